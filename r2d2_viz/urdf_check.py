@@ -1,0 +1,456 @@
+"""Hardened URDF reading and validation, without ROS and without trusting the input.
+
+``read_urdf_xml`` turns a file into a ``<robot>`` element, refusing anything that is not a
+small, well-formed, UTF-8 XML document free of entity declarations (no "billion laughs", no
+XXE: nothing referenced by the document is ever read).  ``check_robot`` then validates the
+URDF structure and numbers the way urdfdom would, but with one-line messages of the form
+``<file name>: <element>: <problem>``.  Unknown elements and attributes are ignored.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import os
+import re
+import stat
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import NoReturn
+from urllib.parse import unquote, urlsplit
+
+from lxml import etree
+
+from r2d2_viz.errors import UrdfError
+
+MAX_FILE_BYTES = 64 * 1024 * 1024
+JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+SHAPES = ("box", "cylinder", "sphere", "mesh")
+_AXIS_TYPES = frozenset({"revolute", "continuous", "prismatic", "planar"})
+_LIMITED_TYPES = frozenset({"revolute", "prismatic"})
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
+# XML 1.0 forbids these characters; refusing them up front also stops UTF-16 look-alikes.
+_BAD_CHARS = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff]")
+_POSITION_SUFFIX = re.compile(r",\s*line \d+, column \d+\s*\Z")
+
+
+def _q(value: str, limit: int = 60) -> str:
+    """Quote a value from the file for a message: never multi-line, never huge."""
+    if len(value) > limit:
+        value = value[: limit // 2] + "…" + value[-(limit // 2) :]
+    return repr(value)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(part.strip() for part in text.splitlines() if part.strip())
+
+
+def _fail(source: str, *parts: str) -> NoReturn:
+    raise UrdfError(_one_line(": ".join((source, *parts))))
+
+
+# --------------------------------------------------------------------------- safe XML
+
+
+def read_urdf_xml(path: Path) -> etree._Element:
+    """Read and strictly parse a URDF file; return the <robot> root element (comments stripped)
+    or raise UrdfError.
+
+    Comments and processing instructions are removed; the file's path is recorded as the
+    document URL so that ``check_robot`` resolves relative mesh paths against its directory.
+    """
+    path = Path(path)
+    name = _one_line(path.name or str(path)) or repr(str(path))
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        _fail(name, f"file not found ({_q(str(path), 200)})")
+    except OSError as exc:
+        _fail(name, f"cannot access file: {exc.strerror or exc}")
+    if stat.S_ISDIR(st.st_mode):
+        _fail(name, "is a directory, not a URDF file")
+    if not stat.S_ISREG(st.st_mode):
+        _fail(name, "is not a regular file")
+    if st.st_size > MAX_FILE_BYTES:
+        _fail(name, f"file is too large ({st.st_size} bytes; the limit is {MAX_FILE_BYTES} bytes)")
+    try:
+        with path.open("rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        _fail(name, f"cannot read file: {exc.strerror or exc}")
+    if len(data) > MAX_FILE_BYTES:
+        _fail(name, f"file is too large (more than {MAX_FILE_BYTES} bytes)")
+    return _parse_bytes(data, name, str(path.absolute()))
+
+
+def _parse_bytes(data: bytes, name: str, url: str) -> etree._Element:
+    if not data.strip():
+        _fail(name, "file is empty")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        _fail(name, f"line {line}: not valid UTF-8 (byte 0x{data[exc.start]:02x} at offset {exc.start})")
+    bad = _BAD_CHARS.search(text)
+    if bad:
+        line = text.count("\n", 0, bad.start()) + 1
+        _fail(name, f"line {line}: character U+{ord(bad.group()):04X} is not allowed in XML")
+    # Refuse entity declarations before the parser sees them: nothing gets expanded or fetched.
+    if "<!DOCTYPE" in text and "<!ENTITY" in text:
+        _fail(name, "DOCTYPE declares entities (<!ENTITY ...>); refused for safety: URDF needs no entities")
+    parser = etree.XMLParser(
+        encoding="utf-8",  # what was checked above, whatever the XML declaration claims
+        resolve_entities=False,
+        no_network=True,
+        load_dtd=False,
+        dtd_validation=False,
+        attribute_defaults=False,
+        huge_tree=False,
+        recover=False,
+        remove_comments=True,
+        remove_pis=True,
+    )
+    try:
+        root = etree.fromstring(data, parser, base_url=url)
+    except etree.XMLSyntaxError as exc:
+        msg = _POSITION_SUFFIX.sub("", _one_line(str(exc.msg or exc)))
+        line = exc.position[0] if exc.position else 0
+        _fail(name, f"line {line}: not well-formed XML: {msg}")
+    if root is None:
+        _fail(name, "not well-formed XML: no root element")
+    for node in root.iter(etree.Entity):
+        _fail(name, f"entity reference {_q(str(node.text))} is not allowed (entities are refused for safety)")
+    if root.tag != "robot":
+        _fail(name, f"root element is <{_q(str(root.tag), 80)[1:-1]}>; expected <robot>")
+    return root
+
+
+# --------------------------------------------------------------------------- meshes
+
+
+def _package_candidates(package: str, rest: str, base_dir: Path) -> Iterator[Path]:
+    for ancestor in (base_dir, *base_dir.parents):
+        if ancestor.name == package:
+            yield ancestor / rest
+        yield ancestor / package / rest
+    for entry in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep):
+        if entry:
+            yield Path(entry) / package / rest
+    for entry in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        if entry:
+            yield Path(entry) / "share" / package / rest
+
+
+def _is_file(path: Path) -> bool:
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
+
+def _resolve_mesh(filename: str, base_dir: Path) -> tuple[Path | None, str]:
+    """Return (existing file, "") or (None, reason for a warning)."""
+    parts = urlsplit(filename)
+    scheme = parts.scheme.lower() if len(parts.scheme) > 1 else ""  # "C:" is a drive, not a scheme
+    if scheme == "package":
+        rest = unquote(parts.path).lstrip("/")
+        for candidate in _package_candidates(unquote(parts.netloc), rest, base_dir):
+            if _is_file(candidate):
+                return candidate, ""
+        return None, f"mesh {_q(filename, 200)} not found (package:// cannot be resolved without ROS)"
+    if scheme == "file":
+        local = Path(unquote(parts.netloc + parts.path))
+    elif scheme:
+        return None, f"mesh {_q(filename, 200)} has unsupported URI scheme {scheme!r}"
+    else:
+        local = Path(filename)
+    candidate = local if local.is_absolute() else base_dir / local
+    if _is_file(candidate):
+        return candidate, ""
+    return None, f"mesh file {_q(filename, 200)} not found"
+
+
+def resolve_mesh_path(filename: str, base_dir: Path) -> Path | None:
+    """Best-effort local file for a URDF mesh ``filename`` (plain path, file:// or package://), else None."""
+    return _resolve_mesh(filename, base_dir)[0]
+
+
+# --------------------------------------------------------------------------- structure
+
+
+def _children(el: etree._Element, tag: str) -> Iterator[etree._Element]:
+    return (child for child in el if child.tag == tag)
+
+
+def _first(el: etree._Element, tag: str) -> etree._Element | None:
+    return next(_children(el, tag), None)
+
+
+class _Checker:
+    def __init__(self, source: str, base_dir: Path) -> None:
+        self.source = _one_line(source) or "<urdf>"
+        self.base_dir = base_dir
+        self.warnings: list[str] = []
+        self.materials: set[str] = set()
+        self.meshes: dict[str, tuple[Path | None, str]] = {}
+
+    def fail(self, where: str, problem: str) -> NoReturn:
+        _fail(self.source, where, problem)
+
+    def warn(self, where: str, problem: str) -> None:
+        self.warnings.append(_one_line(f"{self.source}: {where}: {problem}"))
+
+    def numbers(self, where: str, el: etree._Element, attr: str, count: int) -> tuple[float, ...] | None:
+        """``count`` finite numbers from attribute ``attr`` of ``el``; None if the attribute is absent."""
+        raw = el.get(attr)
+        if raw is None:
+            return None
+        tokens = raw.split()
+        what = f"<{el.tag}> {attr}={_q(raw)}"
+        if len(tokens) != count:
+            plural = "number" if count == 1 else "numbers"
+            self.fail(where, f"{what}: expected {count} {plural}, got {len(tokens)}")
+        values: list[float] = []
+        for token in tokens:
+            value = float(token) if _NUMBER.match(token) else math.nan
+            if not math.isfinite(value):
+                self.fail(where, f"{what}: {_q(token, 30)} is not a finite number")
+            values.append(value)
+        return tuple(values)
+
+    def positive(self, where: str, el: etree._Element, attr: str, count: int) -> None:
+        values = self.numbers(where, el, attr, count)
+        if values is None:
+            self.fail(where, f"<{el.tag}> has no {attr} attribute")
+        if any(v <= 0 for v in values):
+            self.fail(where, f"<{el.tag}> {attr}={_q(el.get(attr, ''))}: must be positive")
+
+    def origin(self, where: str, el: etree._Element) -> None:
+        origin = _first(el, "origin")
+        if origin is not None:
+            self.numbers(where, origin, "xyz", 3)
+            self.numbers(where, origin, "rpy", 3)
+
+    def material(self, where: str, el: etree._Element) -> bool:
+        """Check a <material>; return True if it defines a colour or texture."""
+        color = _first(el, "color")
+        if color is not None:
+            rgba = self.numbers(where, color, "rgba", 4)
+            if rgba is None:
+                self.fail(where, "<color> has no rgba attribute")
+            if any(not 0.0 <= v <= 1.0 for v in rgba):
+                self.fail(where, f"<color> rgba={_q(color.get('rgba', ''))}: components must be in [0, 1]")
+        texture = _first(el, "texture")
+        return color is not None or (texture is not None and bool(texture.get("filename")))
+
+    def geometry(self, where: str, el: etree._Element, kind: str) -> None:
+        geometry = _first(el, "geometry")
+        if geometry is None:
+            self.fail(where, f"<{kind}> has no <geometry>")
+        shapes = [child for child in geometry if isinstance(child.tag, str)]
+        expected = f"expected one of {', '.join(SHAPES)}"
+        if not shapes:
+            self.fail(where, f"<geometry> has no shape; {expected}")
+        for shape in shapes:
+            if shape.tag not in SHAPES:
+                self.fail(where, f"<geometry>: unknown shape <{_q(str(shape.tag), 40)[1:-1]}>; {expected}")
+        if len(shapes) > 1:
+            self.fail(where, f"<geometry> has {len(shapes)} shapes; expected exactly one")
+        shape = shapes[0]
+        if shape.tag == "box":
+            self.positive(where, shape, "size", 3)
+        elif shape.tag == "cylinder":
+            self.positive(where, shape, "radius", 1)
+            self.positive(where, shape, "length", 1)
+        elif shape.tag == "sphere":
+            self.positive(where, shape, "radius", 1)
+        else:
+            scale = self.numbers(where, shape, "scale", 3)
+            if scale is not None and 0.0 in scale:
+                self.fail(where, f"<mesh> scale={_q(shape.get('scale', ''))}: must not be zero")
+            filename = (shape.get("filename") or "").strip()
+            if not filename:
+                self.fail(where, "<mesh> has no filename")
+            if filename not in self.meshes:
+                self.meshes[filename] = _resolve_mesh(filename, self.base_dir)
+            found, reason = self.meshes[filename]
+            if found is None:
+                self.warn(where, f"{reason}; {kind} skipped")
+
+    def link(self, where: str, link: etree._Element) -> list[tuple[str, str]]:
+        """Check a <link>; return its (where, material name) references to resolve later."""
+        refs: list[tuple[str, str]] = []
+        inertial = _first(link, "inertial")
+        if inertial is not None:
+            self.origin(f"{where}: <inertial>", inertial)
+            mass = _first(inertial, "mass")
+            if mass is not None:
+                self.numbers(f"{where}: <inertial>", mass, "value", 1)
+            inertia = _first(inertial, "inertia")
+            if inertia is not None:
+                for attr in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+                    self.numbers(f"{where}: <inertial>", inertia, attr, 1)
+        for kind in ("visual", "collision"):
+            for index, el in enumerate(_children(link, kind), start=1):
+                at = f"{where}: {kind} #{index}"
+                self.origin(at, el)
+                self.geometry(at, el, kind)
+                material = _first(el, "material") if kind == "visual" else None
+                if material is not None:
+                    mat_name = material.get("name") or ""
+                    if self.material(f"{at}: material {_q(mat_name)}", material):
+                        self.materials.add(mat_name)
+                    elif mat_name:
+                        refs.append((at, mat_name))
+        return refs
+
+    def joint(self, where: str, joint: etree._Element, links: dict[str, int]) -> tuple[str, str]:
+        """Check a <joint>; return (parent link, child link)."""
+        jtype = joint.get("type")
+        expected = f"expected one of {', '.join(JOINT_TYPES)}"
+        if jtype is None:
+            self.fail(where, f"missing type attribute; {expected}")
+        if jtype not in JOINT_TYPES:
+            self.fail(where, f"unknown joint type {_q(jtype)}; {expected}")
+        ends: list[str] = []
+        for role in ("parent", "child"):
+            el = _first(joint, role)
+            if el is None or el.get("link") is None:
+                self.fail(where, f"missing <{role} link=...>")
+            name = el.get("link", "")
+            if name not in links:
+                # Suggest a near miss, but keep hostile input (huge names, many links) cheap.
+                short = [n for n in links if len(n) <= 64] if len(name) <= 64 and len(links) <= 5000 else []
+                close = difflib.get_close_matches(name, short, n=1)
+                hint = f" (did you mean {_q(close[0])}?)" if close else ""
+                self.fail(where, f"{role} link {_q(name)} does not exist{hint}")
+            ends.append(name)
+        self.origin(where, joint)
+        axis_el = _first(joint, "axis")
+        if axis_el is not None:
+            axis = self.numbers(where, axis_el, "xyz", 3)
+            if jtype in _AXIS_TYPES and axis is not None and math.fsum(v * v for v in axis) < 1e-24:
+                self.fail(where, f"<axis> xyz={_q(axis_el.get('xyz', ''))}: must not be a zero vector")
+        limit = _first(joint, "limit")
+        if limit is None and jtype in _LIMITED_TYPES:
+            self.fail(where, f"{jtype} joint has no <limit lower=... upper=...>")
+        if limit is not None:
+            bounds = [self.numbers(where, limit, attr, 1) for attr in ("lower", "upper")]
+            for attr in ("effort", "velocity"):
+                self.numbers(where, limit, attr, 1)
+            if jtype in _LIMITED_TYPES:
+                lower, upper = bounds
+                if lower is None or upper is None:
+                    self.fail(where, f"<limit> needs numeric lower and upper for a {jtype} joint")
+                if lower[0] > upper[0]:
+                    self.fail(where, f"<limit> lower={lower[0]:g} is greater than upper={upper[0]:g}")
+        return ends[0], ends[1]
+
+
+def _names(el_list: Iterable[etree._Element], kind: str, checker: _Checker) -> dict[str, int]:
+    seen: dict[str, int] = {}
+    for index, el in enumerate(el_list, start=1):
+        name = el.get("name")
+        if not name:
+            checker.fail(f"{kind} #{index}", "missing name attribute")
+        if name in seen:
+            checker.fail(f"{kind} {_q(name)}", f"duplicate {kind} name (also {kind} #{seen[name]})")
+        seen[name] = index
+    return seen
+
+
+def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = None) -> list[str]:
+    """Validate structure and numbers; raise UrdfError on the first problem; return non-fatal warnings
+    (e.g. mesh file missing: "<source>: link 'x': mesh file 'foo.stl' not found; visual skipped") as strings.
+
+    Relative mesh paths resolve against ``base_dir``, by default the directory of the file
+    ``read_urdf_xml`` read (else the current directory).
+    """
+    if base_dir is None:
+        url = root.getroottree().docinfo.URL
+        base_dir = (
+            Path(unquote(urlsplit(url).path) if url.startswith("file:") else url).parent if url else Path()
+        )
+    checker = _Checker(source, base_dir)
+    if root.tag != "robot":
+        checker.fail("root", f"element is <{_q(str(root.tag), 80)[1:-1]}>; expected <robot>")
+    robot = f"robot {_q(root.get('name', ''))}" if root.get("name") else "robot"
+    link_els = list(_children(root, "link"))
+    joint_els = list(_children(root, "joint"))
+    if not link_els:
+        checker.fail(robot, "has no <link> elements")
+    links = _names(link_els, "link", checker)
+    joint_names = _names(joint_els, "joint", checker)
+
+    for material in _children(root, "material"):
+        name = material.get("name") or ""
+        if checker.material(f"material {_q(name)}", material):
+            checker.materials.add(name)
+    refs = [ref for el in link_els for ref in checker.link(f"link {_q(el.get('name', ''))}", el)]
+    for where, name in refs:
+        if name not in checker.materials:
+            checker.warn(where, f"material {_q(name)} is not defined; default colour used")
+
+    parent_joint: dict[str, str] = {}  # child link -> joint name
+    parent_link: dict[str, str] = {}  # child link -> parent link
+    children: dict[str, list[str]] = {}
+    mimics: dict[str, str] = {}
+    for joint in joint_els:
+        jname = joint.get("name", "")
+        where = f"joint {_q(jname)}"
+        parent, child = checker.joint(where, joint, links)
+        if child in parent_joint:
+            checker.fail(
+                where, f"child link {_q(child)} is already the child of joint {_q(parent_joint[child])}"
+            )
+        parent_joint[child] = jname
+        parent_link[child] = parent
+        children.setdefault(parent, []).append(child)
+        mimic = _first(joint, "mimic")
+        if mimic is not None:
+            target = mimic.get("joint")
+            if not target:
+                checker.fail(where, "<mimic> has no joint attribute")
+            if target not in joint_names:
+                checker.fail(where, f"<mimic> joint {_q(target)} does not exist")
+            checker.numbers(where, mimic, "multiplier", 1)
+            checker.numbers(where, mimic, "offset", 1)
+            mimics[jname] = target
+
+    roots = [name for name in links if name not in parent_joint]
+    if len(roots) > 1:
+        shown = ", ".join(_q(r, 40) for r in roots[:5]) + (", …" if len(roots) > 5 else "")
+        checker.fail(
+            robot, f"more than one root link ({len(roots)}: {shown}); every other link needs a parent joint"
+        )
+    reached: set[str] = set(roots)
+    stack = list(roots)
+    while stack:
+        for child in children.get(stack.pop(), ()):
+            if child not in reached:
+                reached.add(child)
+                stack.append(child)
+    if len(reached) < len(links):
+        start = next(name for name in links if name not in reached)
+        path: dict[str, None] = {}
+        link = start
+        while link not in path:
+            path[link] = None
+            link = parent_link[link]
+        loop = list(path)[list(path).index(link) :]
+        shown = " -> ".join(_q(n, 40) for n in loop[:6]) + (" -> …" if len(loop) > 6 else "")
+        checker.fail(
+            f"joint {_q(parent_joint[loop[0]])}", f"closes a kinematic loop: {shown} -> {_q(loop[0], 40)}"
+        )
+
+    acyclic: set[str] = set()
+    for jname in mimics:
+        chain: dict[str, None] = {}
+        current = jname
+        while current in mimics and current not in acyclic:
+            if current in chain:
+                checker.fail(f"joint {_q(jname)}", "<mimic> joints form a loop")
+            chain[current] = None
+            current = mimics[current]
+        acyclic.update(chain)
+    return checker.warnings
