@@ -1,0 +1,27 @@
+"""The project's error hierarchy: every expected failure is one of these.
+
+The CLI turns an ``R2d2VizError`` into one line on stderr and exit code 2; anything
+else is unexpected and exits 1.
+"""
+
+from __future__ import annotations
+
+
+class R2d2VizError(Exception):
+    """Base class: a problem with the user's input that deserves one clear line."""
+
+
+class UrdfError(R2d2VizError):
+    """The URDF file cannot be read or describes an invalid robot.
+
+    The message starts with the file name and names the element at fault, e.g.
+    ``robot.urdf: joint 'tilt': parent link 'axs' does not exist``.
+    """
+
+
+class UsageError(R2d2VizError):
+    """A command-line value is invalid (bad duration, rate, motion, output path, ...)."""
+
+
+class SinkError(R2d2VizError):
+    """A sink cannot be opened: no viewer possible, port in use, unwritable output."""

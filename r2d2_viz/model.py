@@ -1,0 +1,319 @@
+"""URDF → an immutable robot model.
+
+The file is read and validated by :mod:`r2d2_viz.urdf_check` (safe XML, one-line errors), parsed
+element by element by yourdfpy, and turned into frozen dataclasses that the rest of the app uses.
+Nothing here is specific to the R2D2: any URDF with box, cylinder, sphere (and mesh) geometry loads.
+
+Poses are 4×4 homogeneous matrices named after the frames they map between:
+``Joint.T_parent_joint`` maps joint-frame coordinates into the parent link's frame (the URDF
+``<origin>`` of the joint), ``Shape.T_link_shape`` maps shape coordinates into its link's frame.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections import deque
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+import yourdfpy
+from lxml import etree
+
+from .errors import UrdfError
+from .urdf_check import check_robot, read_urdf_xml, resolve_mesh_path
+
+JointType = Literal["fixed", "revolute", "continuous", "prismatic", "floating", "planar"]
+MOVABLE_TYPES: tuple[str, ...] = ("revolute", "continuous", "prismatic")
+
+Mat4 = npt.NDArray[np.float64]
+Rgba = tuple[float, float, float, float]
+
+
+def default_urdf_path() -> Path:
+    """The tutorial's R2D2, shipped as package data (``r2d2_viz/assets/r2d2.urdf``)."""
+    return Path(str(resources.files("r2d2_viz") / "assets" / "r2d2.urdf"))
+
+
+def _frozen(matrix: npt.ArrayLike | None) -> Mat4:
+    out = np.array(np.eye(4) if matrix is None else matrix, dtype=np.float64)
+    out.flags.writeable = False
+    return out
+
+
+# --- geometry -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Box:
+    size: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """Along the shape frame's z axis, centred on its origin (URDF convention)."""
+
+    radius: float
+    length: float
+
+
+@dataclass(frozen=True)
+class Sphere:
+    radius: float
+
+
+@dataclass(frozen=True)
+class MeshFile:
+    filename: str
+    """As written in the URDF."""
+    path: Path | None
+    """Resolved local file, or None when it cannot be found (the shape is then skipped)."""
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+
+Geometry = Box | Cylinder | Sphere | MeshFile
+
+
+@dataclass(frozen=True, eq=False)
+class Shape:
+    """One ``<visual>`` or ``<collision>`` element of a link."""
+
+    geometry: Geometry
+    T_link_shape: Mat4 = field(default_factory=lambda: _frozen(None))
+    rgba: Rgba | None = None
+    """Resolved colour (named materials looked up); None for collisions or uncoloured visuals."""
+    material: str | None = None
+    name: str | None = None
+
+
+# --- links and joints -----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Limit:
+    lower: float
+    upper: float
+    effort: float | None = None
+    velocity: float | None = None
+
+
+@dataclass(frozen=True)
+class Mimic:
+    """``value = multiplier * value(joint) + offset``."""
+
+    joint: str
+    multiplier: float = 1.0
+    offset: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Joint:
+    name: str
+    type: JointType
+    parent: str
+    child: str
+    T_parent_joint: Mat4
+    axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    """Unit vector in the joint frame."""
+    limit: Limit | None = None
+    mimic: Mimic | None = None
+
+    @property
+    def movable(self) -> bool:
+        return self.type in MOVABLE_TYPES
+
+
+@dataclass(frozen=True)
+class Link:
+    name: str
+    visuals: tuple[Shape, ...] = ()
+    collisions: tuple[Shape, ...] = ()
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A validated robot: one root link, every other link the child of exactly one joint.
+
+    ``joints`` are in topological order (a joint's parent link is the root or the child of an
+    earlier joint); ``links`` start with the root and follow the same order.
+    """
+
+    name: str
+    source: str
+    """File name, used in messages."""
+    root: str
+    links: tuple[Link, ...]
+    joints: tuple[Joint, ...]
+    warnings: tuple[str, ...] = ()
+
+    def joint(self, name: str) -> Joint:
+        for joint in self.joints:
+            if joint.name == name:
+                return joint
+        raise KeyError(f"no joint {name!r}; joints are {', '.join(j.name for j in self.joints)}")
+
+    @property
+    def movable_joints(self) -> tuple[Joint, ...]:
+        """Revolute, continuous and prismatic joints, in topological order (mimic joints included)."""
+        return tuple(j for j in self.joints if j.movable)
+
+    @property
+    def actuated_joints(self) -> tuple[Joint, ...]:
+        """Movable joints that are not mimics: the ones a joint state sets."""
+        return tuple(j for j in self.joints if j.movable and j.mimic is None)
+
+
+# --- loading ------------------------------------------------------------------------------------
+
+
+def load_urdf(path: str | Path) -> Robot:
+    """Read, validate and convert a URDF file. Raises :class:`UrdfError` with a one-line message."""
+    path = Path(path)
+    root = read_urdf_xml(path)
+    notes = check_robot(root, source=path.name, base_dir=path.parent)
+    robot = build_robot(root, source=path.name, base_dir=path.parent)
+    return Robot(robot.name, robot.source, robot.root, robot.links, robot.joints, tuple(notes))
+
+
+def build_robot(root: etree._Element, *, source: str, base_dir: Path) -> Robot:
+    """Convert a validated ``<robot>`` element into a :class:`Robot`.
+
+    Shapes whose mesh file cannot be found are left out (:func:`check_robot` warns about them).
+    """
+    if root.get("name") is None:  # optional for urdf_check, required by yourdfpy
+        root.set("name", Path(source).stem)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            urdf = yourdfpy.URDF._parse_robot(xml_element=root)
+    except (ValueError, KeyError, IndexError, TypeError, AttributeError) as exc:  # validator should catch first
+        raise UrdfError(f"{source}: cannot parse: {exc}") from None
+
+    named_colors = _named_colors(urdf)
+    links = {
+        link.name: Link(
+            name=link.name,
+            visuals=tuple(s for v in link.visuals if (s := _shape(v, v.material, named_colors, base_dir)) is not None),
+            collisions=tuple(s for c in link.collisions if (s := _shape(c, None, named_colors, base_dir)) is not None),
+        )
+        for link in urdf.links
+    }
+    joints = [_joint(j) for j in urdf.joints]
+    root_name, ordered = _topological(links, joints, source)
+    return Robot(
+        name=urdf.name,
+        source=source,
+        root=root_name,
+        links=tuple(links[name] for name in [root_name, *(j.child for j in ordered)]),
+        joints=tuple(ordered),
+    )
+
+
+def _named_colors(urdf: yourdfpy.Robot) -> dict[str, Rgba]:
+    """Materials by name, like urdfdom: top-level ones, then the first inline definition of each."""
+    colors: dict[str, Rgba] = {}
+
+    def register(material: yourdfpy.Material | None) -> None:
+        if material is not None and material.name and material.color is not None:
+            colors.setdefault(material.name, _rgba(material.color.rgba))
+
+    for material in urdf.materials:
+        register(material)
+    for link in urdf.links:
+        for visual in link.visuals:
+            register(visual.material)
+    return colors
+
+
+def _rgba(values: npt.ArrayLike) -> Rgba:
+    r, g, b, a = (float(x) for x in np.asarray(values, dtype=np.float64).reshape(4))
+    return (r, g, b, a)
+
+
+def _shape(
+    element: yourdfpy.Visual | yourdfpy.Collision,
+    material: yourdfpy.Material | None,
+    named_colors: dict[str, Rgba],
+    base_dir: Path,
+) -> Shape | None:
+    geometry = _geometry(element.geometry, base_dir)
+    if isinstance(geometry, MeshFile) and geometry.path is None:
+        return None
+    rgba: Rgba | None = None
+    if material is not None:
+        if material.color is not None:
+            rgba = _rgba(material.color.rgba)
+        elif material.name:
+            rgba = named_colors.get(material.name)
+    return Shape(
+        geometry=geometry,
+        T_link_shape=_frozen(element.origin),
+        rgba=rgba,
+        material=material.name if material is not None else None,
+        name=element.name,
+    )
+
+
+def _geometry(geometry: yourdfpy.Geometry, base_dir: Path) -> Geometry:
+    if geometry.box is not None:
+        x, y, z = (float(v) for v in geometry.box.size)
+        return Box((x, y, z))
+    if geometry.cylinder is not None:
+        return Cylinder(float(geometry.cylinder.radius), float(geometry.cylinder.length))
+    if geometry.sphere is not None:
+        return Sphere(float(geometry.sphere.radius))
+    mesh = geometry.mesh
+    scale = np.broadcast_to(np.asarray(1.0 if mesh.scale is None else mesh.scale, dtype=np.float64), (3,))
+    sx, sy, sz = (float(v) for v in scale)
+    return MeshFile(mesh.filename, resolve_mesh_path(mesh.filename, base_dir), (sx, sy, sz))
+
+
+def _joint(joint: yourdfpy.Joint) -> Joint:
+    axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), dtype=np.float64)
+    norm = float(np.linalg.norm(axis))
+    ax, ay, az = (float(v) for v in (axis / norm if norm > 0 else np.array([1.0, 0.0, 0.0])))
+    limit = None
+    if joint.limit is not None and joint.limit.lower is not None and joint.limit.upper is not None:
+        limit = Limit(
+            lower=float(joint.limit.lower),
+            upper=float(joint.limit.upper),
+            effort=None if joint.limit.effort is None else float(joint.limit.effort),
+            velocity=None if joint.limit.velocity is None else float(joint.limit.velocity),
+        )
+    mimic = None
+    if joint.mimic is not None:
+        mimic = Mimic(joint.mimic.joint, float(joint.mimic.multiplier), float(joint.mimic.offset))
+    return Joint(
+        name=joint.name,
+        type=joint.type,
+        parent=joint.parent,
+        child=joint.child,
+        T_parent_joint=_frozen(joint.origin),
+        axis=(ax, ay, az),
+        limit=limit,
+        mimic=mimic,
+    )
+
+
+def _topological(links: dict[str, Link], joints: list[Joint], source: str) -> tuple[str, list[Joint]]:
+    """Root link and joints ordered parent-first, by an iterative breadth-first walk (no recursion)."""
+    children: dict[str, list[Joint]] = {}
+    child_links = set()
+    for joint in joints:
+        children.setdefault(joint.parent, []).append(joint)
+        child_links.add(joint.child)
+    roots = [name for name in links if name not in child_links]
+    if len(roots) != 1:
+        raise UrdfError(f"{source}: robot: expected exactly one root link, found {len(roots)}")
+    ordered: list[Joint] = []
+    queue = deque([roots[0]])
+    while queue:
+        for joint in children.get(queue.popleft(), ()):
+            ordered.append(joint)
+            queue.append(joint.child)
+    if len(ordered) != len(joints):
+        raise UrdfError(f"{source}: robot: joints form a cycle or reach unknown links")
+    return roots[0], ordered
