@@ -1,0 +1,195 @@
+"""The pinned kinematics core: joint values → joint transforms and link poses, vectorised over frames.
+
+It does what robot_state_publisher does with a URDF and a stream of joint states:
+
+* fixed joints give constant transforms (``/tf_static``); a *planar* joint is treated as fixed;
+* revolute, continuous and prismatic joints move about / along their axis, **without clamping**
+  to the URDF limits; a mimic joint follows ``multiplier * master + offset``;
+* a *floating* joint is skipped (no transform: its subtree is not connected to the root).
+
+Inputs are ``q`` with shape ``(T, A)``: T frames × A actuated joints (``KinematicTree.actuated``).
+Pure numpy; no rerun import.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from .errors import UrdfError
+from .model import Robot
+from .transforms import matrix_to_quat, quat_from_axis_angle, quat_multiply, quat_to_matrix
+
+F64 = npt.NDArray[np.float64]
+I64 = npt.NDArray[np.int64]
+
+REVOLUTE, PRISMATIC = 0, 1
+
+
+@dataclass(frozen=True, eq=False)
+class KinematicTree:
+    """A robot compiled into arrays. Links are indexed in ``robot.links`` order (root = 0)."""
+
+    robot: Robot
+    links: tuple[str, ...]
+    actuated: tuple[str, ...]
+    """Names of the joints whose values make up a row of ``q`` (movable, not mimic)."""
+    moving: tuple[str, ...]
+    """Joints that get a transform per frame: revolute, continuous, prismatic (mimics included)."""
+    static: tuple[str, ...]
+    """Joints whose transform never changes: fixed and planar."""
+    warnings: tuple[str, ...]
+
+    # per moving joint (M)
+    moving_parent: I64
+    moving_child: I64
+    moving_kind: I64  # REVOLUTE or PRISMATIC
+    moving_axis: F64  # (M, 3) unit axes in the joint frame
+    moving_origin_t: F64  # (M, 3)
+    moving_origin_R: F64  # (M, 3, 3)
+    moving_origin_q: F64  # (M, 4) xyzw
+    moving_source: I64  # (M,) column of q driving it
+    moving_multiplier: F64  # (M,)
+    moving_offset: F64  # (M,)
+
+    # per static joint (S)
+    static_parent: I64
+    static_child: I64
+    static_T: F64  # (S, 4, 4) T_parent_child
+
+    def static_translation_quat(self) -> tuple[F64, F64]:
+        """Fixed-joint transforms as ``(translation (S, 3), quaternion xyzw (S, 4))``."""
+        return self.static_T[:, :3, 3].copy(), matrix_to_quat(self.static_T[:, :3, :3])
+
+    @property
+    def limits(self) -> dict[str, tuple[float, float]]:
+        """URDF ``[lower, upper]`` of each moving joint that has one (continuous joints have none)."""
+        out: dict[str, tuple[float, float]] = {}
+        for name in self.moving:
+            joint = self.robot.joint(name)
+            if joint.limit is not None and joint.type != "continuous":
+                out[name] = (joint.limit.lower, joint.limit.upper)
+        return out
+
+
+def compile_tree(robot: Robot) -> KinematicTree:
+    """Compile ``robot`` for :func:`joint_transforms` and :func:`link_poses`."""
+    link_index = {link.name: i for i, link in enumerate(robot.links)}
+    actuated = tuple(j.name for j in robot.actuated_joints)
+    column = {name: i for i, name in enumerate(actuated)}
+    by_name = {j.name: j for j in robot.joints}
+    notes: list[str] = []
+
+    moving = [j for j in robot.joints if j.movable]
+    static = [j for j in robot.joints if j.type in ("fixed", "planar")]
+    for j in robot.joints:
+        if j.type == "planar":
+            notes.append(f"{robot.source}: joint {j.name!r}: planar joints are not supported; treated as fixed")
+        elif j.type == "floating":
+            notes.append(
+                f"{robot.source}: joint {j.name!r}: floating joints are not supported; skipped "
+                f"(link {j.child!r} and below are not connected)"
+            )
+
+    sources, multipliers, offsets = [], [], []
+    for j in moving:
+        multiplier, offset, master = 1.0, 0.0, j
+        seen = {j.name}
+        while master.mimic is not None:  # follow mimic chains: a mimic of a mimic
+            nxt = by_name.get(master.mimic.joint)
+            if nxt is None or not nxt.movable:
+                raise UrdfError(
+                    f"{robot.source}: joint {master.name!r}: mimics {master.mimic.joint!r}, "
+                    "which is not a revolute, continuous or prismatic joint"
+                )
+            if nxt.name in seen:
+                raise UrdfError(f"{robot.source}: joint {j.name!r}: mimic joints form a cycle")
+            seen.add(nxt.name)
+            multiplier, offset = multiplier * master.mimic.multiplier, multiplier * master.mimic.offset + offset
+            master = nxt
+        sources.append(column[master.name])
+        multipliers.append(multiplier)
+        offsets.append(offset)
+
+    def origin_R(joints: list) -> F64:  # type: ignore[type-arg]
+        return np.array([j.T_parent_joint[:3, :3] for j in joints]).reshape(-1, 3, 3)
+
+    moving_R = origin_R(moving)
+    return KinematicTree(
+        robot=robot,
+        links=tuple(link.name for link in robot.links),
+        actuated=actuated,
+        moving=tuple(j.name for j in moving),
+        static=tuple(j.name for j in static),
+        warnings=tuple(notes),
+        moving_parent=np.array([link_index[j.parent] for j in moving], dtype=np.int64),
+        moving_child=np.array([link_index[j.child] for j in moving], dtype=np.int64),
+        moving_kind=np.array([PRISMATIC if j.type == "prismatic" else REVOLUTE for j in moving], dtype=np.int64),
+        moving_axis=np.array([j.axis for j in moving], dtype=np.float64).reshape(-1, 3),
+        moving_origin_t=np.array([j.T_parent_joint[:3, 3] for j in moving]).reshape(-1, 3),
+        moving_origin_R=moving_R,
+        moving_origin_q=matrix_to_quat(moving_R).reshape(-1, 4),
+        moving_source=np.array(sources, dtype=np.int64),
+        moving_multiplier=np.array(multipliers, dtype=np.float64),
+        moving_offset=np.array(offsets, dtype=np.float64),
+        static_parent=np.array([link_index[j.parent] for j in static], dtype=np.int64),
+        static_child=np.array([link_index[j.child] for j in static], dtype=np.int64),
+        static_T=np.array([j.T_parent_joint for j in static]).reshape(-1, 4, 4),
+    )
+
+
+def _as_frames(tree: KinematicTree, q: npt.ArrayLike) -> F64:
+    q = np.asarray(q, dtype=np.float64)
+    if q.ndim == 1:
+        q = q[None, :]
+    if q.ndim != 2 or q.shape[1] != len(tree.actuated):
+        raise ValueError(f"q must have shape (T, {len(tree.actuated)}) for joints {tree.actuated}, got {q.shape}")
+    return q
+
+
+def moving_values(tree: KinematicTree, q: npt.ArrayLike) -> F64:
+    """Values ``(T, M)`` of every moving joint, mimics resolved."""
+    q = _as_frames(tree, q)
+    return q[:, tree.moving_source] * tree.moving_multiplier + tree.moving_offset
+
+
+def joint_transforms(tree: KinematicTree, q: npt.ArrayLike) -> tuple[F64, F64]:
+    """``T_parent_child`` of every moving joint as ``(translation (T, M, 3), quaternion xyzw (T, M, 4))``."""
+    values = moving_values(tree, q)
+    revolute = tree.moving_kind == REVOLUTE
+    angle = np.where(revolute, values, 0.0)
+    q_motion = quat_from_axis_angle(tree.moving_axis, angle)  # (T, M, 4)
+    quat = quat_multiply(tree.moving_origin_q, q_motion)
+    # prismatic: t = t_origin + R_origin · (axis · d)
+    shift = np.where(revolute, 0.0, values)[..., None] * tree.moving_axis  # (T, M, 3)
+    translation = tree.moving_origin_t + np.einsum("mij,tmj->tmi", tree.moving_origin_R, shift)
+    return translation, quat
+
+
+def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.ArrayLike | None = None) -> F64:
+    """Pose of every link in the fixed frame, ``(T, L, 4, 4)``; the root's pose is ``T_fixed_root``
+    (identity by default). Links below a floating joint are NaN."""
+    translation, quat = joint_transforms(tree, q)
+    n_frames = translation.shape[0]
+    T_joint = np.zeros((n_frames, len(tree.moving), 4, 4))
+    T_joint[..., :3, :3] = quat_to_matrix(quat)
+    T_joint[..., :3, 3] = translation
+    T_joint[..., 3, 3] = 1.0
+
+    # parent index and local transform per link, then compose in link order (parents come first).
+    n_links = len(tree.links)
+    local = np.full((n_frames, n_links, 4, 4), np.nan)
+    parent = np.full(n_links, -1, dtype=np.int64)
+    local[:, tree.static_child] = tree.static_T
+    parent[tree.static_child] = tree.static_parent
+    local[:, tree.moving_child] = T_joint
+    parent[tree.moving_child] = tree.moving_parent
+
+    poses = np.empty((n_frames, n_links, 4, 4))
+    poses[:, 0] = np.eye(4) if T_fixed_root is None else np.asarray(T_fixed_root, dtype=np.float64)
+    for i in range(1, n_links):
+        p = parent[i]
+        poses[:, i] = np.nan if p < 0 else poses[:, p] @ local[:, i]
+    return poses
