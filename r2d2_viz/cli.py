@@ -1,0 +1,129 @@
+"""Command line: ``r2d2-viz [--urdf PATH] [--motion …] [--duration S] [--rate HZ] [sink]``.
+
+Exit codes: 0 done, 2 bad usage or bad input (one line on stderr, no traceback), 1 unexpected,
+130 a batch run interrupted by Ctrl-C (its partial file removed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import traceback
+from pathlib import Path
+
+from .errors import R2d2VizError
+from .motion import MOTIONS
+
+EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        """argparse's own errors: one line, exit 2 (argparse would print the whole usage)."""
+        self.exit(EXIT_BAD_INPUT, f"error: {message} (see r2d2-viz --help)\n")
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="r2d2-viz",
+        description="The ROS 2 'URDF with robot_state_publisher' tutorial robot, moving in the Rerun viewer.",
+        epilog="Without a sink flag, --spawn is used. Open a saved recording with: rerun out.rrd",
+    )
+    parser.add_argument("--urdf", type=Path, default=None, help="robot description (default: the tutorial's R2D2)")
+    parser.add_argument(
+        "--motion",
+        default=None,
+        metavar="{" + ",".join(MOTIONS) + "}",
+        help="tutorial: state_publisher.py; sweep: every joint back and forth; still: all zeros "
+        "(default: tutorial if the robot has swivel, tilt and periscope, else sweep)",
+    )
+    parser.add_argument(
+        "--duration",
+        type=_number,
+        default=None,
+        metavar="SECONDS",
+        help="robot time to generate (default: one 48 s lap for --save, until Ctrl-C for live sinks)",
+    )
+    parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="frames per second (default 30)")
+    sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
+    sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
+    sinks.add_argument("--save", type=Path, default=None, metavar="PATH", help="write a recording (.rrd)")
+    sinks.add_argument(
+        "--connect",
+        nargs="?",
+        const="rerun+http://127.0.0.1:9876/proxy",
+        default=None,
+        metavar="URL",
+        help="stream live to a running viewer (default rerun+http://127.0.0.1:9876/proxy)",
+    )
+    sinks.add_argument("--serve", action="store_true", help="serve a web viewer and stream live to it")
+    sinks.add_argument("--headless", action="store_true", help="compute everything, show nothing (checks a URDF)")
+    sinks.add_argument("--realtime", action="store_true", help="pace --save to the wall clock like a live run")
+    sinks.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address --serve listens on")
+    sinks.add_argument("--port", type=int, default=9876, help="gRPC port for --spawn / --serve (default 9876)")
+    sinks.add_argument("--web-port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return _main(args, parser)
+    except R2d2VizError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("r2d2-viz: interrupted; nothing saved", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:
+        if os.environ.get("R2D2_VIZ_DEBUG"):
+            traceback.print_exc()
+        print(f"error: unexpected {type(exc).__name__}: {exc} (set R2D2_VIZ_DEBUG=1 for details)", file=sys.stderr)
+        return EXIT_UNEXPECTED
+
+
+def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    # Heavy imports (rerun, yourdfpy, trimesh) only after the arguments parsed: --help stays instant.
+    from .errors import UsageError
+    from .model import default_urdf_path
+    from .runner import RunConfig, print_summary, run
+    from .sinks import SinkConfig
+
+    live = [flag for flag, on in (("--spawn", args.spawn), ("--connect", args.connect), ("--serve", args.serve)) if on]
+    if len(live) > 1:
+        raise UsageError(f"choose one live sink, not {' and '.join(live)}")
+    if args.headless and (live or args.save):
+        raise UsageError("--headless shows nothing; it cannot be combined with a sink")
+    if args.motion is not None and args.motion not in MOTIONS:
+        raise UsageError(f"unknown motion {args.motion!r}; expected one of {', '.join(MOTIONS)}")
+    spawn = args.spawn or not (live or args.save or args.headless)
+    sink = SinkConfig(
+        spawn=spawn,
+        connect=args.connect,
+        serve=args.serve,
+        save=args.save,
+        headless=args.headless,
+        bind=args.bind,
+        port=args.port,
+        web_port=args.web_port,
+    )
+    config = RunConfig(
+        urdf=args.urdf if args.urdf is not None else default_urdf_path(),
+        motion=args.motion,
+        rate=args.rate,
+        duration=args.duration,
+        sink=sink,
+        realtime=args.realtime,
+    )
+    result = run(config, on_ready=lambda message: print(message, file=sys.stderr, flush=True))
+    print_summary(result, config)
+    return EXIT_OK

@@ -1,0 +1,178 @@
+"""One run of the app: model → motion → kinematics → stream, batch or paced to the wall clock.
+
+No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.stream`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import FrameType
+
+from .errors import UsageError
+from .kinematics import compile_tree
+from .model import load_urdf
+from .motion import MotionName, make_motion
+from .sinks import SinkConfig, close_recording, open_recording
+from .stream import RobotStream
+
+BATCH_CHUNK_FRAMES = 20_000
+"""Frames per columnar chunk in batch runs: memory stays flat however long the run."""
+LAP_SECONDS = 48.0
+"""One lap of the tutorial's odom circle: 360° / (¼° per frame) / 30 Hz."""
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    urdf: Path
+    motion: MotionName | None = None
+    rate: float = 30.0
+    duration: float | None = None
+    """Seconds of robot time; None: one lap for batch saves, forever for live runs."""
+    sink: SinkConfig = field(default_factory=SinkConfig)
+    realtime: bool = False
+    """Pace to the wall clock even when only saving."""
+
+    @property
+    def live(self) -> bool:
+        return self.sink.live or self.realtime
+
+    @property
+    def n_frames(self) -> int | None:
+        duration = self.duration
+        if duration is None:
+            duration = None if self.live else LAP_SECONDS
+        return None if duration is None else max(1, round(duration * self.rate))
+
+
+@dataclass
+class RunResult:
+    frames: int
+    interrupted: bool
+    saved: Path | None
+
+
+class _StopRequested(Exception):  # noqa: N818 - a signal, not an error
+    """Raised in a batch run by SIGTERM so the partial file is removed."""
+
+
+def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
+    """Run the whole pipeline. Raises R2d2VizError for bad input; never leaves a half-written file."""
+    _check_numbers(config)
+    robot = load_urdf(config.urdf)
+    tree = compile_tree(robot)
+    motion = make_motion(robot, config.motion)
+    save = config.sink.save
+    tmp = _temp_path(save) if save is not None else None
+    frames = 0
+    interrupted = False
+    try:
+        rec = open_recording(config.sink, save_to=tmp, on_ready=on_ready)
+        try:
+            streamer = RobotStream(rec, tree, motion, config.rate)
+            streamer.log_static()
+            if config.live:
+                frames, interrupted = _paced(streamer, config)
+            else:
+                with _sigterm_raises():
+                    for chunk in motion.chunks(config.n_frames, BATCH_CHUNK_FRAMES):
+                        streamer.log_chunk(chunk)
+                        frames += len(chunk.frame)
+            streamer.finish()
+        finally:
+            close_recording(rec)
+        if tmp is not None and save is not None:
+            os.replace(tmp, save)
+    except BaseException:
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
+        raise
+    return RunResult(frames=frames, interrupted=interrupted, saved=save)
+
+
+def _check_numbers(config: RunConfig) -> None:
+    if not (math.isfinite(config.rate) and config.rate > 0):
+        raise UsageError(f"--rate must be a positive number of Hz, got {config.rate:g}")
+    if config.duration is not None and not (math.isfinite(config.duration) and config.duration > 0):
+        raise UsageError(f"--duration must be a positive number of seconds, got {config.duration:g}")
+    save = config.sink.save
+    if save is not None:
+        parent = save.parent if str(save.parent) else Path(".")
+        if save.is_dir():
+            raise UsageError(f"--save {save}: is a directory; give a file name such as out.rrd")
+        if not parent.is_dir():
+            raise UsageError(f"--save {save}: directory {str(parent)!r} does not exist")
+        if not os.access(parent, os.W_OK | os.X_OK):
+            raise UsageError(f"--save {save}: directory {str(parent)!r} is not writable")
+
+
+def _temp_path(save: Path) -> Path:
+    """Beside the target, so the final rename is atomic."""
+    return save.with_name(f".{save.name}.{os.getpid()}.partial")
+
+
+def _paced(streamer: RobotStream, config: RunConfig) -> tuple[int, bool]:
+    """Send frame k at ``start + k / rate`` (an absolute schedule: no drift) until done or signalled."""
+    stop = threading.Event()
+    frames = 0
+    with _signals_set(stop):
+        start = time.monotonic()
+        for chunk in streamer.motion.chunks(config.n_frames, 1):
+            delay = start + int(chunk.frame[0]) / config.rate - time.monotonic()
+            if delay > 0 and stop.wait(delay):
+                break
+            if stop.is_set():
+                break
+            streamer.log_chunk(chunk)
+            frames += 1
+    return frames, stop.is_set()
+
+
+@contextmanager
+def _signals_set(stop: threading.Event) -> Iterator[None]:
+    """SIGINT and SIGTERM end a live run cleanly (the recording is finalised)."""
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        stop.set()
+
+    with _handlers(handler):
+        yield
+
+
+@contextmanager
+def _sigterm_raises() -> Iterator[None]:
+    def handler(signum: int, frame: FrameType | None) -> None:
+        raise _StopRequested
+
+    with _handlers(handler, signals=(signal.SIGTERM,)):
+        yield
+
+
+@contextmanager
+def _handlers(
+    handler: Callable[[int, FrameType | None], None],
+    signals: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM),
+) -> Iterator[None]:
+    if threading.current_thread() is not threading.main_thread():  # tests may run us in a thread
+        yield
+        return
+    previous = {s: signal.signal(s, handler) for s in signals}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+def print_summary(result: RunResult, config: RunConfig) -> None:
+    where = f" to {result.saved}" if result.saved else ""
+    how = " (stopped by signal)" if result.interrupted else ""
+    print(f"r2d2-viz: {result.frames} frames at {config.rate:g} Hz{where}{how}", file=sys.stderr)
