@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import sys
+import uuid
 from pathlib import Path
 
 import rerun as rr
@@ -30,6 +31,12 @@ ORBIT_PITCH = 0.459797203540802  # Views / Current / Pitch
 ORBIT_FOCAL_POINT = (0.0, 0.0, 0.0)  # Views / Current / Focal Point
 
 DEFAULT_BLUEPRINT_PATH = Path("blueprints/r2d2.rbl")
+_ID_NAMESPACE = uuid.UUID("5f1b7a52-3c1e-4d0e-9a43-6b2f3f2d2d20")
+
+
+def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
+    """Name-derived ids instead of random ones, so the saved blueprint is the same on every save."""
+    part.id = uuid.uuid5(_ID_NAMESPACE, key)
 
 
 def orbit_eye_position(
@@ -76,8 +83,19 @@ def generate_blueprint() -> rrb.Blueprint:
     limited = rrb.TimeSeriesView(name="Joint states", origin="/joints/limited")
     continuous = rrb.TimeSeriesView(name="Continuous joints", origin="/joints/continuous")
     log = rrb.TextLogView(name="Warnings", origin="/warnings")
+    side = rrb.Vertical(limited, continuous, log, row_shares=[3, 2, 1])
+    root = rrb.Horizontal(scene, side, column_shares=[2, 1])
+    for key, part in {
+        "scene": scene,
+        "limited": limited,
+        "continuous": continuous,
+        "log": log,
+        "side": side,
+        "root": root,
+    }.items():
+        _stable_id(part, key)
     return rrb.Blueprint(
-        rrb.Horizontal(scene, rrb.Vertical(limited, continuous, log, row_shares=[3, 2, 1]), column_shares=[2, 1]),
+        root,
         rrb.BlueprintPanel(state=rrb.components.PanelState.Expanded),
         rrb.SelectionPanel(state=rrb.components.PanelState.Collapsed),
         rrb.TimePanel(

@@ -1,0 +1,60 @@
+"""Shared fixtures: the installed CLI, the tutorial model, one recording made once per session."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED_REFERENCE = REPO.parent / "shared" / "reference"
+
+
+def cli(*args: str, timeout: float = 120, env: dict[str, str] | None = None, cwd: Path | None = None):
+    """Run the installed ``r2d2-viz`` console script in a subprocess."""
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    command = [str(exe)] if exe.exists() else [sys.executable, "-m", "r2d2_viz"]
+    return subprocess.run(
+        [*command, *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**os.environ, **(env or {})},
+        cwd=cwd,
+    )
+
+
+@pytest.fixture(scope="session")
+def tutorial_urdf() -> Path:
+    from r2d2_viz.model import default_urdf_path
+
+    return default_urdf_path()
+
+
+@pytest.fixture(scope="session")
+def lap_recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, subprocess.CompletedProcess[str]]:
+    """``r2d2-viz --save out.rrd`` with every default: one 48 s lap of the tutorial."""
+    out = tmp_path_factory.mktemp("lap") / "out.rrd"
+    result = cli("--save", str(out))
+    assert result.returncode == 0, result.stderr
+    return out, result
+
+
+def rerun_viewer() -> str | None:
+    beside = Path(sys.executable).parent / "rerun"
+    return str(beside) if beside.exists() else shutil.which("rerun")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """The tests exercise the *installed* package (``pip install .``), never the source tree."""
+    import r2d2_viz
+
+    if Path(r2d2_viz.__file__).resolve().is_relative_to(REPO / "r2d2_viz"):
+        raise pytest.UsageError(
+            "r2d2_viz was imported from the source tree; install it (pip install '.[test]') and run "
+            "`pytest` (not `python -m pytest`, which puts the checkout first on sys.path)"
+        )
