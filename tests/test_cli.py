@@ -1,0 +1,105 @@
+"""The command line, in a subprocess, as a user runs it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from conftest import cli
+from rrd import read_recording
+
+from r2d2_viz.cli import main
+
+
+def test_help_lists_the_flags() -> None:
+    result = cli("--help")
+    assert result.returncode == 0
+    for flag in (
+        "--urdf",
+        "--motion",
+        "--duration",
+        "--rate",
+        "--spawn",
+        "--save",
+        "--connect",
+        "--serve",
+        "--headless",
+    ):
+        assert flag in result.stdout
+
+
+def test_python_dash_m_works_too(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    out = tmp_path / "m.rrd"
+    result = subprocess.run(
+        [sys.executable, "-m", "r2d2_viz", "--save", str(out), "--duration", "1"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    assert len(read_recording(out)["/tf/axis"].times) == 30
+
+
+def test_duration_rate_and_motion_shape_the_recording(tmp_path: Path) -> None:
+    out = tmp_path / "short.rrd"
+    result = cli("--save", str(out), "--duration", "2", "--rate", "10", "--motion", "still")
+    assert result.returncode == 0, result.stderr
+    recording = read_recording(out)
+    assert recording["/tf/body"].times == [k * 100_000_000 for k in range(20)]  # 2 s at 10 Hz
+    assert "/tf/axis" in recording and not recording["/tf/axis"].times  # still: odom → axis is static
+
+
+def test_any_urdf_sweeps_by_default(tmp_path: Path) -> None:
+    from r2d2_viz.synth import random_urdf
+
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(random_urdf(12, seed=9, joint_types=("revolute", "prismatic", "fixed")))
+    out = tmp_path / "arm.rrd"
+    result = cli("--urdf", str(urdf), "--save", str(out), "--duration", "1")
+    assert result.returncode == 0, result.stderr
+    values = [rows for path, rows in read_recording(out).items() if path.endswith("/value")]
+    assert values and all(len(rows.times) == 30 for rows in values)
+
+
+def test_headless_computes_and_writes_nothing(tmp_path: Path) -> None:
+    result = cli("--headless", "--duration", "1", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "30 frames" in result.stderr and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["--rate", "0"], "--rate must be a positive"),
+        (["--rate", "-5"], "--rate must be a positive"),
+        (["--rate", "nan"], "--rate must be a positive"),
+        (["--duration", "0"], "--duration must be a positive"),
+        (["--duration", "-1"], "--duration must be a positive"),
+        (["--duration", "inf"], "--duration must be a positive"),
+        (["--duration", "soon"], "not a number: 'soon'"),
+        (["--motion", "dance"], "unknown motion 'dance'; expected one of tutorial, sweep, still"),
+        (["--urdf", "/nonexistent/robot.urdf"], "robot.urdf"),
+        (["--spawn", "--serve"], "choose one live sink"),
+        (["--headless", "--save", "x.rrd"], "--headless"),
+        (["--bogus"], "unrecognized arguments: --bogus"),
+    ],
+)
+def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path: Path, args: list[str], fragment: str) -> None:
+    result = (
+        cli(*args, "--save", str(tmp_path / "out.rrd"), cwd=tmp_path)
+        if "--save" not in args and "--headless" not in args
+        else cli(*args, cwd=tmp_path)
+    )
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0], result.stderr
+    assert "Traceback" not in result.stderr and not list(tmp_path.iterdir())
+
+
+def test_main_is_callable_in_process(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--rate", "-1", "--headless"]) == 2
+    assert capsys.readouterr().err.startswith("error: --rate must be a positive")
