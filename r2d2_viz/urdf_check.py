@@ -368,9 +368,7 @@ def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = No
     """
     if base_dir is None:
         url = root.getroottree().docinfo.URL
-        base_dir = (
-            Path(unquote(urlsplit(url).path) if url.startswith("file:") else url).parent if url else Path()
-        )
+        base_dir = Path(unquote(urlsplit(url).path) if url.startswith("file:") else url).parent if url else Path()
     checker = _Checker(source, base_dir)
     if root.tag != "robot":
         checker.fail("root", f"element is <{_q(str(root.tag), 80)[1:-1]}>; expected <robot>")
@@ -400,9 +398,7 @@ def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = No
         where = f"joint {_q(jname)}"
         parent, child = checker.joint(where, joint, links)
         if child in parent_joint:
-            checker.fail(
-                where, f"child link {_q(child)} is already the child of joint {_q(parent_joint[child])}"
-            )
+            checker.fail(where, f"child link {_q(child)} is already the child of joint {_q(parent_joint[child])}")
         parent_joint[child] = jname
         parent_link[child] = parent
         children.setdefault(parent, []).append(child)
@@ -420,9 +416,7 @@ def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = No
     roots = [name for name in links if name not in parent_joint]
     if len(roots) > 1:
         shown = ", ".join(_q(r, 40) for r in roots[:5]) + (", …" if len(roots) > 5 else "")
-        checker.fail(
-            robot, f"more than one root link ({len(roots)}: {shown}); every other link needs a parent joint"
-        )
+        checker.fail(robot, f"more than one root link ({len(roots)}: {shown}); every other link needs a parent joint")
     reached: set[str] = set(roots)
     stack = list(roots)
     while stack:
@@ -439,9 +433,7 @@ def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = No
             link = parent_link[link]
         loop = list(path)[list(path).index(link) :]
         shown = " -> ".join(_q(n, 40) for n in loop[:6]) + (" -> …" if len(loop) > 6 else "")
-        checker.fail(
-            f"joint {_q(parent_joint[loop[0]])}", f"closes a kinematic loop: {shown} -> {_q(loop[0], 40)}"
-        )
+        checker.fail(f"joint {_q(parent_joint[loop[0]])}", f"closes a kinematic loop: {shown} -> {_q(loop[0], 40)}")
 
     acyclic: set[str] = set()
     for jname in mimics:

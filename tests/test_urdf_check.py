@@ -105,9 +105,7 @@ GOOD_MANIFEST: dict[str, list[str]] = {
         "link 'head': visual #1: mesh 'package://r2d2_description/meshes/dome.dae' not found "
         "(package:// cannot be resolved without ROS); visual skipped"
     ],
-    "material_undefined.urdf": [
-        "link 'base': visual #1: material 'chrome' is not defined; default colour used"
-    ],
+    "material_undefined.urdf": ["link 'base': visual #1: material 'chrome' is not defined; default colour used"],
 }
 
 
@@ -220,9 +218,7 @@ def test_billion_laughs_is_refused_fast() -> None:
 
 def test_bigger_billion_laughs_is_refused_fast(tmp_path: Path) -> None:
     decls = "".join(f'<!ENTITY e{i} "{("&e" + str(i - 1) + ";") * 50}">' for i in range(1, 40))
-    path = write(
-        tmp_path, f'<!DOCTYPE robot [<!ENTITY e0 "ha">{decls}]><robot name="&e39;"><link name="a"/></robot>'
-    )
+    path = write(tmp_path, f'<!DOCTYPE robot [<!ENTITY e0 "ha">{decls}]><robot name="&e39;"><link name="a"/></robot>')
     started = time.perf_counter()
     assert "DOCTYPE declares entities" in refusal(path)
     assert time.perf_counter() - started < 1.0
@@ -311,8 +307,7 @@ def test_chain_of_3000_links_is_accepted_quickly(tmp_path: Path) -> None:
     n = 3000
     parts = ['<robot name="chain">']
     parts += [
-        f'<link name="l{i}"><visual><geometry><sphere radius="0.1"/></geometry></visual></link>'
-        for i in range(n)
+        f'<link name="l{i}"><visual><geometry><sphere radius="0.1"/></geometry></visual></link>' for i in range(n)
     ]
     parts += [
         f'<joint name="j{i}" type="revolute"><parent link="l{i - 1}"/><child link="l{i}"/>'
@@ -330,8 +325,7 @@ def test_long_cycle_is_reported_compactly(tmp_path: Path) -> None:
     n = 3000
     links = "".join(f'<link name="l{i}"/>' for i in range(n))
     joints = "".join(
-        f'<joint name="j{i}" type="fixed"><parent link="l{i}"/><child link="l{(i + 1) % n}"/></joint>'
-        for i in range(n)
+        f'<joint name="j{i}" type="fixed"><parent link="l{i}"/><child link="l{(i + 1) % n}"/></joint>' for i in range(n)
     )
     message = refusal(write(tmp_path, f'<robot name="ring">{links}{joints}</robot>'))
     assert "closes a kinematic loop:" in message and "-> …" in message and len(message) < 400

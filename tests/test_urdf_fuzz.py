@@ -126,9 +126,7 @@ def test_mutated_tutorial_is_accepted_or_refused_cleanly(mutations: list[tuple[o
     st.integers(0, len(TUTORIAL)),
     st.lists(st.tuples(st.integers(0, len(TUTORIAL) - 1), st.integers(0, 255)), max_size=4),
 )
-def test_truncated_or_corrupted_bytes_are_accepted_or_refused_cleanly(
-    cut: int, flips: list[tuple[int, int]]
-) -> None:
+def test_truncated_or_corrupted_bytes_are_accepted_or_refused_cleanly(cut: int, flips: list[tuple[int, int]]) -> None:
     data = bytearray(TUTORIAL)
     for offset, value in flips:
         data[offset] = value
