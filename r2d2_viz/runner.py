@@ -60,7 +60,7 @@ class RunResult:
     saved: Path | None
 
 
-class _StopRequested(Exception):  # noqa: N818 - a signal, not an error
+class _StopRequested(KeyboardInterrupt):  # noqa: N818 - a signal, not an error
     """Raised in a batch run by SIGTERM so the partial file is removed."""
 
 

@@ -1,0 +1,111 @@
+"""Live runs and signals: paced to the wall clock, streamed to a real Rerun gRPC server, finalised on
+SIGINT/SIGTERM; batch runs interrupted leave nothing behind."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+from conftest import rerun_viewer
+from rrd import read_recording
+
+pytestmark = pytest.mark.slow
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _command() -> list[str]:
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "r2d2_viz"]
+
+
+@contextmanager
+def _process(args: list[str], **kwargs) -> Iterator[subprocess.Popen[str]]:
+    proc = subprocess.Popen(
+        args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True, **kwargs
+    )
+    try:
+        yield proc
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=30)
+
+
+def _wait_for_port(port: int, timeout: float = 30) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.1)
+    raise TimeoutError(f"nothing listens on {port}")
+
+
+def test_connect_streams_paced_frames_to_a_running_rerun_server(tmp_path: Path) -> None:
+    viewer = rerun_viewer()
+    assert viewer, "the rerun binary ships with rerun-sdk"
+    port, received = _free_port(), tmp_path / "received.rrd"
+    with _process([viewer, "--port", str(port), "--save", str(received)]) as server:
+        _wait_for_port(port)
+        start = time.monotonic()
+        result = subprocess.run(
+            [*_command(), "--connect", f"rerun+http://127.0.0.1:{port}/proxy", "--duration", "2"],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        elapsed = time.monotonic() - start
+        assert result.returncode == 0, result.stderr
+        time.sleep(1.0)
+        os.killpg(server.pid, signal.SIGINT)
+        server.wait(timeout=30)
+    assert elapsed >= 2.0 * 59 / 60  # frame 59 is sent at t = 59/30 s, not before
+    recording = read_recording(received)
+    assert len(recording["/tf/axis"].times) == 60
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_finalises_a_live_save(tmp_path: Path, signum: int) -> None:
+    out = tmp_path / "live.rrd"
+    with _process([*_command(), "--save", str(out), "--realtime"]) as proc:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not list(tmp_path.glob(".live.rrd.*.partial")):
+            time.sleep(0.05)
+        time.sleep(2.0)  # ~60 frames
+        os.killpg(proc.pid, signum)
+        _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 0, stderr
+    assert "stopped by signal" in stderr
+    frames = len(read_recording(out)["/tf/axis"].times)
+    reported = int(stderr.split("r2d2-viz: ")[1].split(" frames")[0])
+    assert frames == reported and frames >= 30
+    assert not list(tmp_path.glob("*.partial"))
+
+
+def test_an_interrupted_batch_save_removes_its_partial_file_and_keeps_the_old_one(tmp_path: Path) -> None:
+    out = tmp_path / "keep.rrd"
+    out.write_bytes(b"an older recording")
+    with _process([*_command(), "--save", str(out), "--duration", "86400"]) as proc:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not list(tmp_path.glob(".keep.rrd.*.partial")):
+            time.sleep(0.05)
+        time.sleep(0.5)
+        os.killpg(proc.pid, signal.SIGTERM)
+        _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    assert out.read_bytes() == b"an older recording"
+    assert not list(tmp_path.glob("*.partial"))
