@@ -1,0 +1,103 @@
+"""Broken and hostile input through the real command line: one clear line, exit 2, nothing written."""
+
+from __future__ import annotations
+
+import os
+import socket
+from pathlib import Path
+
+import pytest
+from conftest import cli
+from rrd import read_recording
+from test_urdf_check import BAD, BAD_MANIFEST, GOOD
+
+from r2d2_viz.cli import main
+
+
+def _assert_refused(stderr: str, fragment: str, tmp_path: Path) -> None:
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr
+    assert lines[0].startswith("error: ") and fragment in lines[0], stderr
+    assert "Traceback" not in stderr
+    assert not [p for p in tmp_path.iterdir() if p.name != "keep.rrd"], "nothing may be written"
+
+
+@pytest.mark.parametrize("name", sorted(BAD_MANIFEST))
+def test_every_bad_urdf_is_refused_by_main(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--urdf", str(BAD / name), "--save", str(tmp_path / "out.rrd")]) == 2
+    _assert_refused(capsys.readouterr().err, f"{name}: ", tmp_path)
+
+
+@pytest.mark.parametrize(
+    "name", ["billion_laughs.urdf", "xxe_file.urdf", "truncated.urdf", "not_utf8.urdf", "cycle.urdf"]
+)
+def test_bad_urdf_in_a_subprocess_keeps_the_existing_recording(name: str, tmp_path: Path) -> None:
+    assert (BAD / name).exists(), name
+    keep = tmp_path / "keep.rrd"
+    keep.write_bytes(b"previous")
+    result = cli("--urdf", str(BAD / name), "--save", str(keep))
+    assert result.returncode == 2
+    _assert_refused(result.stderr, BAD_MANIFEST[name], tmp_path)
+    assert keep.read_bytes() == b"previous"
+
+
+def test_urdf_path_problems(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for target, fragment in ((tmp_path / "nope.urdf", "nope.urdf: "), (tmp_path, f"{tmp_path.name}: ")):
+        assert main(["--urdf", str(target), "--headless"]) == 2
+        _assert_refused(capsys.readouterr().err, fragment, tmp_path)
+
+
+@pytest.mark.parametrize(
+    ("save", "fragment"),
+    [("missing/dir/out.rrd", "does not exist"), (".", "is a directory")],
+)
+def test_save_target_problems(tmp_path: Path, save: str, fragment: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--save", str(tmp_path / save)]) == 2
+    _assert_refused(capsys.readouterr().err, fragment, tmp_path)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root can write into any directory")
+def test_save_into_an_unwritable_directory(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o500)
+    assert main(["--save", str(locked / "out.rrd")]) == 2
+    assert "is not writable" in capsys.readouterr().err
+
+
+def test_spawn_without_a_display_says_what_to_do_instead(tmp_path: Path) -> None:
+    result = cli("--spawn", "--duration", "1", env={"DISPLAY": "", "WAYLAND_DISPLAY": ""}, cwd=tmp_path)
+    assert result.returncode == 2
+    _assert_refused(result.stderr, "--spawn: no display", tmp_path)
+    assert "--save" in result.stderr and "--serve" in result.stderr
+
+
+def test_serve_on_a_port_in_use_is_a_clear_error(tmp_path: Path) -> None:
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        result = cli("--serve", "--port", str(port), "--duration", "1", cwd=tmp_path)
+    assert result.returncode == 2
+    _assert_refused(result.stderr, f"cannot listen on 127.0.0.1:{port}", tmp_path)
+
+
+def test_odd_names_keep_their_frames_exactly(tmp_path: Path) -> None:
+    out = tmp_path / "odd.rrd"
+    result = cli("--urdf", str(GOOD / "names_unicode_spaces.urdf"), "--save", str(out), "--duration", "1")
+    assert result.returncode == 0, result.stderr
+    recording = read_recording(out)
+    child_frames = {
+        (rows.static.get("Transform3D:child_frame") or rows.temporal.get("Transform3D:child_frame"))[0][0]
+        for rows in recording.values()
+        if rows.static.get("Transform3D:child_frame") or rows.temporal.get("Transform3D:child_frame")
+    }
+    assert child_frames == {"base link", "arm/upper", "Gelenk-ä", "手首 🤖"}
+    axes_frames = {
+        rows.static["CoordinateFrame:frame"][-1][0] for path, rows in recording.items() if path.startswith("/tf_axes/")
+    }
+    assert axes_frames == {"odom", "base link", "arm/upper", "Gelenk-ä", "手首 🤖"}
+
+
+def test_good_corpus_runs_headless(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for urdf in sorted(GOOD.glob("*.urdf")):
+        assert main(["--urdf", str(urdf), "--headless", "--duration", "0.5"]) == 0, capsys.readouterr().err
