@@ -86,32 +86,3 @@ def matrix_to_quat(R: npt.ArrayLike) -> F64:
     q *= np.where(q[:, 3:4] < 0, -1.0, 1.0)
     out: F64 = q.reshape(*matrices.shape[:-2], 4)
     return out
-
-
-def rpy_to_matrix(rpy: npt.ArrayLike) -> F64:
-    """URDF fixed-axis roll-pitch-yaw: ``R = Rz(yaw) · Ry(pitch) · Rx(roll)``."""
-    r, p, y = np.moveaxis(np.asarray(rpy, dtype=np.float64), -1, 0)
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    out = np.empty((*np.shape(r), 3, 3))
-    out[..., 0, 0] = cy * cp
-    out[..., 0, 1] = cy * sp * sr - sy * cr
-    out[..., 0, 2] = cy * sp * cr + sy * sr
-    out[..., 1, 0] = sy * cp
-    out[..., 1, 1] = sy * sp * sr + cy * cr
-    out[..., 1, 2] = sy * sp * cr - cy * sr
-    out[..., 2, 0] = -sp
-    out[..., 2, 1] = cp * sr
-    out[..., 2, 2] = cp * cr
-    return out
-
-
-def homogeneous(rotation: npt.ArrayLike, translation: npt.ArrayLike) -> F64:
-    """4×4 matrices from rotations ``(..., 3, 3)`` and translations ``(..., 3)``."""
-    R = np.asarray(rotation, dtype=np.float64)
-    t = np.asarray(translation, dtype=np.float64)
-    shape = np.broadcast_shapes(R.shape[:-2], t.shape[:-1])
-    out = np.zeros((*shape, 4, 4))
-    out[..., :3, :3] = R
-    out[..., :3, 3] = t
-    out[..., 3, 3] = 1.0
-    return out
