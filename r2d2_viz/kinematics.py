@@ -20,7 +20,7 @@ import numpy.typing as npt
 
 from .errors import UrdfError
 from .model import Robot
-from .transforms import matrix_to_quat, quat_from_axis_angle, quat_multiply, quat_to_matrix
+from .transforms import matrix_to_quat, quat_multiply, quat_to_matrix
 
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]
@@ -157,15 +157,42 @@ def moving_values(tree: KinematicTree, q: npt.ArrayLike) -> F64:
 
 def joint_transforms(tree: KinematicTree, q: npt.ArrayLike) -> tuple[F64, F64]:
     """``T_parent_child`` of every moving joint as ``(translation (T, M, 3), quaternion xyzw (T, M, 4))``."""
-    values = moving_values(tree, q)
-    revolute = tree.moving_kind == REVOLUTE
-    angle = np.where(revolute, values, 0.0)
-    q_motion = quat_from_axis_angle(tree.moving_axis, angle)  # (T, M, 4)
-    quat = quat_multiply(tree.moving_origin_q, q_motion)
-    # prismatic: t = t_origin + R_origin · (axis · d)
-    shift = np.where(revolute, 0.0, values)[..., None] * tree.moving_axis  # (T, M, 3)
-    translation = tree.moving_origin_t + np.einsum("mij,tmj->tmi", tree.moving_origin_R, shift)
-    return translation, quat
+    return transforms_from_values(tree, moving_values(tree, q))
+
+
+def transforms_from_values(tree: KinematicTree, values: F64) -> tuple[F64, F64]:
+    """:func:`joint_transforms` from the values ``(T, M)`` of the moving joints (see :func:`moving_values`).
+
+    Per joint, ``origin ⊗ rot(axis, θ) = sin(θ/2) · (origin ⊗ (axis, 0)) + cos(θ/2) · origin`` and a
+    prismatic shift is ``d · (R_origin · axis)``: the per-joint factors are computed once per call, the
+    per-frame work is one sin, one cos and a few multiply-adds. The arithmetic runs joint by joint over
+    long runs of frames (numpy is slow on many short rows); the results are views ``(T, M, k)`` of arrays
+    laid out ``(M, T, k)``, so ``translation[:, m]`` is contiguous.
+    """
+    n_moving = len(tree.moving)
+    revolute = (tree.moving_kind == REVOLUTE)[:, None]
+    pure_axis = np.concatenate([tree.moving_axis, np.zeros((n_moving, 1))], axis=-1)
+    origin_q = tree.moving_origin_q
+    origin_axis_q = quat_multiply(origin_q, pure_axis)  # (M, 4)
+    direction = np.einsum("mij,mj->mi", tree.moving_origin_R, tree.moving_axis)  # (M, 3)
+
+    by_joint = np.asarray(values, dtype=np.float64).T  # (M, T)
+    n_frames = by_joint.shape[1]
+    half = np.where(revolute, by_joint, 0.0)
+    half *= 0.5
+    sin, cos = np.sin(half), np.cos(half)
+    quat = np.empty((n_moving, n_frames, 4))
+    scratch = np.empty((n_moving, n_frames))
+    for k in range(4):
+        np.multiply(sin, origin_axis_q[:, k, None], out=quat[..., k])
+        np.multiply(cos, origin_q[:, k, None], out=scratch)
+        quat[..., k] += scratch
+    shift = np.where(revolute, 0.0, by_joint)
+    translation = np.empty((n_moving, n_frames, 3))
+    for k in range(3):  # prismatic: t = t_origin + R_origin · (axis · d) = t_origin + d · (R_origin · axis)
+        np.multiply(shift, direction[:, k, None], out=translation[..., k])
+        translation[..., k] += tree.moving_origin_t[:, k, None]
+    return translation.transpose(1, 0, 2), quat.transpose(1, 0, 2)
 
 
 def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.ArrayLike | None = None) -> F64:

@@ -84,32 +84,73 @@ def make_motion(robot: Robot, name: MotionName | None = None) -> Motion:
 # --- tutorial --------------------------------------------------------------------------------------
 
 
+TILT_START, TILT_STEP, TILT_LOWER, TILT_UPPER = 0.0, DEGREE, -0.5, 0.0
+HEIGHT_START, HEIGHT_STEP, HEIGHT_LOWER, HEIGHT_UPPER = 0.0, 0.005, 0.0, 0.2
+
+
+def tutorial_reference(n: int) -> tuple[F64, F64]:
+    """Tilt and periscope height of frames ``0 … n-1``: state_publisher.py's loop, literally.
+
+    The reference for :func:`bounce_cycle` (the tests check one against the other)."""
+    tilt, tinc, height, hinc = TILT_START, TILT_STEP, HEIGHT_START, HEIGHT_STEP
+    tilts, heights = np.empty(n), np.empty(n)
+    for k in range(n):
+        tilts[k] = tilt
+        heights[k] = height
+        tilt += tinc
+        if tilt < TILT_LOWER or tilt > TILT_UPPER:
+            tinc *= -1
+        height += hinc
+        if height > HEIGHT_UPPER or height < HEIGHT_LOWER:
+            hinc *= -1
+    return tilts, heights
+
+
+def bounce_cycle(start: float, step: float, lower: float, upper: float, max_steps: int = 1_000_000) -> tuple[F64, int]:
+    """One variable of state_publisher.py's bouncing loop (``x += inc; if x < lower or x > upper: inc *= -1``),
+    as ``(values, loop_start)`` like :func:`sweep_cycle`.
+
+    The loop's whole state is the pair ``(x, inc)`` of floats, and the next state is a function of it
+    alone, so once a state (compared bit for bit) comes back, everything after repeats exactly: the
+    published value of frame ``k`` is ``values[k]`` for ``k < len(values)``, then
+    ``values[loop_start + (k - loop_start) % (len(values) - loop_start)]`` — the literal loop's
+    floating-point values, rounding included, at any ``k``. (Tilt repeats after 89 steps, the
+    periscope after 105.)
+    """
+    x, inc = start, step
+    seen: dict[tuple[str, str], int] = {}  # float.hex(): bit for bit (tells -0.0 from 0.0)
+    values: list[float] = []
+    while (state := (x.hex(), inc.hex())) not in seen:
+        if len(values) >= max_steps:
+            raise RuntimeError("bouncing motion does not repeat")  # cannot happen for finite steps and bounds
+        seen[state] = len(values)
+        values.append(x)
+        x += inc
+        if x < lower or x > upper:
+            inc *= -1
+    return np.array(values), seen[state]
+
+
+def _cycle_values(cycle: tuple[F64, int], frame: npt.NDArray[np.int64]) -> F64:
+    values, loop = cycle
+    period = len(values) - loop
+    index = np.where(frame < len(values), frame, loop + (frame - loop) % period)
+    out: F64 = values[index]
+    return out
+
+
 def _tutorial(motion: Motion) -> _Source:
-    """state_publisher.py, step for step: publish the state, then advance it."""
-    tilt, tinc, height, hinc = 0.0, DEGREE, 0.0, 0.005
+    """state_publisher.py, step for step: publish the state, then advance it (see :func:`bounce_cycle`)."""
+    tilt = bounce_cycle(TILT_START, TILT_STEP, TILT_LOWER, TILT_UPPER)
+    height = bounce_cycle(HEIGHT_START, HEIGHT_STEP, HEIGHT_LOWER, HEIGHT_UPPER)
     column = {name: i for i, name in enumerate(motion.joints)}
-    last = 0
 
     def source(start: int, n: int) -> MotionChunk:
-        nonlocal tilt, tinc, height, hinc, last
-        assert start == last, "tutorial frames must be generated in order"
-        tilts = np.empty(n)
-        heights = np.empty(n)
-        for k in range(n):  # the bouncing state machine is sequential by nature: ~0.3 µs a frame
-            tilts[k] = tilt
-            heights[k] = height
-            tilt += tinc
-            if tilt < -0.5 or tilt > 0.0:
-                tinc *= -1
-            height += hinc
-            if height > 0.2 or height < 0.0:
-                hinc *= -1
-        last = start + n
         frame = np.arange(start, start + n, dtype=np.int64)
         positions = np.zeros((n, len(motion.joints)))
         positions[:, column["swivel"]] = frame * DEGREE  # swivel += degree, never wrapped
-        positions[:, column["tilt"]] = tilts
-        positions[:, column["periscope"]] = heights
+        positions[:, column["tilt"]] = _cycle_values(tilt, frame)
+        positions[:, column["periscope"]] = _cycle_values(height, frame)
         angle = frame * (DEGREE / 4)  # angle += degree / 4
         translation = np.stack([2 * np.cos(angle), 2 * np.sin(angle), np.full(n, 0.7)], axis=-1)
         yaw = angle + math.pi / 2  # euler_to_quaternion(0, 0, angle + pi/2)
@@ -156,10 +197,8 @@ def _sweep(motion: Motion) -> _Source:
     def source(start: int, n: int) -> MotionChunk:
         frame = np.arange(start, start + n, dtype=np.int64)
         positions = np.empty((n, len(cycles)))
-        for c, (values, loop) in enumerate(cycles):
-            period = len(values) - loop
-            index = np.where(frame < len(values), frame, loop + (frame - loop) % period)
-            positions[:, c] = values[index]
+        for c, cycle in enumerate(cycles):
+            positions[:, c] = _cycle_values(cycle, frame)
         return MotionChunk(frame, positions, None, None)
 
     return source

@@ -24,9 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+import pyarrow as pa
 import rerun as rr
 
-from .kinematics import KinematicTree, joint_transforms, moving_values
+from .kinematics import KinematicTree, moving_values, transforms_from_values
 from .meshes import shape_mesh
 from .model import Rgba, Shape
 from .motion import Motion, MotionChunk
@@ -60,6 +61,18 @@ def _rgba8(rgba: Rgba | None, default: tuple[int, ...]) -> tuple[int, ...]:
 def _time_column(frames: npt.NDArray[np.int64], rate: float) -> rr.TimeColumn:
     nanos = np.rint(frames * (1e9 / rate)).astype(np.int64)
     return rr.TimeColumn(TIMELINE, duration=nanos.astype("timedelta64[ns]"))
+
+
+def _repeated(text: str, n: int) -> pa.StringArray:
+    """``[text] * n`` as an Arrow string array, built from two buffers (no per-row Python strings).
+
+    Rerun takes an Arrow array of its own type as is; a Python list would be converted row by row.
+    The column itself is unchanged: every row still holds the name."""
+    data = text.encode()
+    offsets = np.arange(n + 1, dtype=np.int64) * len(data)
+    if offsets[-1] > np.iinfo(np.int32).max:  # cannot happen for the chunk sizes used; stay correct anyway
+        return pa.array([text] * n, type=pa.utf8())
+    return pa.StringArray.from_buffers(n, pa.py_buffer(offsets.astype(np.int32)), pa.py_buffer(data * n))
 
 
 def _stderr(message: str) -> None:
@@ -199,43 +212,26 @@ class RobotStream:
     # --- per frame ---------------------------------------------------------------------------------
 
     def log_chunk(self, chunk: MotionChunk) -> None:
-        """Log consecutive frames: moving joint transforms, odom → root, arrows, joint values."""
-        if len(chunk.frame) == 0:
+        """Log consecutive frames: moving joint transforms, odom → root, arrows, joint values.
+
+        One ``send_columns`` per entity and chunk; the frame-name columns are built once per chunk length.
+        """
+        n = len(chunk.frame)
+        if n == 0:
             return
         rec, tree = self.rec, self.tree
         times = [_time_column(chunk.frame, self.rate)]
-        n = len(chunk.frame)
-        q = chunk.positions[:, self._order]
-        translation, quat = joint_transforms(tree, q)
+        values = moving_values(tree, chunk.positions[:, self._order])
+        translation, quat = transforms_from_values(tree, values)
         for m, child in enumerate(self._moving_child):
-            parent = self._moving_parent[m]
-            rec.send_columns(
-                path("tf", child),
-                indexes=times,
-                columns=rr.Transform3D.columns(
-                    translation=translation[:, m],
-                    quaternion=quat[:, m],
-                    parent_frame=[parent] * n,
-                    child_frame=[child] * n,
-                ),
-            )
+            self._send_transforms(times, self._moving_parent[m], child, translation[:, m], quat[:, m])
             if self._prismatic[m]:
                 self._send_arrows(times, child, translation[:, m])
         if chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None:
             root = tree.robot.root
-            rec.send_columns(
-                path("tf", root),
-                indexes=times,
-                columns=rr.Transform3D.columns(
-                    translation=chunk.odom_translation,
-                    quaternion=chunk.odom_quat_xyzw,
-                    parent_frame=[ODOM] * n,
-                    child_frame=[root] * n,
-                ),
-            )
+            self._send_transforms(times, ODOM, root, chunk.odom_translation, chunk.odom_quat_xyzw)
             self._send_arrows(times, root, chunk.odom_translation)
 
-        values = moving_values(tree, q)
         for m in range(len(tree.moving)):
             rec.send_columns(self._value_path[m], indexes=times, columns=rr.Scalars.columns(scalars=values[:, m]))
         self._check_limits(chunk, values)
@@ -244,6 +240,20 @@ class RobotStream:
         if chunk.frame[0] == 0 or end_time >= self._next_limit_time:
             self._log_limits(float(chunk.frame[0]) / self.rate if chunk.frame[0] == 0 else end_time)
             self._next_limit_time = end_time + LIMIT_LOG_PERIOD_S
+
+    def _send_transforms(self, times: list[rr.TimeColumn], parent: str, child: str, t: F64, q: F64) -> None:
+        """``/tf/<child>``: every row names its frames (Rerun attaches a row to a frame only if the row says so)."""
+        n = len(t)
+        self.rec.send_columns(
+            path("tf", child),
+            indexes=times,
+            columns=rr.Transform3D.columns(
+                translation=t,
+                quaternion=q,
+                parent_frame=_repeated(parent, n),
+                child_frame=_repeated(child, n),
+            ),
+        )
 
     def finish(self) -> None:
         """Draw the limit lines up to the last frame."""
