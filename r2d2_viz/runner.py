@@ -12,7 +12,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
@@ -26,6 +26,13 @@ from .stream import RobotStream
 
 BATCH_CHUNK_FRAMES = 20_000
 """Frames per columnar chunk in batch runs: memory stays flat however long the run."""
+BATCH_CHUNK_CELLS = 1_000_000
+"""…and at most this many moving-joint values per chunk, so a robot with thousands of joints stays flat too."""
+LIVE_BLOCK_SECONDS = 1.0
+"""Live runs compute and encode this much robot time at once, then send each frame when it is due."""
+PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
+"""Benchmark hook: if set to a path, live runs write one line per frame, ``frame lateness_seconds``
+(when its send returned, minus when it was due). Off by default; costs nothing when unset."""
 LAP_SECONDS = 48.0
 """One lap of the tutorial's odom circle: 360° / (¼° per frame) / 30 Hz."""
 
@@ -60,7 +67,7 @@ class RunResult:
     saved: Path | None
 
 
-class _StopRequested(KeyboardInterrupt):  # noqa: N818 - a signal, not an error
+class _StopRequested(KeyboardInterrupt):  # a signal, not an error
     """Raised in a batch run by SIGTERM so the partial file is removed."""
 
 
@@ -83,7 +90,7 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
                 frames, interrupted = _paced(streamer, config)
             else:
                 with _sigterm_raises():
-                    for chunk in motion.chunks(config.n_frames, BATCH_CHUNK_FRAMES):
+                    for chunk in motion.chunks(config.n_frames, batch_chunk_frames(len(tree.moving))):
                         streamer.log_chunk(chunk)
                         frames += len(chunk.frame)
             streamer.finish()
@@ -119,20 +126,47 @@ def _temp_path(save: Path) -> Path:
     return save.with_name(f".{save.name}.{os.getpid()}.partial")
 
 
+def batch_chunk_frames(n_moving: int) -> int:
+    """Frames per chunk of a batch run for a robot with ``n_moving`` moving joints."""
+    return max(1, min(BATCH_CHUNK_FRAMES, BATCH_CHUNK_CELLS // max(1, n_moving)))
+
+
 def _paced(streamer: RobotStream, config: RunConfig) -> tuple[int, bool]:
-    """Send frame k at ``start + k / rate`` (an absolute schedule: no drift) until done or signalled."""
+    """Send frame k at ``start + k / rate`` (an absolute schedule: no drift) until done or signalled.
+
+    Frames are computed a block at a time (:meth:`RobotStream.prepare`); each is sent on its own
+    when due. If the process falls behind, every frame already due goes out in one send, so a late
+    frame does not push the next ones later.
+    """
     stop = threading.Event()
     frames = 0
-    with _signals_set(stop):
+    rate = config.rate
+    block = max(1, round(rate * LIVE_BLOCK_SECONDS))
+    log_path = os.environ.get(PACING_LOG_ENV)
+    with _signals_set(stop), (open(log_path, "w") if log_path else nullcontext()) as log:
         start = time.monotonic()
-        for chunk in streamer.motion.chunks(config.n_frames, 1):
-            delay = start + int(chunk.frame[0]) / config.rate - time.monotonic()
-            if delay > 0 and stop.wait(delay):
+        for chunk in streamer.motion.chunks(config.n_frames, block):
+            prepared = streamer.prepare(chunk)
+            first, n = int(chunk.frame[0]), len(chunk.frame)
+            i = 0
+            while i < n:
+                delay = start + (first + i) / rate - time.monotonic()
+                if delay > 0 and stop.wait(delay):
+                    break
+                if stop.is_set():
+                    break
+                now = time.monotonic()
+                j = i + 1
+                while j < n and start + (first + j) / rate <= now:
+                    j += 1
+                streamer.send(prepared, i, j)
+                if log is not None:
+                    sent = time.monotonic()
+                    log.writelines(f"{k} {sent - (start + k / rate):.6f}\n" for k in range(first + i, first + j))
+                frames += j - i
+                i = j
+            if i < n:
                 break
-            if stop.is_set():
-                break
-            streamer.log_chunk(chunk)
-            frames += 1
     return frames, stop.is_set()
 
 

@@ -131,7 +131,7 @@ class RobotStream:
             )
             self._log_arrow_static(joint.parent, joint.child, translation[i])
         # Revolute/continuous joints never move their child's origin: their arrow is static too.
-        # Prismatic joints and a moving root get their arrows per frame (see _send_arrows).
+        # Prismatic joints and a moving root get their arrows per frame (see _arrow_columns).
         for m in range(len(tree.moving)):
             if not self._prismatic[m]:
                 self._log_arrow_static(self._moving_parent[m], self._moving_child[m], tree.moving_origin_t[m])
@@ -214,58 +214,74 @@ class RobotStream:
     def log_chunk(self, chunk: MotionChunk) -> None:
         """Log consecutive frames: moving joint transforms, odom → root, arrows, joint values.
 
-        One ``send_columns`` per entity and chunk; the frame-name columns are built once per chunk length.
+        One ``send_columns`` per entity for the whole chunk (see :meth:`prepare` and :meth:`send`).
         """
+        self.send(self.prepare(chunk))
+
+    def prepare(self, chunk: MotionChunk) -> PreparedFrames:
+        """Compute and encode frames for :meth:`send` (nothing is logged yet).
+
+        Everything is vectorised over the chunk: the Arrow columns are built once, and sending
+        any run of its frames later only slices them. Live runs prepare a block of frames ahead and
+        send each frame when it is due, so a frame costs one slice and one send per entity.
+        """
+        tree = self.tree
         n = len(chunk.frame)
-        if n == 0:
-            return
-        rec, tree = self.rec, self.tree
-        times = [_time_column(chunk.frame, self.rate)]
         values = moving_values(tree, chunk.positions[:, self._order])
         translation, quat = transforms_from_values(tree, values)
+        entities: list[tuple[str, list[tuple[rr.ComponentDescriptor, pa.Array]]]] = []
         for m, child in enumerate(self._moving_child):
-            self._send_transforms(times, self._moving_parent[m], child, translation[:, m], quat[:, m])
+            entities.append(self._transform_columns(self._moving_parent[m], child, translation[:, m], quat[:, m]))
             if self._prismatic[m]:
-                self._send_arrows(times, child, translation[:, m])
+                entities.append(_arrow_columns(child, translation[:, m]))
         if chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None:
             root = tree.robot.root
-            self._send_transforms(times, ODOM, root, chunk.odom_translation, chunk.odom_quat_xyzw)
-            self._send_arrows(times, root, chunk.odom_translation)
-
+            entities.append(self._transform_columns(ODOM, root, chunk.odom_translation, chunk.odom_quat_xyzw))
+            entities.append(_arrow_columns(root, chunk.odom_translation))
         for m in range(len(tree.moving)):
-            rec.send_columns(self._value_path[m], indexes=times, columns=rr.Scalars.columns(scalars=values[:, m]))
-        self._check_limits(chunk, values)
-        self._last_frame = int(chunk.frame[-1])
+            entities.append((self._value_path[m], _encoded(rr.Scalars.columns(scalars=values[:, m]))))
+        time = _time_column(chunk.frame, self.rate).as_arrow_array()
+        return PreparedFrames(chunk.frame, values, time, entities) if n else PreparedFrames.empty(values)
+
+    def send(self, frames: PreparedFrames, start: int = 0, stop: int | None = None) -> None:
+        """Log frames ``start … stop-1`` of a prepared block (all by default), one chunk per entity."""
+        stop = len(frames.frame) if stop is None else min(stop, len(frames.frame))
+        if start >= stop:
+            return
+        n = stop - start
+        whole = start == 0 and stop == len(frames.frame)
+        times = [_Index(TIMELINE, frames.time if whole else frames.time.slice(start, n))]
+        for entity, columns in frames.entities:
+            self.rec.send_columns(
+                entity,
+                indexes=times,
+                columns=[_Column(d, a if whole else a.slice(start, n)) for d, a in columns],
+            )
+        frame = frames.frame[start:stop]
+        self._check_limits(frame, frames.values[start:stop])
+        self._last_frame = int(frame[-1])
         end_time = self._last_frame / self.rate
-        if chunk.frame[0] == 0 or end_time >= self._next_limit_time:
-            self._log_limits(float(chunk.frame[0]) / self.rate if chunk.frame[0] == 0 else end_time)
+        if frame[0] == 0 or end_time >= self._next_limit_time:
+            self._log_limits(float(frame[0]) / self.rate if frame[0] == 0 else end_time)
             self._next_limit_time = end_time + LIMIT_LOG_PERIOD_S
 
-    def _send_transforms(self, times: list[rr.TimeColumn], parent: str, child: str, t: F64, q: F64) -> None:
+    def _transform_columns(
+        self, parent: str, child: str, t: F64, q: F64
+    ) -> tuple[str, list[tuple[rr.ComponentDescriptor, pa.Array]]]:
         """``/tf/<child>``: every row names its frames (Rerun attaches a row to a frame only if the row says so)."""
         n = len(t)
-        self.rec.send_columns(
-            path("tf", child),
-            indexes=times,
-            columns=rr.Transform3D.columns(
-                translation=t,
-                quaternion=q,
-                parent_frame=_repeated(parent, n),
-                child_frame=_repeated(child, n),
-            ),
+        columns = rr.Transform3D.columns(
+            translation=t,
+            quaternion=q,
+            parent_frame=_repeated(parent, n),
+            child_frame=_repeated(child, n),
         )
+        return path("tf", child), _encoded(columns)
 
     def finish(self) -> None:
         """Draw the limit lines up to the last frame."""
         if self._last_frame >= 0:
             self._log_limits(self._last_frame / self.rate)
-
-    def _send_arrows(self, times: list[rr.TimeColumn], child: str, t_parent_child: F64) -> None:
-        self.rec.send_columns(
-            path("tf_arrows", child),
-            indexes=times,
-            columns=rr.Arrows3D.columns(origins=t_parent_child, vectors=-t_parent_child),
-        )
 
     def _log_limits(self, time_s: float) -> None:
         self.rec.set_time(TIMELINE, duration=time_s)
@@ -273,7 +289,7 @@ class RobotStream:
             self.rec.log(path("joints", "limited", name, "lower"), rr.Scalars(lower))
             self.rec.log(path("joints", "limited", name, "upper"), rr.Scalars(upper))
 
-    def _check_limits(self, chunk: MotionChunk, values: F64) -> None:
+    def _check_limits(self, frame: npt.NDArray[np.int64], values: F64) -> None:
         for m, name in enumerate(self.tree.moving):
             if name in self._reported or name not in self._limits:
                 continue
@@ -283,7 +299,7 @@ class RobotStream:
                 continue
             k = outside[0]
             self._reported.add(name)
-            t = float(chunk.frame[k]) / self.rate
+            t = float(frame[k]) / self.rate
             message = (
                 f"joint {name!r} left its URDF limits [{lower:g}, {upper:g}] at t={t:.3f} s "
                 f"(value {values[k, m]:.4g}); shown unclamped, like robot_state_publisher"
@@ -291,6 +307,58 @@ class RobotStream:
             self.warn(message)
             self.rec.set_time(TIMELINE, duration=t)
             self.rec.log("/warnings", rr.TextLog(message, level=rr.TextLogLevel.WARN))
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedFrames:
+    """Frames encoded for Rerun by :meth:`RobotStream.prepare`: per entity, its Arrow list columns."""
+
+    frame: npt.NDArray[np.int64]  # (n,)
+    values: F64  # (n, M) moving-joint values, for the limit checks
+    time: pa.Array  # (n,) durations on the ``time`` timeline
+    entities: list[tuple[str, list[tuple[rr.ComponentDescriptor, pa.Array]]]]
+
+    @staticmethod
+    def empty(values: F64) -> PreparedFrames:
+        return PreparedFrames(np.zeros(0, dtype=np.int64), values, pa.array([], pa.duration("ns")), [])
+
+
+class _Index:
+    """A time column whose Arrow array is already built (``rr.TimeColumnLike``)."""
+
+    __slots__ = ("_array", "_timeline")
+
+    def __init__(self, timeline: str, array: pa.Array) -> None:
+        self._timeline, self._array = timeline, array
+
+    def timeline_name(self) -> str:
+        return self._timeline
+
+    def as_arrow_array(self) -> pa.Array:
+        return self._array
+
+
+class _Column(rr.ComponentColumn):
+    """A component column whose Arrow list array (one list per row) is already built.
+
+    ``rr.ComponentColumn`` would rebuild the list array from its batch and offsets on every send;
+    ``send_columns`` only asks a column for its descriptor and its list array."""
+
+    def __init__(self, descriptor: rr.ComponentDescriptor, array: pa.Array) -> None:
+        self.descriptor = descriptor
+        self._array = array
+
+    def as_arrow_array(self) -> pa.Array:
+        return self._array
+
+
+def _encoded(columns: rr.ComponentColumnList) -> list[tuple[rr.ComponentDescriptor, pa.Array]]:
+    return [(c.component_descriptor(), c.as_arrow_array()) for c in columns]
+
+
+def _arrow_columns(child: str, t_parent_child: F64) -> tuple[str, list[tuple[rr.ComponentDescriptor, pa.Array]]]:
+    """``/tf_arrows/<child>``: the arrow from the child frame's origin back to its parent's."""
+    return path("tf_arrows", child), _encoded(rr.Arrows3D.columns(origins=t_parent_child, vectors=-t_parent_child))
 
 
 def _palette(n: int) -> list[tuple[int, int, int, int]]:
