@@ -93,6 +93,7 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
                     for chunk in motion.chunks(config.n_frames, batch_chunk_frames(len(tree.moving))):
                         streamer.log_chunk(chunk)
                         frames += len(chunk.frame)
+                        rec.flush()  # backpressure: the sinks' queue stays one chunk deep, memory flat
             streamer.finish()
         finally:
             close_recording(rec)
