@@ -13,12 +13,13 @@ from __future__ import annotations
 import math
 import sys
 import uuid
+from collections.abc import Sequence
 from pathlib import Path
 
 import rerun as rr
 import rerun.blueprint as rrb
 
-from .stream import APP_ID, ODOM, TIMELINE
+from .stream import APP_ID, ODOM, TIMELINE, path
 
 # --- values read off r2d2.rviz --------------------------------------------------------------------
 BACKGROUND_RGB = (48, 48, 48)  # Global Options / Background Color
@@ -54,8 +55,13 @@ def orbit_eye_position(
     )
 
 
-def generate_blueprint() -> rrb.Blueprint:
-    """The RViz-like layout: a 3D view in ``odom`` (Grid, TF, RobotModel), joint plot, warnings."""
+def generate_blueprint(*, hidden_links: Sequence[str] = ()) -> rrb.Blueprint:
+    """The RViz-like layout: a 3D view in ``odom`` (Grid, TF, RobotModel), joint plots, warnings.
+
+    ``hidden_links`` hides those links' visuals, like unticking them under RobotModel / Links in RViz.
+    """
+    overrides: dict[str, rrb.EntityBehavior] = {"/robot/collision": rrb.EntityBehavior(visible=False)}
+    overrides.update({path("robot", "visual", link): rrb.EntityBehavior(visible=False) for link in hidden_links})
     scene = rrb.Spatial3DView(
         name="3D: odom (Grid · TF · RobotModel)",
         origin="/",
@@ -76,7 +82,7 @@ def generate_blueprint() -> rrb.Blueprint:
             eye_up=(0.0, 0.0, 1.0),
         ),
         # RobotModel: "Collision Enabled: false" — collision shapes are logged but hidden.
-        overrides={"/robot/collision": rrb.EntityBehavior(visible=False)},
+        overrides=overrides,  # type: ignore[arg-type]  # EntityBehavior is one of the accepted values
     )
     # /joint_states as plots: joints with limits (and the limits), and continuous joints, which
     # grow without bound (the tutorial's swivel) and would flatten the others on a shared axis.
@@ -85,25 +91,23 @@ def generate_blueprint() -> rrb.Blueprint:
     log = rrb.TextLogView(name="Warnings", origin="/warnings")
     side = rrb.Vertical(limited, continuous, log, row_shares=[3, 2, 1])
     root = rrb.Horizontal(scene, side, column_shares=[2, 1])
-    for key, part in {
+    parts: dict[str, rrb.View | rrb.Container] = {
         "scene": scene,
         "limited": limited,
         "continuous": continuous,
         "log": log,
         "side": side,
         "root": root,
-    }.items():
+    }
+    for key, part in parts.items():
         _stable_id(part, key)
     return rrb.Blueprint(
         root,
         rrb.BlueprintPanel(state=rrb.components.PanelState.Expanded),
         rrb.SelectionPanel(state=rrb.components.PanelState.Collapsed),
-        rrb.TimePanel(
-            state=rrb.components.PanelState.Collapsed,
-            timeline=TIMELINE,
-            play_state=rrb.components.PlayState.Playing,
-            loop_mode=rrb.components.LoopMode.All,
-        ),
+        # Play state left to the viewer: a recording plays once from the start and stays on its last
+        # frame; a live stream is followed as it arrives — RViz always shows the latest state.
+        rrb.TimePanel(state=rrb.components.PanelState.Collapsed, timeline=TIMELINE),
         auto_views=False,
     )
 

@@ -29,7 +29,7 @@ def test_shipped_model_is_the_tutorials_byte_for_byte() -> None:
 
 def test_links_joints_and_tree(r2d2) -> None:
     assert r2d2.name == "r2d2" and r2d2.root == "axis"
-    assert [link.name for link in r2d2.links][0] == "axis"
+    assert r2d2.links[0].name == "axis"
     assert {j.name: (j.type, j.parent, j.child) for j in r2d2.joints} == {
         "leg1connect": ("fixed", "axis", "leg1"),
         "leg2connect": ("fixed", "axis", "leg2"),
