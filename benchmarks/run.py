@@ -331,15 +331,9 @@ def _live_run(
             proc.send_signal(signal.SIGINT)
             proc.wait()
     rows = [(int(a), float(b)) for a, b in (line.split() for line in log.read_text().splitlines())]
-    in_file = _count_rows(out, f"/tf/{_root_link()}")
+    in_file = _count_rows(out, "/joints/limited")  # one row per frame
     out.unlink()
     return rows, cpu_fraction, in_file
-
-
-def _root_link() -> str:
-    from r2d2_viz.model import default_urdf_path, load_urdf
-
-    return load_urdf(default_urdf_path()).root
 
 
 def _count_rows(rrd: Path, entity: str) -> int:

@@ -13,6 +13,7 @@ Pure numpy; no rerun import.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -195,9 +196,18 @@ def transforms_from_values(tree: KinematicTree, values: F64) -> tuple[F64, F64]:
     return translation.transpose(1, 0, 2), quat.transpose(1, 0, 2)
 
 
-def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.ArrayLike | None = None) -> F64:
+def link_poses(
+    tree: KinematicTree,
+    q: npt.ArrayLike,
+    *,
+    T_fixed_root: npt.ArrayLike | None = None,
+    links: Sequence[int] | None = None,
+) -> F64:
     """Pose of every link in the fixed frame, ``(T, L, 4, 4)``; the root's pose is ``T_fixed_root``
-    (identity by default). Links below a floating joint are NaN."""
+    (identity by default). Links below a floating joint are NaN.
+
+    With ``links`` (indices into ``tree.links``), only those links and their ancestors are composed and
+    the result is ``(T, len(links), 4, 4)``."""
     translation, quat = joint_transforms(tree, q)
     n_frames = translation.shape[0]
     T_joint = np.zeros((n_frames, len(tree.moving), 4, 4))
@@ -214,9 +224,17 @@ def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.Array
     local[:, tree.moving_child] = T_joint
     parent[tree.moving_child] = tree.moving_parent
 
-    poses = np.empty((n_frames, n_links, 4, 4))
+    needed = np.ones(n_links, dtype=bool)
+    if links is not None:  # only the requested links and their ancestors
+        needed[:] = False
+        for i in links:
+            while i >= 0 and not needed[i]:
+                needed[i] = True
+                i = int(parent[i])
+    poses = np.full((n_frames, n_links, 4, 4), np.nan)
     poses[:, 0] = np.eye(4) if T_fixed_root is None else np.asarray(T_fixed_root, dtype=np.float64)
     for i in range(1, n_links):
-        p = parent[i]
-        poses[:, i] = np.nan if p < 0 else poses[:, p] @ local[:, i]
-    return poses
+        p = int(parent[i])
+        if needed[i] and p >= 0:
+            poses[:, i] = poses[:, p] @ local[:, i]
+    return poses if links is None else poses[:, list(links)]

@@ -2,14 +2,18 @@
 
 Entity layout (every name is a URDF link or joint name, escaped for entity paths):
 
-* ``/tf_static/<child>`` — fixed (and planar) joints: one static ``Transform3D(parent_frame, child_frame)``;
-* ``/tf/<child>`` — moving joints and ``odom → <root>``: one ``Transform3D`` per frame;
+* ``/tf_static/<child>`` — fixed (and planar) joints, and ``odom → <root>`` when the root stays put: one
+  static ``Transform3D(parent_frame, child_frame)`` each;
+* ``/tf`` — every moving joint and a moving ``odom → <root>``: one ``Transform3D`` row per joint per frame,
+  each row naming its frames (one entity, like the /tf topic: Rerun resolves every child frame of it);
 * ``/robot/visual/<link>/<i>``, ``/robot/collision/<link>/<i>`` — ``Mesh3D`` in the link's named frame
   (``CoordinateFrame``), shape origin baked into the vertices;
 * ``/tf_axes/<frame>`` — ``TransformAxes3D`` for every frame (RViz TF "Show Axes"; names off);
-* ``/tf_arrows/<child>`` — an arrow from each child frame's origin to its parent's (RViz "Show Arrows");
-* ``/joints/limited/<joint>/value|lower|upper`` — values of joints with limits, and the limits;
-* ``/joints/continuous/<joint>`` — values of continuous joints (they grow without bound: own plot);
+* ``/tf_arrows/<child>`` — an arrow from each child frame's origin to its parent's (RViz "Show Arrows"),
+  static in the parent frame; the arrows that move (prismatic joints, a moving root) are all in one
+  entity, ``/tf_arrows/moving``, in ``odom``;
+* ``/joints/limited`` — values of the joints with limits, one series each; ``…/<joint>/lower|upper`` the limits;
+* ``/joints/continuous`` — values of continuous joints (they grow without bound: their own plot);
 * ``/warnings`` — ``TextLog`` lines, e.g. a joint leaving its limits.
 
 Named frames are the URDF link names plus ``odom``. Quaternions enter Rerun as ``xyzw``.
@@ -27,10 +31,11 @@ import numpy.typing as npt
 import pyarrow as pa
 import rerun as rr
 
-from .kinematics import KinematicTree, moving_values, transforms_from_values
+from .kinematics import KinematicTree, link_poses, moving_values, transforms_from_values
 from .meshes import shape_mesh
 from .model import Rgba, Shape
 from .motion import Motion, MotionChunk
+from .transforms import quat_to_matrix
 
 APP_ID = "r2d2_viz"
 TIMELINE = "time"
@@ -40,6 +45,8 @@ AXIS_LENGTH = 0.1
 ARROW_COLOR = (255, 0, 255)
 COLLISION_COLOR = (255, 140, 0, 160)
 DEFAULT_VISUAL_COLOR = (204, 204, 204, 255)
+PLOT_PERIOD_S = 0.2
+"""Live runs send plot values five times a second (each with its own timestamp), transforms every frame."""
 LIMIT_LOG_PERIOD_S = 1.0
 """How often (in recording time) live runs repeat the constant limit lines, so they span the plot."""
 
@@ -58,21 +65,18 @@ def _rgba8(rgba: Rgba | None, default: tuple[int, ...]) -> tuple[int, ...]:
     return tuple(round(min(max(c, 0.0), 1.0) * 255) for c in rgba)
 
 
-def _time_column(frames: npt.NDArray[np.int64], rate: float) -> rr.TimeColumn:
-    nanos = np.rint(frames * (1e9 / rate)).astype(np.int64)
-    return rr.TimeColumn(TIMELINE, duration=nanos.astype("timedelta64[ns]"))
-
-
-def _repeated(text: str, n: int) -> pa.StringArray:
-    """``[text] * n`` as an Arrow string array, built from two buffers (no per-row Python strings).
+def _tiled(texts: list[str], n: int) -> pa.StringArray:
+    """``texts * n`` as an Arrow string array, built from two buffers (no per-row Python strings).
 
     Rerun takes an Arrow array of its own type as is; a Python list would be converted row by row.
-    The column itself is unchanged: every row still holds the name."""
-    data = text.encode()
-    offsets = np.arange(n + 1, dtype=np.int64) * len(data)
+    The column itself is unchanged: every row still holds its name."""
+    encoded = [t.encode() for t in texts]
+    lengths = np.tile(np.array([len(e) for e in encoded], dtype=np.int64), n)
+    offsets = np.concatenate([[0], np.cumsum(lengths)])
     if offsets[-1] > np.iinfo(np.int32).max:  # cannot happen for the chunk sizes used; stay correct anyway
-        return pa.array([text] * n, type=pa.utf8())
-    return pa.StringArray.from_buffers(n, pa.py_buffer(offsets.astype(np.int32)), pa.py_buffer(data * n))
+        return pa.array(texts * n, type=pa.utf8())
+    data = b"".join(encoded) * n
+    return pa.StringArray.from_buffers(len(lengths), pa.py_buffer(offsets.astype(np.int32)), pa.py_buffer(data))
 
 
 def _stderr(message: str) -> None:
@@ -99,11 +103,26 @@ class RobotStream:
         assert set(self.motion.joints) == set(self.tree.actuated), "motion and robot disagree on joints"
         self._order = [self._column[name] for name in self.tree.actuated]
         self._limits = self.tree.limits
-        self._value_path = [
-            path("joints", "limited", name, "value") if name in self._limits else path("joints", "continuous", name)
-            for name in self.tree.moving
+        limited = [m for m, name in enumerate(self.tree.moving) if name in self._limits]
+        continuous = [m for m, name in enumerate(self.tree.moving) if name not in self._limits]
+        self._plots = [
+            (path("joints", kind), np.array(ms, dtype=np.intp))
+            for kind, ms in (("limited", limited), ("continuous", continuous))
+            if ms
+        ]
+        self._tf_parents = [*self._moving_parent, *([ODOM] if self.motion.moves_root else [])]
+        self._tf_children = [*self._moving_child, *([robot.root] if self.motion.moves_root else [])]
+        # rows of /tf whose child origin moves in its parent: prismatic joints and a moving root
+        self._moving_arrows = [
+            r for r in range(len(self._tf_children)) if r >= len(self._prismatic) or self._prismatic[r]
+        ]
+        index = {name: i for i, name in enumerate(self.tree.links)}  # odom is no link: -1
+        self._arrow_ends = [
+            (index[self._tf_children[r]], index.get(self._tf_parents[r], -1)) for r in self._moving_arrows
         ]
         self._reported: set[str] = set()
+        self._pending_block: PreparedFrames | None = None
+        self._plot_from = self._sent_to = 0
         self._next_limit_time = 0.0
         self._last_frame = -1
 
@@ -135,13 +154,16 @@ class RobotStream:
         for m in range(len(tree.moving)):
             if not self._prismatic[m]:
                 self._log_arrow_static(self._moving_parent[m], self._moving_child[m], tree.moving_origin_t[m])
-            else:
-                self._log_arrow_style(self._moving_parent[m], self._moving_child[m])
-        if self.motion.moves_root:
-            self._log_arrow_style(ODOM, robot.root)
-        else:
+        if self._moving_arrows:
             rec.log(
-                path("tf", robot.root),
+                path("tf_arrows", "moving"),
+                rr.CoordinateFrame(ODOM),
+                rr.Arrows3D.from_fields(colors=[ARROW_COLOR] * len(self._moving_arrows)),
+                static=True,
+            )
+        if not self.motion.moves_root:
+            rec.log(
+                path("tf_static", robot.root),
                 rr.Transform3D(translation=[0.0, 0.0, 0.0], parent_frame=ODOM, child_frame=robot.root),
                 static=True,
             )
@@ -160,9 +182,15 @@ class RobotStream:
                     self._log_shape(path("robot", kind, link.name, str(i)), link.name, shape, kind == "visual")
 
         palette = _palette(len(tree.moving))
+        for entity, ms in self._plots:
+            names = [tree.moving[m] for m in ms]
+            rec.log(
+                entity,
+                rr.SeriesLines(colors=[palette[m] for m in ms], names=names, widths=[2.0] * len(ms)),
+                static=True,
+            )
         for m, name in enumerate(tree.moving):
             color = palette[m]
-            rec.log(self._value_path[m], rr.SeriesLines(colors=[color], names=[name], widths=[2.0]), static=True)
             if name in self._limits:
                 faded = (*color[:3], 140)
                 for bound in ("lower", "upper"):
@@ -179,14 +207,6 @@ class RobotStream:
             path("tf_arrows", child),
             rr.CoordinateFrame(parent),
             rr.Arrows3D(origins=[t_parent_child], vectors=[-np.asarray(t_parent_child)], colors=[ARROW_COLOR]),
-            static=True,
-        )
-
-    def _log_arrow_style(self, parent: str, child: str) -> None:
-        self.rec.log(
-            path("tf_arrows", child),
-            rr.CoordinateFrame(parent),
-            rr.Arrows3D.from_fields(colors=[ARROW_COLOR]),
             static=True,
         )
 
@@ -223,40 +243,76 @@ class RobotStream:
 
         Everything is vectorised over the chunk: the Arrow columns are built once, and sending
         any run of its frames later only slices them. Live runs prepare a block of frames ahead and
-        send each frame when it is due, so a frame costs one slice and one send per entity.
+        send each frame when it is due, so a frame costs a slice and one send per entity — and the
+        entities per frame are few (``/tf``, the moving arrows, the plots): Rerun's cost is per chunk.
         """
         tree = self.tree
         n = len(chunk.frame)
         values = moving_values(tree, chunk.positions[:, self._order])
-        translation, quat = transforms_from_values(tree, values)
-        entities: list[tuple[str, list[tuple[rr.ComponentDescriptor, pa.Array]]]] = []
-        for m, child in enumerate(self._moving_child):
-            entities.append(self._transform_columns(self._moving_parent[m], child, translation[:, m], quat[:, m]))
-            if self._prismatic[m]:
-                entities.append(_arrow_columns(child, translation[:, m]))
+        if n == 0:
+            return PreparedFrames.empty(values)
+        translation, quat = transforms_from_values(tree, values)  # (n, M, 3), (n, M, 4)
         if chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None:
-            root = tree.robot.root
-            entities.append(self._transform_columns(ODOM, root, chunk.odom_translation, chunk.odom_quat_xyzw))
-            entities.append(_arrow_columns(root, chunk.odom_translation))
-        for m in range(len(tree.moving)):
-            entities.append((self._value_path[m], _encoded(rr.Scalars.columns(scalars=values[:, m]))))
-        time = _time_column(chunk.frame, self.rate).as_arrow_array()
-        return PreparedFrames(chunk.frame, values, time, entities) if n else PreparedFrames.empty(values)
+            translation = np.concatenate([translation, chunk.odom_translation[:, None]], axis=1)
+            quat = np.concatenate([quat, chunk.odom_quat_xyzw[:, None]], axis=1)
+        rows = translation.shape[1]  # transforms per frame, in self._tf_children order
+        entities: list[_Entity] = []
+        if rows:
+            columns = rr.Transform3D.columns(
+                translation=translation.reshape(-1, 3),
+                quaternion=quat.reshape(-1, 4),
+                parent_frame=_tiled(self._tf_parents, n),
+                child_frame=_tiled(self._tf_children, n),
+            )
+            entities.append(_Entity(path("tf"), rows, _encoded(columns)))
+        if self._moving_arrows:
+            entities.append(self._moving_arrow_columns(chunk, values))
+        for entity, ms in self._plots:
+            scalars = rr.Scalars.columns(scalars=values[:, ms].reshape(-1)).partition(np.full(n, len(ms)))
+            entities.append(_Entity(entity, 1, _encoded(scalars), plot=True))
+        nanos = np.rint(chunk.frame * (1e9 / self.rate)).astype(np.int64)
+        times = {r: pa.array(np.repeat(nanos, r).astype("timedelta64[ns]")) for r in {e.rows for e in entities}}
+        return PreparedFrames(chunk.frame, values, times, entities)
+
+    def _moving_arrow_columns(self, chunk: MotionChunk, values: F64) -> _Entity:
+        """``/tf_arrows/moving``: from each moving child's origin to its parent's, both in ``odom``."""
+        n = len(chunk.frame)
+        T_odom_root = None
+        if chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None:
+            T_odom_root = np.zeros((n, 4, 4))
+            T_odom_root[:, :3, :3] = quat_to_matrix(chunk.odom_quat_xyzw)
+            T_odom_root[:, :3, 3] = chunk.odom_translation
+            T_odom_root[:, 3, 3] = 1.0
+        ends = sorted({i for pair in self._arrow_ends for i in pair if i >= 0})
+        poses = link_poses(self.tree, chunk.positions[:, self._order], T_fixed_root=T_odom_root, links=ends)
+        at = {link: poses[:, k, :3, 3] for k, link in enumerate(ends)}
+        odom = np.zeros((n, 3))
+        child = np.stack([at[c] for c, _ in self._arrow_ends], axis=1)  # (n, k, 3)
+        parent = np.stack([at[p] if p >= 0 else odom for _, p in self._arrow_ends], axis=1)
+        k = len(self._arrow_ends)
+        arrows = rr.Arrows3D.columns(origins=child.reshape(-1, 3), vectors=(parent - child).reshape(-1, 3))
+        return _Entity(path("tf_arrows", "moving"), 1, _encoded(arrows.partition(np.full(n, k))))
 
     def send(self, frames: PreparedFrames, start: int = 0, stop: int | None = None) -> None:
-        """Log frames ``start … stop-1`` of a prepared block (all by default), one chunk per entity."""
+        """Log frames ``start … stop-1`` of a prepared block (all by default), one chunk per entity.
+
+        Transforms and arrows go out with every call. Plot values, when frames come one at a time (live
+        runs), are gathered and sent every ``PLOT_PERIOD_S`` of robot time, and when the block ends:
+        every value keeps its own timestamp, the plot just fills in a few times a second — Rerun's cost
+        is per chunk, and this keeps a 30 Hz live run within a few percent of a core.
+        """
         stop = len(frames.frame) if stop is None else min(stop, len(frames.frame))
         if start >= stop:
             return
-        n = stop - start
-        whole = start == 0 and stop == len(frames.frame)
-        times = [_Index(TIMELINE, frames.time if whole else frames.time.slice(start, n))]
-        for entity, columns in frames.entities:
-            self.rec.send_columns(
-                entity,
-                indexes=times,
-                columns=[_Column(d, a if whole else a.slice(start, n)) for d, a in columns],
-            )
+        if frames is not self._pending_block:
+            self._flush_plots()
+            self._pending_block, self._plot_from = frames, start
+        for entity in frames.entities:
+            if not entity.plot:
+                self._send_rows(frames, entity, start, stop)
+        self._sent_to = stop
+        if stop == len(frames.frame) or stop - self._plot_from >= max(1, round(PLOT_PERIOD_S * self.rate)):
+            self._flush_plots()
         frame = frames.frame[start:stop]
         self._check_limits(frame, frames.values[start:stop])
         self._last_frame = int(frame[-1])
@@ -265,21 +321,29 @@ class RobotStream:
             self._log_limits(float(frame[0]) / self.rate if frame[0] == 0 else end_time)
             self._next_limit_time = end_time + LIMIT_LOG_PERIOD_S
 
-    def _transform_columns(
-        self, parent: str, child: str, t: F64, q: F64
-    ) -> tuple[str, list[tuple[rr.ComponentDescriptor, pa.Array]]]:
-        """``/tf/<child>``: every row names its frames (Rerun attaches a row to a frame only if the row says so)."""
-        n = len(t)
-        columns = rr.Transform3D.columns(
-            translation=t,
-            quaternion=q,
-            parent_frame=_repeated(parent, n),
-            child_frame=_repeated(child, n),
+    def _flush_plots(self) -> None:
+        """Send the plot values of the frames sent so far that have not been plotted yet."""
+        frames = self._pending_block
+        if frames is None or self._plot_from >= self._sent_to:
+            return
+        for entity in frames.entities:
+            if entity.plot:
+                self._send_rows(frames, entity, self._plot_from, self._sent_to)
+        self._plot_from = self._sent_to
+
+    def _send_rows(self, frames: PreparedFrames, entity: _Entity, start: int, stop: int) -> None:
+        whole = start == 0 and stop == len(frames.frame)
+        first, count = start * entity.rows, (stop - start) * entity.rows
+        time = frames.times[entity.rows]
+        self.rec.send_columns(
+            entity.path,
+            indexes=[_Index(TIMELINE, time if whole else time.slice(first, count))],
+            columns=[_Column(d, a if whole else a.slice(first, count)) for d, a in entity.columns],
         )
-        return path("tf", child), _encoded(columns)
 
     def finish(self) -> None:
-        """Draw the limit lines up to the last frame."""
+        """Send what is pending and draw the limit lines up to the last frame."""
+        self._flush_plots()
         if self._last_frame >= 0:
             self._log_limits(self._last_frame / self.rate)
 
@@ -310,17 +374,28 @@ class RobotStream:
 
 
 @dataclass(frozen=True, eq=False)
+class _Entity:
+    """One entity's columns for a block of frames: ``rows`` rows per frame (``/tf`` has one per joint)."""
+
+    path: str
+    rows: int
+    columns: list[tuple[rr.ComponentDescriptor, pa.Array]]
+    plot: bool = False
+    """Plot data: in live runs sent every ``PLOT_PERIOD_S`` rather than every frame (see :meth:`send`)."""
+
+
+@dataclass(frozen=True, eq=False)
 class PreparedFrames:
     """Frames encoded for Rerun by :meth:`RobotStream.prepare`: per entity, its Arrow list columns."""
 
     frame: npt.NDArray[np.int64]  # (n,)
     values: F64  # (n, M) moving-joint values, for the limit checks
-    time: pa.Array  # (n,) durations on the ``time`` timeline
-    entities: list[tuple[str, list[tuple[rr.ComponentDescriptor, pa.Array]]]]
+    times: dict[int, pa.Array]  # rows per frame → the ``time`` column, each frame's time repeated that often
+    entities: list[_Entity]
 
     @staticmethod
     def empty(values: F64) -> PreparedFrames:
-        return PreparedFrames(np.zeros(0, dtype=np.int64), values, pa.array([], pa.duration("ns")), [])
+        return PreparedFrames(np.zeros(0, dtype=np.int64), values, {}, [])
 
 
 class _Index:
@@ -354,11 +429,6 @@ class _Column(rr.ComponentColumn):
 
 def _encoded(columns: rr.ComponentColumnList) -> list[tuple[rr.ComponentDescriptor, pa.Array]]:
     return [(c.component_descriptor(), c.as_arrow_array()) for c in columns]
-
-
-def _arrow_columns(child: str, t_parent_child: F64) -> tuple[str, list[tuple[rr.ComponentDescriptor, pa.Array]]]:
-    """``/tf_arrows/<child>``: the arrow from the child frame's origin back to its parent's."""
-    return path("tf_arrows", child), _encoded(rr.Arrows3D.columns(origins=t_parent_child, vectors=-t_parent_child))
 
 
 def _palette(n: int) -> list[tuple[int, int, int, int]]:

@@ -63,3 +63,17 @@ def blueprint_components(path: str | Path) -> dict[str, dict[str, Any]]:
             if f.name not in IGNORED and f.name != "blueprint":
                 out[chunk.entity_path][f.name] = batch.column(i).to_pylist()[-1]
     return dict(out)
+
+
+def tf_by_child(recording: dict[str, Rows], entity: str = "/tf") -> dict[str, Rows]:
+    """The rows of a ``/tf``-like entity (several child frames per time) split by child frame."""
+    out: dict[str, Rows] = defaultdict(Rows)
+    rows = recording.get(entity)
+    if rows is None:
+        return {}
+    for i, child in enumerate(rows.temporal["Transform3D:child_frame"]):
+        mine = out[child[0]]
+        mine.times.append(rows.times[i])
+        for name, values in rows.temporal.items():
+            mine.temporal[name].append(values[i])
+    return dict(out)

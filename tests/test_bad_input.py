@@ -87,9 +87,12 @@ def test_odd_names_keep_their_frames_exactly(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     recording = read_recording(out)
     child_frames = {
-        (rows.static.get("Transform3D:child_frame") or rows.temporal.get("Transform3D:child_frame"))[0][0]
+        child[0]
         for rows in recording.values()
-        if rows.static.get("Transform3D:child_frame") or rows.temporal.get("Transform3D:child_frame")
+        for child in (
+            *rows.static.get("Transform3D:child_frame", []),
+            *rows.temporal.get("Transform3D:child_frame", []),
+        )
     }
     assert child_frames == {"base link", "arm/upper", "Gelenk-ä", "手首 🤖"}
     axes_frames = {

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 from conftest import cli
-from rrd import read_recording
+from rrd import read_recording, tf_by_child
 
 from r2d2_viz.cli import main
 
@@ -41,7 +41,7 @@ def test_python_dash_m_works_too(tmp_path: Path) -> None:
         timeout=120,
     )
     assert result.returncode == 0, result.stderr
-    assert len(read_recording(out)["/tf/axis"].times) == 30
+    assert len(tf_by_child(read_recording(out))["axis"].times) == 30
 
 
 def test_duration_rate_and_motion_shape_the_recording(tmp_path: Path) -> None:
@@ -49,8 +49,10 @@ def test_duration_rate_and_motion_shape_the_recording(tmp_path: Path) -> None:
     result = cli("--save", str(out), "--duration", "2", "--rate", "10", "--motion", "still")
     assert result.returncode == 0, result.stderr
     recording = read_recording(out)
-    assert recording["/tf/body"].times == [k * 100_000_000 for k in range(20)]  # 2 s at 10 Hz
-    assert "/tf/axis" in recording and not recording["/tf/axis"].times  # still: odom → axis is static
+    moving = tf_by_child(recording)
+    assert moving["body"].times == [k * 100_000_000 for k in range(20)]  # 2 s at 10 Hz
+    assert "axis" not in moving  # still: odom → axis is static
+    assert recording["/tf_static/axis"].static["Transform3D:parent_frame"][-1] == ["odom"]
 
 
 def test_any_urdf_sweeps_by_default(tmp_path: Path) -> None:
@@ -61,8 +63,9 @@ def test_any_urdf_sweeps_by_default(tmp_path: Path) -> None:
     out = tmp_path / "arm.rrd"
     result = cli("--urdf", str(urdf), "--save", str(out), "--duration", "1")
     assert result.returncode == 0, result.stderr
-    values = [rows for path, rows in read_recording(out).items() if path.endswith("/value")]
-    assert values and all(len(rows.times) == 30 for rows in values)
+    recording = read_recording(out)
+    assert len(recording["/joints/limited"].times) == 30
+    assert all(len(rows.times) == 30 for rows in tf_by_child(recording).values())
 
 
 def test_headless_computes_and_writes_nothing(tmp_path: Path) -> None:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 from conftest import rerun_viewer
-from rrd import read_recording
+from rrd import read_recording, tf_by_child
 
 pytestmark = pytest.mark.slow
 
@@ -74,7 +74,7 @@ def test_connect_streams_paced_frames_to_a_running_rerun_server(tmp_path: Path) 
         server.wait(timeout=30)
     assert elapsed >= 2.0 * 59 / 60  # frame 59 is sent at t = 59/30 s, not before
     recording = read_recording(received)
-    assert len(recording["/tf/axis"].times) == 60
+    assert len(tf_by_child(recording)["axis"].times) == 60
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
@@ -89,7 +89,7 @@ def test_a_signal_finalises_a_live_save(tmp_path: Path, signum: int) -> None:
         _, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 0, stderr
     assert "stopped by signal" in stderr
-    frames = len(read_recording(out)["/tf/axis"].times)
+    frames = len(tf_by_child(read_recording(out))["axis"].times)
     reported = int(stderr.split("r2d2-viz: ")[1].split(" frames")[0])
     assert frames == reported and frames >= 30
     assert not list(tmp_path.glob("*.partial"))

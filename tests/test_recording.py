@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import yourdfpy
 from reference import quat_xyzw_to_matrix, state_publisher
-from rrd import Rows, read_recording
+from rrd import Rows, read_recording, tf_by_child
 
 LINKS = ("axis", "leg1", "leg2", "body", "head", "rod", "box")
 N_FRAMES = 1440  # one lap: 360° / (¼° per frame)
@@ -47,7 +47,7 @@ def _edges_static(recording: dict[str, Rows]) -> dict[str, tuple[str, np.ndarray
 
 
 def test_one_lap_is_1440_frames_on_the_time_timeline(recording: dict[str, Rows]) -> None:
-    times = recording["/tf/axis"].times
+    times = tf_by_child(recording)["axis"].times
     assert len(times) == N_FRAMES
     expected = np.rint(np.arange(N_FRAMES) * 1e9 / 30).astype(np.int64)
     assert np.array_equal(times, expected)  # frame k at t = k / 30 s
@@ -58,23 +58,19 @@ def test_fixed_joints_are_static_and_moving_ones_are_not(recording: dict[str, Ro
     for child, parent in (("leg1", "axis"), ("leg2", "axis"), ("box", "rod")):
         assert static[child][0] == parent
     temporal_children = {
-        rows.temporal["Transform3D:child_frame"][0][0]
-        for rows in recording.values()
-        if rows.temporal.get("Transform3D:child_frame")
+        child[0] for rows in recording.values() for child in rows.temporal.get("Transform3D:child_frame", [])
     }
     assert temporal_children == {"axis", "body", "head", "rod"}  # odom→axis, tilt, swivel, periscope
+    assert set(tf_by_child(recording)) == temporal_children  # all on /tf, as on the /tf topic
 
 
 def test_every_link_pose_matches_state_publisher_and_robot_state_publisher(
     recording: dict[str, Rows], tutorial_urdf: Path
 ) -> None:
     static = _edges_static(recording)
-    moving = {}
-    for rows in recording.values():
-        if rows.temporal.get("Transform3D:child_frame"):
-            child = rows.temporal["Transform3D:child_frame"][0][0]
-            assert len(rows.times) == N_FRAMES, child
-            moving[child] = rows
+    moving = tf_by_child(recording)
+    for child, rows in moving.items():
+        assert len(rows.times) == N_FRAMES, child
 
     reference = state_publisher(N_FRAMES)
     urdf = yourdfpy.URDF.load(str(tutorial_urdf), load_meshes=False)
@@ -109,7 +105,9 @@ def test_every_link_pose_matches_state_publisher_and_robot_state_publisher(
 
 
 def test_periscope_is_not_clamped_and_the_excursion_is_reported_once(lap_recording, recording) -> None:
-    values = np.array([v[0] for v in recording["/joints/limited/periscope/value"].temporal["Scalars:scalars"]])
+    names = recording["/joints/limited"].static["SeriesLines:names"][-1]
+    column = names.index("periscope")
+    values = np.array([v[column] for v in recording["/joints/limited"].temporal["Scalars:scalars"]])
     assert values.max() == pytest.approx(0.2, abs=1e-9)  # URDF upper limit is 0: not clamped
     assert values.min() == pytest.approx(0.0, abs=1e-9)
     lower = recording["/joints/limited/periscope/lower"].temporal["Scalars:scalars"]
@@ -119,7 +117,7 @@ def test_periscope_is_not_clamped_and_the_excursion_is_reported_once(lap_recordi
     assert sum("'periscope'" in t for t in texts) == 1
     stderr = lap_recording[1].stderr
     assert stderr.count("'periscope' left its URDF limits") == 1
-    rod_translations = np.array([t[0] for t in recording["/tf/rod"].temporal["Transform3D:translation"]])
+    rod_translations = np.array([t[0] for t in tf_by_child(recording)["rod"].temporal["Transform3D:translation"]])
     assert rod_translations[:, 2].max() == pytest.approx(0.15 + 0.2, abs=1e-6)  # origin z + unclamped 0.2
 
 
@@ -160,7 +158,17 @@ def test_tf_display_axes_on_every_frame_names_off_and_arrows_to_parents(recordin
     assert leg1["CoordinateFrame:frame"][-1] == ["axis"]
     assert np.allclose(leg1["Arrows3D:origins"][-1][0], [0, 0.3, 0], atol=1e-6)
     assert np.allclose(leg1["Arrows3D:vectors"][-1][0], [0, -0.3, 0], atol=1e-6)
-    # odom → axis moves every frame: so does its arrow (2 m long, from the robot to odom's origin).
-    vectors = np.array([v[0] for v in recording["/tf_arrows/axis"].temporal["Arrows3D:vectors"]])
-    assert len(vectors) == N_FRAMES
-    assert np.allclose(np.linalg.norm(vectors[:, :2], axis=1), 2.0, atol=1e-5)
+    # odom → axis and head → rod (prismatic) move every frame: their arrows are drawn per frame in odom.
+    moving = recording["/tf_arrows/moving"]
+    assert moving.static["CoordinateFrame:frame"][-1] == ["odom"]
+    origins = np.array(moving.temporal["Arrows3D:origins"])  # (frames, 2 arrows, 3)
+    vectors = np.array(moving.temporal["Arrows3D:vectors"])
+    assert origins.shape == (N_FRAMES, 2, 3)
+    reference = state_publisher(N_FRAMES)
+    odom_t = np.array([r["odom_translation"] for r in reference])
+    root = [i for i in range(2) if np.allclose(origins[:, i], odom_t, atol=1e-5)]  # axis's origin, in odom
+    assert len(root) == 1 and np.allclose(vectors[:, root[0]], -odom_t, atol=1e-5)
+    rod = 1 - root[0]
+    periscope = np.array([r["joint_state"]["periscope"] for r in reference])
+    expected = np.hypot(0.12, 0.15 + periscope)  # |t_head_rod|: origin (.12, 0, .15) + periscope along z
+    assert np.allclose(np.linalg.norm(vectors[:, rod], axis=1), expected, atol=1e-5)
