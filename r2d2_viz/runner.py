@@ -82,9 +82,9 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
     frames = 0
     interrupted = False
     try:
-        rec = open_recording(config.sink, save_to=tmp, on_ready=on_ready)
+        recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready)
         try:
-            streamer = RobotStream(rec, tree, motion, config.rate)
+            streamer = RobotStream(recording.rec, tree, motion, config.rate)
             streamer.log_static()
             if config.live:
                 frames, interrupted = _paced(streamer, config)
@@ -93,10 +93,10 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
                     for chunk in motion.chunks(config.n_frames, batch_chunk_frames(len(tree.moving))):
                         streamer.log_chunk(chunk)
                         frames += len(chunk.frame)
-                        rec.flush()  # backpressure: the sinks' queue stays one chunk deep, memory flat
+                        recording.rec.flush()  # backpressure: the sinks' queue stays one chunk deep, memory flat
             streamer.finish()
         finally:
-            close_recording(rec)
+            close_recording(recording)
         if tmp is not None and save is not None:
             os.replace(tmp, save)
     except BaseException:
@@ -144,7 +144,7 @@ def _paced(streamer: RobotStream, config: RunConfig) -> tuple[int, bool]:
     rate = config.rate
     block = max(1, round(rate * LIVE_BLOCK_SECONDS))
     log_path = os.environ.get(PACING_LOG_ENV)
-    with _signals_set(stop), (open(log_path, "w") if log_path else nullcontext()) as log:
+    with _signals_set(stop), open(log_path, "w") if log_path else nullcontext() as log:
         start = time.monotonic()
         for chunk in streamer.motion.chunks(config.n_frames, block):
             prepared = streamer.prepare(chunk)

@@ -7,11 +7,15 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import socket
+import subprocess
 import sys
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from urllib.parse import quote
 
 import rerun as rr
 
@@ -21,6 +25,7 @@ from .stream import APP_ID
 
 DEFAULT_GRPC_PORT = 9876
 DEFAULT_WEB_PORT = 9090
+SERVER_START_TIMEOUT_S = 30.0
 
 
 @dataclass(frozen=True)
@@ -61,17 +66,17 @@ def open_recording(
     *,
     save_to: Path | None = None,
     on_ready: Callable[[str], None] | None = None,
-) -> rr.RecordingStream:
+) -> Recording:
     """A recording stream with the configured sinks and the RViz-like default blueprint.
 
     ``save_to`` is the file actually written (the caller renames it into place when done).
     """
     blueprint = generate_blueprint()
     if config.headless:
-        rec = rr.RecordingStream(APP_ID, default_enabled=False)
-        return rec
+        return Recording(rr.RecordingStream(APP_ID, default_enabled=False))
     rec = rr.RecordingStream(APP_ID, send_properties=True)
-    sinks: list[rr.FileSink | rr.GrpcSink | rr.GrpcServerSink] = []
+    sinks: list[rr.FileSink | rr.GrpcSink] = []
+    server: subprocess.Popen[bytes] | None = None
     if config.spawn:
         if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
             raise SinkError("--spawn: no display to open the viewer on; use --save FILE.rrd or --serve instead")
@@ -86,24 +91,77 @@ def open_recording(
     if config.connect is not None:
         sinks.append(rr.GrpcSink(config.connect))
     if config.serve:
-        _check_port_free(config.bind, config.port, "gRPC server")
-        _check_port_free(config.bind, config.web_port, "web viewer")
-        server = rr.GrpcServerSink(bind_ip=config.bind, port=config.port)
-        sinks.append(server)
+        server, uri = _serve(config)
+        sinks.append(rr.GrpcSink(uri))
     if save_to is not None:
         sinks.append(rr.FileSink(save_to))
     rec.set_sinks(*sinks, default_blueprint=blueprint)
-    if config.serve:
-        uri = server.uri
-        rr.serve_web_viewer(web_port=config.web_port, open_browser=False, connect_to=uri)
-        host = "localhost" if config.bind in ("127.0.0.1", "::1") else config.bind
-        url = f"http://{host}:{config.web_port}/?url={uri}"
-        if on_ready is not None:
-            on_ready(f"serving: open {url} in a browser, or run: rerun {uri}")
-    return rec
+    if config.serve and on_ready is not None:
+        host = "localhost" if config.bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else config.bind
+        public = uri.replace("127.0.0.1", host)
+        on_ready(
+            f"serving: open http://{host}:{config.web_port}/?url={quote(public, safe='')} in a browser, "
+            f"or run: rerun {public}"
+        )
+    return Recording(rec, server)
 
 
-def close_recording(rec: rr.RecordingStream) -> None:
-    """Flush everything to the sinks and close them (finalises an .rrd file)."""
-    rec.flush()
-    rec.disconnect()
+def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
+    """Rerun's own server (``rerun --serve-web``): a web viewer and a gRPC proxy, both on ``--bind``.
+
+    (The SDK's in-process ``serve_web_viewer`` always listens on every address; this one does not.)
+    """
+    _check_port_free(config.bind, config.port, "gRPC server")
+    _check_port_free(config.bind, config.web_port, "web viewer")
+    executable = viewer_executable()
+    if executable is None:
+        raise SinkError("--serve: the 'rerun' binary that ships with rerun-sdk was not found; use --save FILE.rrd")
+    command = [
+        executable,
+        "--serve-web",
+        "--bind",
+        config.bind,
+        "--port",
+        str(config.port),
+        "--web-viewer-port",
+        str(config.web_port),
+    ]
+    server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    local = "127.0.0.1" if config.bind in ("0.0.0.0", "::") else config.bind
+    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
+    while time.monotonic() < deadline and server.poll() is None:
+        with socket.socket(socket.AF_INET6 if ":" in local else socket.AF_INET) as probe:
+            if probe.connect_ex((local, config.port)) == 0:
+                host = f"[{local}]" if ":" in local else local
+                return server, f"rerun+http://{host}:{config.port}/proxy"
+        time.sleep(0.05)
+    _stop(server)
+    raise SinkError(f"--serve: the Rerun server did not start on {config.bind}:{config.port}")
+
+
+def _stop(process: subprocess.Popen[bytes]) -> None:
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGTERM)
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+
+
+@dataclass
+class Recording:
+    """The recording stream, and the server process ``--serve`` started, if any."""
+
+    rec: rr.RecordingStream
+    server: subprocess.Popen[bytes] | None = None
+
+
+def close_recording(recording: Recording) -> None:
+    """Flush everything to the sinks and close them (finalises an .rrd file); stop the server."""
+    try:
+        recording.rec.flush()
+        recording.rec.disconnect()
+    finally:
+        if recording.server is not None:
+            _stop(recording.server)

@@ -196,3 +196,42 @@ def test_native_viewer(case: str, recordings: dict[str, Path], x_display, artifa
     if case == "r2d2":  # the viewer itself resolved the URDF links and odom as named frames
         named = {f["id"] for f in graph["frames"] if f["kind"] == "named"}  # type: ignore[index]
         assert named == {"odom", "axis", "leg1", "leg2", "body", "head", "rod", "box"}
+
+
+def test_serve_streams_live_to_the_web_viewer(chromium_browser, artifacts_dir: Path) -> None:
+    """``r2d2-viz --serve``: the robot, live, in the browser, on the RViz-like layout."""
+    from urllib.parse import quote
+
+    grpc_port, web_port = viewers.free_port(), viewers.free_port()
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    log = artifacts_dir / "serve.log"
+    command = [str(exe), "--serve", "--port", str(grpc_port), "--web-port", str(web_port), "--duration", "300"]
+    with log.open("w") as sink:
+        app = subprocess.Popen(command, stdout=sink, stderr=sink, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            with socket.socket() as s:
+                if s.connect_ex(("127.0.0.1", web_port)) == 0:
+                    break
+            assert app.poll() is None, log.read_text()
+            time.sleep(0.2)
+        context = chromium_browser.new_context(
+            viewport={"width": WEB_VIEWPORT[0], "height": WEB_VIEWPORT[1]}, color_scheme="dark"
+        )
+        context.route("**/*", lambda route: route.continue_() if "127.0.0.1" in route.request.url else route.abort())
+        page = context.new_page()
+        url = f"http://127.0.0.1:{web_port}/?url={quote(f'rerun+http://127.0.0.1:{grpc_port}/proxy', safe='')}"
+        page.goto(url)
+
+        def shows_the_robot(img: np.ndarray) -> bool:
+            return not layout_problems(img) and not any("white" in p for p in robot_problems(img))
+
+        # live: the robot moves, so the page never stands still; readiness is the predicate
+        png = viewers.wait_until_viewer_ready(page, timeout=150, max_changed=0.2, ready=shows_the_robot)
+        (artifacts_dir / "web_serve.png").write_bytes(png)
+        context.close()
+    finally:
+        viewers._stop_process_group(app)
+    img = viewers.load_png(artifacts_dir / "web_serve.png")
+    assert layout_problems(img) == [] and not any("white" in p for p in robot_problems(img))
