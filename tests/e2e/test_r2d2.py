@@ -173,8 +173,10 @@ def native_viewer(display: str, log: Path) -> Iterator[object]:
         viewers._stop_process_group(proc)
 
 
-def _native_shot(display: str, rrd: Path, png: Path, log: Path) -> object:
+def _native_shot(display: str, rrd: Path, png: Path, log: Path, *, blueprint: Path | None = None) -> object:
     with native_viewer(display, log) as client:
+        if blueprint is not None:  # like `rerun out.rrd layout.rbl`: the blueprint, then the recording
+            client.open(str(blueprint), navigate=False)  # type: ignore[attr-defined]
         client.open(str(rrd))  # type: ignore[attr-defined]
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
@@ -186,6 +188,16 @@ def _native_shot(display: str, rrd: Path, png: Path, log: Path) -> object:
         time.sleep(8.0)  # let the start-up notifications (software rasterizer, …) fade from the plots
         client.save_screenshot(str(png))  # type: ignore[attr-defined]
         return client.get_transform_graph()  # type: ignore[attr-defined]
+
+
+def test_native_viewer_with_the_saved_blueprint(recordings: dict[str, Path], x_display, artifacts_dir: Path) -> None:
+    """``rerun out.rrd blueprints/r2d2.rbl``: the saved layout applies even to a recording without one."""
+    rbl = Path(__file__).resolve().parents[2] / "blueprints" / "r2d2.rbl"
+    png = artifacts_dir / "native_default_blueprint_with_rbl.png"
+    _native_shot(x_display.display, recordings["default_blueprint"], png, artifacts_dir / "rbl.log", blueprint=rbl)
+    img = viewers.load_png(png)
+    assert layout_problems(img) == [], f"{png}: {layout_problems(img)}"
+    assert not any("white" in p for p in robot_problems(img)), f"{png}: {robot_problems(img)}"
 
 
 @pytest.mark.parametrize("case", CASES)
