@@ -55,7 +55,6 @@ def soak(seconds: float, rate: float, interval: float) -> dict[str, float]:
         "seconds": seconds,
         "rate_hz": rate,
         "frames": round(seconds * rate),
-        "rss_start_mb": samples[0][1],
         "rss_settled_mb": base,
         "rss_end_mb": last,
         "rss_peak_mb": max(v for _, v in samples),
@@ -74,8 +73,8 @@ def main(argv: list[str] | None = None) -> int:
     frames, rate, seconds = r["frames"], r["rate_hz"], r["seconds"]
     print(f"soak: {frames:,} frames live at {rate:g} Hz for {seconds:g} s, saved ({r['file_mb']:.0f} MB)")
     print(
-        f"RSS: {r['rss_start_mb']:.0f} MB at start, {r['rss_settled_mb']:.0f} MB settled, "
-        f"{r['rss_end_mb']:.0f} MB at the end (peak {r['rss_peak_mb']:.0f} MB)"
+        f"RSS: {r['rss_settled_mb']:.0f} MB once settled, {r['rss_end_mb']:.0f} MB at the end "
+        f"(peak {r['rss_peak_mb']:.0f} MB)"
     )
     print(f"growth after settling: {r['growth_percent']:+.1f} % (goal < 10 %)")
     return 0

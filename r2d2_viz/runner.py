@@ -82,7 +82,7 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
     frames = 0
     interrupted = False
     try:
-        recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready)
+        recording = open_recording(config.sink, save_to=tmp, live=config.live, on_ready=on_ready)
         try:
             streamer = RobotStream(recording.rec, tree, motion, config.rate)
             streamer.log_static()
@@ -152,8 +152,8 @@ def _paced(streamer: RobotStream, config: RunConfig) -> tuple[int, bool]:
             i = 0
             while i < n:
                 delay = start + (first + i) / rate - time.monotonic()
-                if delay > 0 and stop.wait(delay):
-                    break
+                if delay > 0:  # at most one frame period: a signal's handler sets `stop`, seen right after
+                    time.sleep(delay)
                 if stop.is_set():
                     break
                 now = time.monotonic()
@@ -168,6 +168,9 @@ def _paced(streamer: RobotStream, config: RunConfig) -> tuple[int, bool]:
                 i = j
             if i < n:
                 break
+            # Backpressure, once a block (a second): wait until the sinks have taken what was sent, so a
+            # sink slower than the frame rate makes frames late instead of piling them up in memory.
+            streamer.rec.flush()
     return frames, stop.is_set()
 
 
