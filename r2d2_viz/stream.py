@@ -11,7 +11,7 @@ Entity layout (every name is a URDF link or joint name, escaped for entity paths
 * ``/tf_axes/<frame>`` — ``TransformAxes3D`` for every frame (RViz TF "Show Axes"; names off);
 * ``/tf_arrows/<child>`` — an arrow from each child frame's origin to its parent's (RViz "Show Arrows"),
   static in the parent frame; the arrows that move (prismatic joints, a moving root) are all in one
-  entity, ``/tf_arrows/moving``, in ``odom``;
+  entity, ``/tf_moving_arrows``, in ``odom``;
 * ``/joints/limited`` — values of the joints with limits, one series each; ``…/<joint>/lower|upper`` the limits;
 * ``/joints/continuous`` — values of continuous joints (they grow without bound: their own plot);
 * ``/warnings`` — ``TextLog`` lines, e.g. a joint leaving its limits.
@@ -158,7 +158,7 @@ class RobotStream:
                 self._log_arrow_static(self._moving_parent[m], self._moving_child[m], tree.moving_origin_t[m])
         if self._moving_arrows:
             rec.log(
-                path("tf_arrows", "moving"),
+                path("tf_moving_arrows"),
                 rr.CoordinateFrame(ODOM),
                 rr.Arrows3D.from_fields(colors=[ARROW_COLOR] * len(self._moving_arrows)),
                 static=True,
@@ -268,7 +268,7 @@ class RobotStream:
             )
             entities.append(_Entity(path("tf"), rows, _encoded(columns)))
         if self._moving_arrows:
-            entities.append(self._moving_arrow_columns(chunk, values))
+            entities.append(self._moving_arrow_columns(chunk))
         for entity, ms in self._plots:
             scalars = rr.Scalars.columns(scalars=values[:, ms].reshape(-1)).partition(np.full(n, len(ms)))
             entities.append(_Entity(entity, 1, _encoded(scalars), plot=True))
@@ -287,8 +287,8 @@ class RobotStream:
         frames = np.flatnonzero(((block < lower) | (block > upper)).any(axis=1))
         return frames if len(frames) else None
 
-    def _moving_arrow_columns(self, chunk: MotionChunk, values: F64) -> _Entity:
-        """``/tf_arrows/moving``: from each moving child's origin to its parent's, both in ``odom``."""
+    def _moving_arrow_columns(self, chunk: MotionChunk) -> _Entity:
+        """``/tf_moving_arrows``: from each moving child's origin to its parent's, both in ``odom``."""
         n = len(chunk.frame)
         T_odom_root = None
         if chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None:
@@ -304,7 +304,7 @@ class RobotStream:
         parent = np.stack([at[p] if p >= 0 else odom for _, p in self._arrow_ends], axis=1)
         k = len(self._arrow_ends)
         arrows = rr.Arrows3D.columns(origins=child.reshape(-1, 3), vectors=(parent - child).reshape(-1, 3))
-        return _Entity(path("tf_arrows", "moving"), 1, _encoded(arrows.partition(np.full(n, k))))
+        return _Entity(path("tf_moving_arrows"), 1, _encoded(arrows.partition(np.full(n, k))))
 
     def send(self, frames: PreparedFrames, start: int = 0, stop: int | None = None) -> None:
         """Log frames ``start … stop-1`` of a prepared block (all by default), one chunk per entity.

@@ -159,7 +159,7 @@ def test_tf_display_axes_on_every_frame_names_off_and_arrows_to_parents(recordin
     assert np.allclose(leg1["Arrows3D:origins"][-1][0], [0, 0.3, 0], atol=1e-6)
     assert np.allclose(leg1["Arrows3D:vectors"][-1][0], [0, -0.3, 0], atol=1e-6)
     # odom → axis and head → rod (prismatic) move every frame: their arrows are drawn per frame in odom.
-    moving = recording["/tf_arrows/moving"]
+    moving = recording["/tf_moving_arrows"]
     assert moving.static["CoordinateFrame:frame"][-1] == ["odom"]
     origins = np.array(moving.temporal["Arrows3D:origins"])  # (frames, 2 arrows, 3)
     vectors = np.array(moving.temporal["Arrows3D:vectors"])
