@@ -17,7 +17,9 @@ the viewer's default blueprint instead of ours.
 
 from __future__ import annotations
 
+import os
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -247,3 +249,44 @@ def test_serve_streams_live_to_the_web_viewer(chromium_browser, artifacts_dir: P
         viewers._stop_process_group(app)
     img = viewers.load_png(artifacts_dir / "web_serve.png")
     assert layout_problems(img) == [] and not any("white" in p for p in robot_problems(img))
+
+
+def test_spawn_opens_the_native_viewer_and_streams_live(x_display, artifacts_dir: Path) -> None:
+    """``r2d2-viz --spawn``, the default: the native viewer opens and shows the robot on the RViz-like layout."""
+    from rerun.experimental import ViewerClient
+
+    port = viewers.free_port()
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    env = viewers.native_render_env(x_display.display)
+    log = artifacts_dir / "spawn.log"
+    with log.open("w") as sink:  # not a pipe: the detached viewer inherits it and would keep it open
+        result = subprocess.run(
+            [str(exe), "--spawn", "--port", str(port), "--duration", "3"],
+            env=env,
+            stdout=sink,
+            stderr=sink,
+            timeout=120,
+        )
+    viewer_pids = [
+        int(p)
+        for p in subprocess.run(["pgrep", "-f", f"rerun.*--port={port}"], capture_output=True, text=True).stdout.split()
+    ]
+    try:
+        assert result.returncode == 0, log.read_text()
+        assert "90 frames" in log.read_text()
+        assert viewer_pids, "the viewer should outlive the app, like an RViz window"
+        client = ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
+        state = client.get_state()
+        assert state.active_recording and any(t.name == "time" for r in state.recordings for t in r.timelines)
+        time.sleep(8.0)  # start-up notifications fade from the plots
+        png = artifacts_dir / "spawn.png"
+        client.save_screenshot(str(png))
+        img = viewers.load_png(png)
+        assert layout_problems(img) == [], f"{png}: {layout_problems(img)}"
+        assert not any("white" in p for p in robot_problems(img)), f"{png}: {robot_problems(img)}"
+    finally:
+        for pid in viewer_pids:  # the viewer this test spawned, by its own pid
+            try:
+                os.kill(pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
