@@ -196,18 +196,59 @@ def transforms_from_values(tree: KinematicTree, values: F64) -> tuple[F64, F64]:
     return translation.transpose(1, 0, 2), quat.transpose(1, 0, 2)
 
 
-def link_poses(
+def link_positions(
     tree: KinematicTree,
-    q: npt.ArrayLike,
+    translation: F64,
+    quat: F64,
+    links: Sequence[int],
     *,
-    T_fixed_root: npt.ArrayLike | None = None,
-    links: Sequence[int] | None = None,
-) -> F64:
-    """Pose of every link in the fixed frame, ``(T, L, 4, 4)``; the root's pose is ``T_fixed_root``
-    (identity by default). Links below a floating joint are NaN.
+    T_fixed_root: F64 | None = None,
+) -> dict[int, F64]:
+    """Origins ``(T, 3)`` of ``links`` (indices into ``tree.links``) in the fixed frame, from the moving
+    joints' transforms already computed by :func:`transforms_from_values`: only the links asked for and
+    their ancestors are composed, as rotation and translation (no 4×4 matrices for the whole tree)."""
+    n_frames = translation.shape[0]
+    parent = np.full(len(tree.links), -1, dtype=np.int64)
+    parent[tree.static_child] = tree.static_parent
+    parent[tree.moving_child] = tree.moving_parent
+    moving_index = {int(c): m for m, c in enumerate(tree.moving_child)}
+    static_index = {int(c): s for s, c in enumerate(tree.static_child)}
+    if T_fixed_root is None:
+        root_R, root_t = np.broadcast_to(np.eye(3), (n_frames, 3, 3)), np.zeros((n_frames, 3))
+    else:
+        root_R, root_t = T_fixed_root[:, :3, :3], T_fixed_root[:, :3, 3]
+    poses: dict[int, tuple[F64, F64]] = {0: (root_R, root_t)}
 
-    With ``links`` (indices into ``tree.links``), only those links and their ancestors are composed and
-    the result is ``(T, len(links), 4, 4)``."""
+    def pose(link: int) -> tuple[F64, F64]:
+        chain = []
+        while link not in poses:  # walk up to a known ancestor (iteratively: chains may be long)
+            chain.append(link)
+            link = int(parent[link])
+            if link < 0:  # below a floating joint: not connected
+                nan = (np.full((n_frames, 3, 3), np.nan), np.full((n_frames, 3), np.nan))
+                for c in chain:
+                    poses[c] = nan
+                return nan
+        for c in reversed(chain):
+            R_parent, t_parent = poses[int(parent[c])]
+            if c in moving_index:
+                m = moving_index[c]
+                R_local, t_local = quat_to_matrix(quat[:, m]), translation[:, m]
+            else:
+                T = tree.static_T[static_index[c]]
+                R_local, t_local = (
+                    np.broadcast_to(T[:3, :3], (n_frames, 3, 3)),
+                    np.broadcast_to(T[:3, 3], (n_frames, 3)),
+                )
+            poses[c] = (R_parent @ R_local, t_parent + np.einsum("tij,tj->ti", R_parent, t_local))
+        return poses[chain[0]] if chain else poses[link]
+
+    return {link: pose(link)[1] for link in links}
+
+
+def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.ArrayLike | None = None) -> F64:
+    """Pose of every link in the fixed frame, ``(T, L, 4, 4)``; the root's pose is ``T_fixed_root``
+    (identity by default). Links below a floating joint are NaN."""
     translation, quat = joint_transforms(tree, q)
     n_frames = translation.shape[0]
     T_joint = np.zeros((n_frames, len(tree.moving), 4, 4))
@@ -224,17 +265,9 @@ def link_poses(
     local[:, tree.moving_child] = T_joint
     parent[tree.moving_child] = tree.moving_parent
 
-    needed = np.ones(n_links, dtype=bool)
-    if links is not None:  # only the requested links and their ancestors
-        needed[:] = False
-        for i in links:
-            while i >= 0 and not needed[i]:
-                needed[i] = True
-                i = int(parent[i])
-    poses = np.full((n_frames, n_links, 4, 4), np.nan)
+    poses = np.empty((n_frames, n_links, 4, 4))
     poses[:, 0] = np.eye(4) if T_fixed_root is None else np.asarray(T_fixed_root, dtype=np.float64)
     for i in range(1, n_links):
-        p = int(parent[i])
-        if needed[i] and p >= 0:
-            poses[:, i] = poses[:, p] @ local[:, i]
-    return poses if links is None else poses[:, list(links)]
+        p = parent[i]
+        poses[:, i] = np.nan if p < 0 else poses[:, p] @ local[:, i]
+    return poses

@@ -90,10 +90,12 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
                 frames, interrupted = _paced(streamer, config)
             else:
                 with _sigterm_raises():
-                    for chunk in motion.chunks(config.n_frames, batch_chunk_frames(len(tree.moving))):
-                        streamer.log_chunk(chunk)
+                    for k, chunk in enumerate(motion.chunks(config.n_frames, batch_chunk_frames(len(tree.moving)))):
+                        prepared = streamer.prepare(chunk)  # meanwhile the sinks write the previous chunk
+                        if k:
+                            recording.rec.flush()  # backpressure: one chunk in flight, memory stays flat
+                        streamer.send(prepared)
                         frames += len(chunk.frame)
-                        recording.rec.flush()  # backpressure: the sinks' queue stays one chunk deep, memory flat
             streamer.finish()
         finally:
             close_recording(recording)

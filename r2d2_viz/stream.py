@@ -32,7 +32,7 @@ import pyarrow as pa
 import rerun as rr
 from rerun_bindings import send_arrow_chunk as _send_arrow_chunk
 
-from .kinematics import KinematicTree, link_poses, moving_values, transforms_from_values
+from .kinematics import KinematicTree, link_positions, moving_values, transforms_from_values
 from .meshes import shape_mesh
 from .model import Rgba, Shape
 from .motion import Motion, MotionChunk
@@ -254,6 +254,7 @@ class RobotStream:
         if n == 0:
             return PreparedFrames.empty(values)
         translation, quat = transforms_from_values(tree, values)  # (n, M, 3), (n, M, 4)
+        arrows = self._moving_arrow_columns(chunk, translation, quat) if self._moving_arrows else None
         if chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None:
             translation = np.concatenate([translation, chunk.odom_translation[:, None]], axis=1)
             quat = np.concatenate([quat, chunk.odom_quat_xyzw[:, None]], axis=1)
@@ -267,8 +268,8 @@ class RobotStream:
                 child_frame=_tiled(self._tf_children, n),
             )
             entities.append(_Entity(path("tf"), rows, _encoded(columns)))
-        if self._moving_arrows:
-            entities.append(self._moving_arrow_columns(chunk))
+        if arrows is not None:
+            entities.append(arrows)
         for entity, ms in self._plots:
             scalars = rr.Scalars.columns(scalars=values[:, ms].reshape(-1)).partition(np.full(n, len(ms)))
             entities.append(_Entity(entity, 1, _encoded(scalars), plot=True))
@@ -287,7 +288,7 @@ class RobotStream:
         frames = np.flatnonzero(((block < lower) | (block > upper)).any(axis=1))
         return frames if len(frames) else None
 
-    def _moving_arrow_columns(self, chunk: MotionChunk) -> _Entity:
+    def _moving_arrow_columns(self, chunk: MotionChunk, translation: F64, quat: F64) -> _Entity:
         """``/tf_moving_arrows``: from each moving child's origin to its parent's, both in ``odom``."""
         n = len(chunk.frame)
         T_odom_root = None
@@ -295,10 +296,8 @@ class RobotStream:
             T_odom_root = np.zeros((n, 4, 4))
             T_odom_root[:, :3, :3] = quat_to_matrix(chunk.odom_quat_xyzw)
             T_odom_root[:, :3, 3] = chunk.odom_translation
-            T_odom_root[:, 3, 3] = 1.0
         ends = sorted({i for pair in self._arrow_ends for i in pair if i >= 0})
-        poses = link_poses(self.tree, chunk.positions[:, self._order], T_fixed_root=T_odom_root, links=ends)
-        at = {link: poses[:, k, :3, 3] for k, link in enumerate(ends)}
+        at = link_positions(self.tree, translation, quat, ends, T_fixed_root=T_odom_root)
         odom = np.zeros((n, 3))
         child = np.stack([at[c] for c, _ in self._arrow_ends], axis=1)  # (n, k, 3)
         parent = np.stack([at[p] if p >= 0 else odom for _, p in self._arrow_ends], axis=1)

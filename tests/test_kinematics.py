@@ -17,7 +17,7 @@ import rerun as rr
 import yourdfpy
 from reference import quat_xyzw_to_matrix
 
-from r2d2_viz.kinematics import compile_tree, joint_transforms, link_poses
+from r2d2_viz.kinematics import compile_tree, joint_transforms, link_poses, moving_values
 from r2d2_viz.model import load_urdf
 from r2d2_viz.synth import random_urdf
 from r2d2_viz.transforms import matrix_to_quat, quat_to_matrix
@@ -236,3 +236,19 @@ def test_quaternion_conversions_against_known_rotations() -> None:
     assert np.allclose(np.abs(matrix_to_quat(Rx180)), [1, 0, 0, 0], atol=TOL)
     R = np.stack([_rpy(v) for v in np.random.default_rng(0).uniform(-math.pi, math.pi, (200, 3))])
     assert np.allclose(quat_to_matrix(matrix_to_quat(R)), R, atol=1e-12)
+
+
+def test_link_positions_of_a_few_links_match_the_full_poses(tmp_path: Path) -> None:
+    from r2d2_viz.kinematics import link_positions, transforms_from_values
+
+    tree = compile_tree(load_urdf(_write(tmp_path, random_urdf(30, seed=11, mimic_fraction=0.3))))
+    q = _random_configs(tree, 20, seed=4)
+    T_root = np.broadcast_to(np.eye(4), (20, 4, 4)).copy()
+    T_root[:, :3, 3] = [1.0, -2.0, 0.5]
+    full = link_poses(tree, q, T_fixed_root=T_root)
+    translation, quat = transforms_from_values(tree, moving_values(tree, q))
+    links = [3, 17, 29, 0]
+    got = link_positions(tree, translation, quat, links, T_fixed_root=T_root)
+    for link in links:
+        assert np.allclose(got[link], full[:, link, :3, 3], atol=1e-12, equal_nan=True), link
+    assert any(np.isnan(full[0, i, 0, 3]) for i in range(30))  # the tree has a floating joint: NaN subtrees
