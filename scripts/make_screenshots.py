@@ -26,15 +26,13 @@ with lavapipe on two cores (~1.3 s per screenshot).
 from __future__ import annotations
 
 import argparse
-import contextlib
 import io
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -150,49 +148,6 @@ def check_prerequisites() -> str:
     return cli_path
 
 
-@contextlib.contextmanager
-def native_viewer(display: str, window: tuple[int, int], log: Path, timeout: float = 60.0) -> Iterator[ViewerClient]:
-    """The real native viewer on ``display``, driven through its control API; its process group stopped on exit."""
-    from rerun.experimental import ViewerClient
-
-    port = viewers.free_port()
-    command = [
-        viewers.rerun_cli(),
-        "--port",
-        str(port),
-        "--bind",
-        "127.0.0.1",
-        "--hide-welcome-screen",
-        "--window-size",
-        f"{window[0]}x{window[1]}",
-        "--renderer",
-        "vulkan",
-    ]
-    with log.open("wb") as sink:
-        proc = subprocess.Popen(
-            command,
-            env=viewers.native_render_env(display),
-            stdin=subprocess.DEVNULL,
-            stdout=sink,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
-        )
-    try:
-        deadline = time.monotonic() + timeout
-        while True:
-            if proc.poll() is not None:
-                raise RuntimeError(f"rerun exited with {proc.returncode}:\n{viewers._tail(log)}")
-            with socket.socket() as s:
-                if s.connect_ex(("127.0.0.1", port)) == 0:
-                    break
-            if time.monotonic() > deadline:
-                raise TimeoutError(f"rerun did not listen on port {port} within {timeout:.0f} s:\n{viewers._tail(log)}")
-            time.sleep(0.2)
-        yield ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
-    finally:
-        viewers._stop_process_group(proc)
-
-
 def open_recording(client: ViewerClient, rrd: Path, timeout: float = 60.0) -> tuple[str, int]:
     """Open ``rrd``; wait for its ``time`` timeline. Returns (id of the 3D view, number of frames in the lap)."""
     client.open(str(rrd))
@@ -238,7 +193,7 @@ def make_screenshots(args: argparse.Namespace) -> list[Path]:
         # so no hover tooltip ends up in a screenshot.
         with viewers.xvfb(window[0] + 200, window[1] + 200) as display:
             try:
-                with native_viewer(display.display, window, log) as client:
+                with viewers.native_viewer(display.display, window, log) as client:
                     view_3d, n_frames = open_recording(client, rrd)
                     print(f"viewer up, recording open ({n_frames} frames); waiting {args.settle:g} s for it to settle")
                     client.set_time(TIMELINE, duration=args.still_time, play_state="paused")

@@ -24,8 +24,6 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -140,43 +138,8 @@ def test_web_viewer(case: str, recordings: dict[str, Path], chromium_browser, ar
     _assert_case(case, shot.path)
 
 
-@contextmanager
-def native_viewer(display: str, log: Path) -> Iterator[object]:
-    """The real native viewer on Xvfb, driven through its control API (ViewerClient)."""
-    from rerun.experimental import ViewerClient
-
-    port = viewers.free_port()
-    command = [
-        viewers.rerun_cli(),
-        "--port",
-        str(port),
-        "--bind",
-        "127.0.0.1",
-        "--hide-welcome-screen",
-        "--window-size",
-        f"{WINDOW[0]}x{WINDOW[1]}",
-        "--renderer",
-        "vulkan",
-    ]
-    with log.open("w") as sink:
-        proc = subprocess.Popen(
-            command, env=viewers.native_render_env(display), stdout=sink, stderr=sink, start_new_session=True
-        )
-    try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            with socket.socket() as s:
-                if s.connect_ex(("127.0.0.1", port)) == 0:
-                    break
-            assert proc.poll() is None, log.read_text()[-2000:]
-            time.sleep(0.2)
-        yield ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
-    finally:
-        viewers._stop_process_group(proc)
-
-
 def _native_shot(display: str, rrd: Path, png: Path, log: Path, *, blueprint: Path | None = None) -> object:
-    with native_viewer(display, log) as client:
+    with viewers.native_viewer(display, WINDOW, log) as client:
         if blueprint is not None:  # like `rerun out.rrd layout.rbl`: the blueprint, then the recording
             client.open(str(blueprint), navigate=False)  # type: ignore[attr-defined]
         client.open(str(rrd))  # type: ignore[attr-defined]

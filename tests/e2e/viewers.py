@@ -50,6 +50,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from playwright.sync_api import Browser, Page, Playwright
+    from rerun.experimental import ViewerClient
 
 # --------------------------------------------------------------------------------------------------
 # Constants / discovery
@@ -641,6 +642,49 @@ def native_render_env(display: str, base: Mapping[str, str] | None = None) -> di
         runtime_dir.mkdir(mode=0o700, exist_ok=True)
         env["XDG_RUNTIME_DIR"] = str(runtime_dir)
     return env
+
+
+@contextlib.contextmanager
+def native_viewer(display: str, window: tuple[int, int], log: Path, timeout: float = 60.0) -> Iterator[ViewerClient]:
+    """The real native viewer on ``display``, driven through its control API; its process group stopped on exit."""
+    from rerun.experimental import ViewerClient
+
+    port = free_port()
+    command = [
+        rerun_cli(),
+        "--port",
+        str(port),
+        "--bind",
+        "127.0.0.1",
+        "--hide-welcome-screen",
+        "--window-size",
+        f"{window[0]}x{window[1]}",
+        "--renderer",
+        "vulkan",
+    ]
+    with log.open("wb") as sink:
+        proc = subprocess.Popen(
+            command,
+            env=native_render_env(display),
+            stdin=subprocess.DEVNULL,
+            stdout=sink,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
+    try:
+        deadline = time.monotonic() + timeout
+        while True:
+            if proc.poll() is not None:
+                raise RuntimeError(f"rerun exited with {proc.returncode}:\n{_tail(log)}")
+            with socket.socket() as s:
+                if s.connect_ex(("127.0.0.1", port)) == 0:
+                    break
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"rerun did not listen on port {port} within {timeout:.0f} s:\n{_tail(log)}")
+            time.sleep(0.2)
+        yield ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
+    finally:
+        _stop_process_group(proc)
 
 
 @dataclass
