@@ -1,6 +1,7 @@
 """One run of the app: model → motion → kinematics → stream, batch or paced to the wall clock.
 
-No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.stream`.
+No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.sinks` and written by
+:mod:`r2d2_viz.stream`.
 """
 
 from __future__ import annotations
@@ -33,8 +34,8 @@ LIVE_BLOCK_SECONDS = 1.0
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
 """Benchmark hook: if set to a path, live runs write one line per frame, ``frame lateness_seconds``
 (when its send returned, minus when it was due). Off by default; costs nothing when unset."""
-LAP_SECONDS = 48.0
-"""One lap of the tutorial's odom circle: 360° / (¼° per frame) / 30 Hz."""
+LAP_FRAMES = 1440
+"""One lap of the tutorial's odom circle: 360° / (¼° per frame) — 48 s at the default 30 Hz."""
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,7 @@ class RunConfig:
     motion: MotionName | None = None
     rate: float = 30.0
     duration: float | None = None
-    """Seconds of robot time; None: one lap for batch saves, forever for live runs."""
+    """Seconds of robot time; None: one lap (1,440 frames) for batch saves, forever for live runs."""
     sink: SinkConfig = field(default_factory=SinkConfig)
     realtime: bool = False
     """Pace to the wall clock even when only saving."""
@@ -54,10 +55,9 @@ class RunConfig:
 
     @property
     def n_frames(self) -> int | None:
-        duration = self.duration
-        if duration is None:
-            duration = None if self.live else LAP_SECONDS
-        return None if duration is None else max(1, round(duration * self.rate))
+        if self.duration is None:
+            return None if self.live else LAP_FRAMES
+        return max(1, round(self.duration * self.rate))
 
 
 @dataclass

@@ -106,3 +106,11 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path: Path, args: 
 def test_main_is_callable_in_process(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--rate", "-1", "--headless"]) == 2
     assert capsys.readouterr().err.startswith("error: --rate must be a positive")
+
+
+def test_save_defaults_to_one_lap_whatever_the_rate(tmp_path: Path) -> None:
+    out = tmp_path / "lap60.rrd"
+    result = cli("--save", str(out), "--rate", "60")
+    assert result.returncode == 0, result.stderr
+    times = tf_by_child(read_recording(out))["axis"].times
+    assert len(times) == 1440 and times[-1] == round(1439 * 1e9 / 60)  # 360° at ¼° a frame: 24 s at 60 Hz
