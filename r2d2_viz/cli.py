@@ -50,7 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=_number,
         default=None,
         metavar="SECONDS",
-        help="robot time to generate (default: one 48 s lap for --save, until Ctrl-C for live sinks)",
+        help="robot time to generate (default: one lap, 1,440 frames, for --save; until Ctrl-C for live sinks)",
     )
     parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="frames per second (default 30)")
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
