@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -206,44 +207,92 @@ def link_positions(
 ) -> dict[int, F64]:
     """Origins ``(T, 3)`` of ``links`` (indices into ``tree.links``) in the fixed frame, from the moving
     joints' transforms already computed by :func:`transforms_from_values`: only the links asked for and
-    their ancestors are composed, as rotation and translation (no 4×4 matrices for the whole tree)."""
+    their ancestors are composed, as rotation and translation (no 4×4 matrices for the whole tree), one
+    depth of the tree at a time (a few numpy calls per depth, however many links share it).
+    Links below a floating joint are NaN."""
     n_frames = translation.shape[0]
+    plan = _composition_plan(tree, tuple(int(link) for link in links))
+    R = np.empty((n_frames, len(plan.links), 3, 3))
+    t = np.empty((n_frames, len(plan.links), 3))
+    if T_fixed_root is None:
+        R[:, 0], t[:, 0] = np.eye(3), 0.0
+    else:
+        R[:, 0], t[:, 0] = T_fixed_root[:, :3, :3], T_fixed_root[:, :3, 3]
+    for level in plan.levels:
+        for child, parent, local in level:
+            R_parent = R[:, parent]
+            if local.moving:
+                R_local, t_local = quat_to_matrix(quat[:, local.index]), translation[:, local.index]
+            else:
+                R_local, t_local = tree.static_T[local.index, :3, :3], tree.static_T[local.index, :3, 3]
+            R[:, child] = R_parent @ R_local
+            t[:, child] = t[:, parent] + (R_parent @ t_local[..., None])[..., 0]
+    out = {}
+    for link in links:
+        k = plan.compact.get(int(link))
+        out[link] = t[:, k] if k is not None else np.full((n_frames, 3), np.nan)
+    return out
+
+
+@dataclass(frozen=True)
+class _Local:
+    moving: bool
+    index: I64
+    """Indices into the moving joints' columns, or into ``static_T``."""
+
+
+@dataclass(frozen=True)
+class _Plan:
+    links: tuple[int, ...]
+    """The links composed (root first), in compact order; ``compact`` maps a link to its position."""
+    compact: dict[int, int]
+    levels: tuple[tuple[tuple[I64, I64, _Local], ...], ...]
+    """Per depth below the root: (compact children, compact parents, their local transforms) groups."""
+
+
+@lru_cache(maxsize=8)
+def _composition_plan(tree: KinematicTree, links: tuple[int, ...]) -> _Plan:
+    """Which links to compose, grouped by depth: linear in the number of links (iterative walks)."""
     parent = np.full(len(tree.links), -1, dtype=np.int64)
     parent[tree.static_child] = tree.static_parent
     parent[tree.moving_child] = tree.moving_parent
-    moving_index = {int(c): m for m, c in enumerate(tree.moving_child)}
-    static_index = {int(c): s for s, c in enumerate(tree.static_child)}
-    if T_fixed_root is None:
-        root_R, root_t = np.broadcast_to(np.eye(3), (n_frames, 3, 3)), np.zeros((n_frames, 3))
-    else:
-        root_R, root_t = T_fixed_root[:, :3, :3], T_fixed_root[:, :3, 3]
-    poses: dict[int, tuple[F64, F64]] = {0: (root_R, root_t)}
-
-    def pose(link: int) -> tuple[F64, F64]:
-        chain = []
-        while link not in poses:  # walk up to a known ancestor (iteratively: chains may be long)
-            chain.append(link)
+    moving_of = dict(zip(tree.moving_child.tolist(), range(len(tree.moving)), strict=True))
+    static_of = dict(zip(tree.static_child.tolist(), range(len(tree.static)), strict=True))
+    depth: dict[int, int] = {0: 0}  # links connected to the root; links below a floating joint stay out
+    cut: set[int] = set()
+    for link in links:
+        path = []
+        while link not in depth and link not in cut:
+            path.append(link)
             link = int(parent[link])
-            if link < 0:  # below a floating joint: not connected
-                nan = (np.full((n_frames, 3, 3), np.nan), np.full((n_frames, 3), np.nan))
-                for c in chain:
-                    poses[c] = nan
-                return nan
-        for c in reversed(chain):
-            R_parent, t_parent = poses[int(parent[c])]
-            if c in moving_index:
-                m = moving_index[c]
-                R_local, t_local = quat_to_matrix(quat[:, m]), translation[:, m]
+            if link < 0:
+                break
+        base = depth.get(link) if link >= 0 else None
+        for k, c in enumerate(reversed(path)):
+            if base is None:
+                cut.add(c)
             else:
-                T = tree.static_T[static_index[c]]
-                R_local, t_local = (
-                    np.broadcast_to(T[:3, :3], (n_frames, 3, 3)),
-                    np.broadcast_to(T[:3, 3], (n_frames, 3)),
+                depth[c] = base + k + 1
+    order = sorted(depth, key=depth.__getitem__)  # root first, then by depth
+    compact = {link: k for k, link in enumerate(order)}
+    by_depth: dict[int, list[int]] = {}
+    for link in order[1:]:
+        by_depth.setdefault(depth[link], []).append(link)
+    levels = []
+    for d in sorted(by_depth):
+        groups = []
+        for moving, table in ((True, moving_of), (False, static_of)):
+            members = [c for c in by_depth[d] if c in table]
+            if members:
+                groups.append(
+                    (
+                        np.array([compact[c] for c in members], dtype=np.int64),
+                        np.array([compact[int(parent[c])] for c in members], dtype=np.int64),
+                        _Local(moving, np.array([table[c] for c in members], dtype=np.int64)),
+                    )
                 )
-            poses[c] = (R_parent @ R_local, t_parent + np.einsum("tij,tj->ti", R_parent, t_local))
-        return poses[chain[0]] if chain else poses[link]
-
-    return {link: pose(link)[1] for link in links}
+        levels.append(tuple(groups))
+    return _Plan(tuple(order), compact, tuple(levels))
 
 
 def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.ArrayLike | None = None) -> F64:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import warnings
 from collections import deque
 from dataclasses import dataclass, field
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 from typing import Literal
@@ -150,10 +151,15 @@ class Robot:
     warnings: tuple[str, ...] = ()
 
     def joint(self, name: str) -> Joint:
-        for joint in self.joints:
-            if joint.name == name:
-                return joint
-        raise KeyError(f"no joint {name!r}; joints are {', '.join(j.name for j in self.joints)}")
+        try:
+            return self._joints_by_name[name]
+        except KeyError:
+            raise KeyError(f"no joint {name!r}; joints are {', '.join(j.name for j in self.joints)}") from None
+
+    @cached_property
+    def _joints_by_name(self) -> dict[str, Joint]:
+        """Built on first use (a dictionary: looking every joint up stays linear for thousands of joints)."""
+        return {joint.name: joint for joint in self.joints}
 
     @property
     def movable_joints(self) -> tuple[Joint, ...]:

@@ -252,3 +252,18 @@ def test_link_positions_of_a_few_links_match_the_full_poses(tmp_path: Path) -> N
     for link in links:
         assert np.allclose(got[link], full[:, link, :3, 3], atol=1e-12, equal_nan=True), link
     assert any(np.isnan(full[0, i, 0, 3]) for i in range(30))  # the tree has a floating joint: NaN subtrees
+
+
+@pytest.mark.parametrize("chain", [True, False], ids=["chain", "tree"])
+def test_link_positions_of_every_link_match_the_full_poses(tmp_path: Path, chain: bool) -> None:
+    # Deep chains and wide trees: positions are composed depth by depth, many links at once; link_poses
+    # (checked against yourdfpy above) composes link by link.
+    from r2d2_viz.kinematics import link_positions, transforms_from_values
+
+    tree = compile_tree(load_urdf(_write(tmp_path, random_urdf(300, seed=2, chain=chain, mimic_fraction=0.2))))
+    q = _random_configs(tree, 5, seed=9)
+    full = link_poses(tree, q)
+    translation, quat = transforms_from_values(tree, moving_values(tree, q))
+    every = list(range(len(tree.links)))
+    got = link_positions(tree, translation, quat, every)
+    assert np.allclose(np.stack([got[i] for i in every], axis=1), full[..., :3, 3], atol=1e-9, equal_nan=True)
