@@ -219,14 +219,16 @@ def link_positions(
     else:
         R[:, 0], t[:, 0] = T_fixed_root[:, :3, :3], T_fixed_root[:, :3, 3]
     for level in plan.levels:
-        for child, parent, local in level:
-            R_parent = R[:, parent]
-            if local.moving:
-                R_local, t_local = quat_to_matrix(quat[:, local.index]), translation[:, local.index]
+        for g in level:
+            R_parent = R[:, g.parent]  # a view when the group is a single link (chains, the R2D2)
+            if g.moving:
+                t_local = translation[:, g.index]
             else:
-                R_local, t_local = tree.static_T[local.index, :3, :3], tree.static_T[local.index, :3, 3]
-            R[:, child] = R_parent @ R_local
-            t[:, child] = t[:, parent] + (R_parent @ t_local[..., None])[..., 0]
+                t_local = tree.static_T[g.index, :3, 3]
+            t[:, g.child] = t[:, g.parent] + np.einsum("...ij,...j->...i", R_parent, t_local)
+            if g.has_children:  # a rotation is only needed to go further down
+                R_local = quat_to_matrix(quat[:, g.index]) if g.moving else tree.static_T[g.index, :3, :3]
+                R[:, g.child] = R_parent @ R_local
     out = {}
     for link in links:
         k = plan.compact.get(int(link))
@@ -235,10 +237,17 @@ def link_positions(
 
 
 @dataclass(frozen=True)
-class _Local:
+class _Group:
+    """Links of one depth whose transforms are all moving or all static, composed in one step."""
+
+    child: int | I64
+    """Positions in the plan's compact order: an int for a single link (numpy then indexes a view)."""
+    parent: int | I64
     moving: bool
-    index: I64
-    """Indices into the moving joints' columns, or into ``static_T``."""
+    index: int | I64
+    """Columns of the moving joints' transforms, or rows of ``static_T``."""
+    has_children: bool
+    """Whether any of these links is the parent of a link in the plan (else its rotation is not needed)."""
 
 
 @dataclass(frozen=True)
@@ -246,8 +255,8 @@ class _Plan:
     links: tuple[int, ...]
     """The links composed (root first), in compact order; ``compact`` maps a link to its position."""
     compact: dict[int, int]
-    levels: tuple[tuple[tuple[I64, I64, _Local], ...], ...]
-    """Per depth below the root: (compact children, compact parents, their local transforms) groups."""
+    levels: tuple[tuple[_Group, ...], ...]
+    """Per depth below the root, its groups."""
 
 
 @lru_cache(maxsize=8)
@@ -275,9 +284,14 @@ def _composition_plan(tree: KinematicTree, links: tuple[int, ...]) -> _Plan:
                 depth[c] = base + k + 1
     order = sorted(depth, key=depth.__getitem__)  # root first, then by depth
     compact = {link: k for k, link in enumerate(order)}
+    parents = {int(parent[link]) for link in order[1:]}
     by_depth: dict[int, list[int]] = {}
     for link in order[1:]:
         by_depth.setdefault(depth[link], []).append(link)
+
+    def indices(values: list[int]) -> int | I64:
+        return values[0] if len(values) == 1 else np.array(values, dtype=np.int64)
+
     levels = []
     for d in sorted(by_depth):
         groups = []
@@ -285,10 +299,12 @@ def _composition_plan(tree: KinematicTree, links: tuple[int, ...]) -> _Plan:
             members = [c for c in by_depth[d] if c in table]
             if members:
                 groups.append(
-                    (
-                        np.array([compact[c] for c in members], dtype=np.int64),
-                        np.array([compact[int(parent[c])] for c in members], dtype=np.int64),
-                        _Local(moving, np.array([table[c] for c in members], dtype=np.int64)),
+                    _Group(
+                        child=indices([compact[c] for c in members]),
+                        parent=indices([compact[int(parent[c])] for c in members]),
+                        moving=moving,
+                        index=indices([table[c] for c in members]),
+                        has_children=any(c in parents for c in members),
                     )
                 )
         levels.append(tuple(groups))
