@@ -6,12 +6,13 @@ Entity layout (every name is a URDF link or joint name, escaped for entity paths
   static ``Transform3D(parent_frame, child_frame)`` each;
 * ``/tf`` — every moving joint and a moving ``odom → <root>``: one ``Transform3D`` row per joint per frame,
   each row naming its frames (one entity, like the /tf topic: Rerun resolves every child frame of it);
+  the TF arrows that move (prismatic joints, a moving root) ride along in the first row of each frame,
+  drawn in ``odom`` (``/tf``'s ``CoordinateFrame``), so a frame is one chunk;
 * ``/robot/visual/<link>/<i>``, ``/robot/collision/<link>/<i>`` — ``Mesh3D`` in the link's named frame
   (``CoordinateFrame``), shape origin baked into the vertices;
 * ``/tf_axes/<frame>`` — ``TransformAxes3D`` for every frame (RViz TF "Show Axes"; names off);
 * ``/tf_arrows/<child>`` — an arrow from each child frame's origin to its parent's (RViz "Show Arrows"),
-  static in the parent frame; the arrows that move (prismatic joints, a moving root) are all in one
-  entity, ``/tf_moving_arrows``, in ``odom``;
+  static in the parent frame (the arrows that move are on ``/tf``);
 * ``/joints/limited`` — values of the joints with limits, one series each; ``…/<joint>/lower|upper`` the limits;
 * ``/joints/continuous`` — values of continuous joints (they grow without bound: their own plot);
 * ``/warnings`` — ``TextLog`` lines, e.g. a joint leaving its limits.
@@ -46,10 +47,11 @@ AXIS_LENGTH = 0.1
 ARROW_COLOR = (255, 0, 255)
 COLLISION_COLOR = (255, 140, 0, 160)
 DEFAULT_VISUAL_COLOR = (204, 204, 204, 255)
-PLOT_PERIOD_S = 0.2
-"""Live runs send plot values five times a second (each with its own timestamp), transforms every frame."""
+PLOT_PERIOD_S = 0.5
+"""Live runs send plot values twice a second (each with its own timestamp), transforms every frame."""
 LIMIT_LOG_PERIOD_S = 1.0
-"""How often (in recording time) live runs repeat the constant limit lines, so they span the plot."""
+"""How often (in recording time) live runs repeat the constant limit lines, so they span the plot; they
+go out with the plot values, so a live frame wakes Rerun's threads once (see :meth:`RobotStream.send`)."""
 
 F64 = npt.NDArray[np.float64]
 Warn = Callable[[str], None]
@@ -121,11 +123,18 @@ class RobotStream:
         self._arrow_ends = [
             (index[self._tf_children[r]], index.get(self._tf_parents[r], -1)) for r in self._moving_arrows
         ]
+        self._arrow_links = sorted({i for pair in self._arrow_ends for i in pair if i >= 0})
         self._reported: set[str] = set()
+        self._limit_lines = [
+            (path("joints", "limited", name, bound), dict(_encoded(rr.Scalars.columns(scalars=[value]))))
+            for name, bounds in self._limits.items()
+            for bound, value in zip(("lower", "upper"), bounds, strict=True)
+        ]
         self._native = self.rec.to_native()
         self._pending_block: PreparedFrames | None = None
         self._plot_from = self._sent_to = 0
         self._next_limit_time = 0.0
+        self._plot_every = max(1, round(PLOT_PERIOD_S * self.rate))
         self._last_frame = -1
 
     # --- static ----------------------------------------------------------------------------------
@@ -158,7 +167,7 @@ class RobotStream:
                 self._log_arrow_static(self._moving_parent[m], self._moving_child[m], tree.moving_origin_t[m])
         if self._moving_arrows:
             rec.log(
-                path("tf_moving_arrows"),
+                path("tf"),
                 rr.CoordinateFrame(ODOM),
                 rr.Arrows3D.from_fields(colors=[ARROW_COLOR] * len(self._moving_arrows)),
                 static=True,
@@ -245,8 +254,8 @@ class RobotStream:
 
         Everything is vectorised over the chunk: the Arrow columns are built once, and sending
         any run of its frames later only slices them. Live runs prepare a block of frames ahead and
-        send each frame when it is due, so a frame costs a slice and one send per entity — and the
-        entities per frame are few (``/tf``, the moving arrows, the plots): Rerun's cost is per chunk.
+        send each frame when it is due, so a frame costs a slice and one send — a frame is one chunk
+        (``/tf``, arrows included; plots go out a few times a second): Rerun's cost is per chunk.
         """
         tree = self.tree
         n = len(chunk.frame)
@@ -254,7 +263,7 @@ class RobotStream:
         if n == 0:
             return PreparedFrames.empty(values)
         translation, quat = transforms_from_values(tree, values)  # (n, M, 3), (n, M, 4)
-        arrows = self._moving_arrow_columns(chunk, translation, quat) if self._moving_arrows else None
+        arrows = self._moving_arrow_columns(chunk, translation, quat) if self._moving_arrows else []
         if chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None:
             translation = np.concatenate([translation, chunk.odom_translation[:, None]], axis=1)
             quat = np.concatenate([quat, chunk.odom_quat_xyzw[:, None]], axis=1)
@@ -267,9 +276,8 @@ class RobotStream:
                 parent_frame=_tiled(self._tf_parents, n),
                 child_frame=_tiled(self._tf_children, n),
             )
-            entities.append(_Entity(path("tf"), rows, _encoded(columns)))
-        if arrows is not None:
-            entities.append(arrows)
+            spread = [(d, _first_of_every(a, rows)) for d, a in arrows]  # arrows on each frame's first row
+            entities.append(_Entity(path("tf"), rows, [*_encoded(columns), *spread]))
         for entity, ms in self._plots:
             scalars = rr.Scalars.columns(scalars=values[:, ms].reshape(-1)).partition(np.full(n, len(ms)))
             entities.append(_Entity(entity, 1, _encoded(scalars), plot=True))
@@ -288,22 +296,23 @@ class RobotStream:
         frames = np.flatnonzero(((block < lower) | (block > upper)).any(axis=1))
         return frames if len(frames) else None
 
-    def _moving_arrow_columns(self, chunk: MotionChunk, translation: F64, quat: F64) -> _Entity:
-        """``/tf_moving_arrows``: from each moving child's origin to its parent's, both in ``odom``."""
+    def _moving_arrow_columns(
+        self, chunk: MotionChunk, translation: F64, quat: F64
+    ) -> list[tuple[rr.ComponentDescriptor, pa.Array]]:
+        """The arrows that move, one row per frame: from each moving child's origin to its parent's, in ``odom``."""
         n = len(chunk.frame)
         T_odom_root = None
         if chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None:
             T_odom_root = np.zeros((n, 4, 4))
             T_odom_root[:, :3, :3] = quat_to_matrix(chunk.odom_quat_xyzw)
             T_odom_root[:, :3, 3] = chunk.odom_translation
-        ends = sorted({i for pair in self._arrow_ends for i in pair if i >= 0})
-        at = link_positions(self.tree, translation, quat, ends, T_fixed_root=T_odom_root)
+        at = link_positions(self.tree, translation, quat, self._arrow_links, T_fixed_root=T_odom_root)
         odom = np.zeros((n, 3))
         child = np.stack([at[c] for c, _ in self._arrow_ends], axis=1)  # (n, k, 3)
         parent = np.stack([at[p] if p >= 0 else odom for _, p in self._arrow_ends], axis=1)
         k = len(self._arrow_ends)
         arrows = rr.Arrows3D.columns(origins=child.reshape(-1, 3), vectors=(parent - child).reshape(-1, 3))
-        return _Entity(path("tf_moving_arrows"), 1, _encoded(arrows.partition(np.full(n, k))))
+        return _encoded(arrows.partition(np.full(n, k)))
 
     def send(self, frames: PreparedFrames, start: int = 0, stop: int | None = None) -> None:
         """Log frames ``start … stop-1`` of a prepared block (all by default), one chunk per entity.
@@ -313,7 +322,8 @@ class RobotStream:
         every value keeps its own timestamp, the plot just fills in a few times a second — Rerun's cost
         is per chunk, and this keeps a 30 Hz live run within a few percent of a core.
         """
-        stop = len(frames.frame) if stop is None else min(stop, len(frames.frame))
+        n = len(frames.frame)
+        stop = n if stop is None else min(stop, n)
         if start >= stop:
             return
         if frames is not self._pending_block:
@@ -323,26 +333,27 @@ class RobotStream:
             if not entity.plot:
                 self._send_rows(frames, entity, start, stop)
         self._sent_to = stop
-        if stop == len(frames.frame) or stop - self._plot_from >= max(1, round(PLOT_PERIOD_S * self.rate)):
+        if stop == n or stop - self._plot_from >= self._plot_every:
             self._flush_plots()
-        frame = frames.frame[start:stop]
         if frames.outside is not None and start <= int(frames.outside.max()) and int(frames.outside.min()) < stop:
-            self._check_limits(frame, frames.values[start:stop])
-        self._last_frame = int(frame[-1])
-        end_time = self._last_frame / self.rate
-        if frame[0] == 0 or end_time >= self._next_limit_time:
-            self._log_limits(float(frame[0]) / self.rate if frame[0] == 0 else end_time)
-            self._next_limit_time = end_time + LIMIT_LOG_PERIOD_S
+            self._check_limits(frames.frame[start:stop], frames.values[start:stop])
+        self._last_frame = int(frames.frame[stop - 1])
 
     def _flush_plots(self) -> None:
-        """Send the plot values of the frames sent so far that have not been plotted yet."""
+        """Send the plot values of the frames sent so far that have not been plotted yet, and the limit
+        lines: at the first frame, then every ``LIMIT_LOG_PERIOD_S`` (in batch runs: once a chunk)."""
         frames = self._pending_block
         if frames is None or self._plot_from >= self._sent_to:
             return
         for entity in frames.entities:
             if entity.plot:
                 self._send_rows(frames, entity, self._plot_from, self._sent_to)
+        first, last = int(frames.frame[self._plot_from]), int(frames.frame[self._sent_to - 1])
         self._plot_from = self._sent_to
+        end_time = last / self.rate
+        if first == 0 or end_time >= self._next_limit_time:
+            self._log_limits(0.0 if first == 0 else end_time)
+            self._next_limit_time = end_time + LIMIT_LOG_PERIOD_S
 
     def _send_rows(self, frames: PreparedFrames, entity: _Entity, start: int, stop: int) -> None:
         """``rec.send_columns`` for prebuilt Arrow columns, minus its per-call Python checks.
@@ -350,15 +361,11 @@ class RobotStream:
         The columns were built by Rerun's own ``…columns()`` and sliced here, so they are valid by
         construction; calling the binding that ``send_columns`` ends in, directly, halves the cost of a live
         frame. (rerun-sdk is pinned to 0.41: this is the same call its ``send_columns`` makes.)"""
-        whole = start == 0 and stop == len(frames.frame)
-        first, count = start * entity.rows, (stop - start) * entity.rows
-        time = frames.times[entity.rows]
-        _send_arrow_chunk(
-            entity.path,
-            timelines={TIMELINE: time if whole else time.slice(first, count)},
-            components={d: a if whole else a.slice(first, count) for d, a in entity.columns},
-            recording=self._native,
-        )
+        if start == 0 and stop == len(frames.frame):
+            timelines, components = {TIMELINE: frames.times[entity.rows]}, dict(entity.columns)
+        else:
+            timelines, components = _sliced(frames.times[entity.rows], entity, start, stop)
+        _send_arrow_chunk(entity.path, timelines=timelines, components=components, recording=self._native)
 
     def finish(self) -> None:
         """Send what is pending and draw the limit lines up to the last frame."""
@@ -367,10 +374,11 @@ class RobotStream:
             self._log_limits(self._last_frame / self.rate)
 
     def _log_limits(self, time_s: float) -> None:
-        self.rec.set_time(TIMELINE, duration=time_s)
-        for name, (lower, upper) in self._limits.items():
-            self.rec.log(path("joints", "limited", name, "lower"), rr.Scalars(lower))
-            self.rec.log(path("joints", "limited", name, "upper"), rr.Scalars(upper))
+        """One row on every limit line at ``time_s``: columns encoded once, a chunk per line (no ``rr.log``:
+        a robot with a thousand limited joints has two thousand lines)."""
+        time = pa.array(np.array([round(time_s * 1e9)], dtype="timedelta64[ns]"))
+        for entity, columns in self._limit_lines:
+            _send_arrow_chunk(entity, timelines={TIMELINE: time}, components=columns, recording=self._native)
 
     def _check_limits(self, frame: npt.NDArray[np.int64], values: F64) -> None:
         for m, name in enumerate(self.tree.moving):
@@ -421,6 +429,28 @@ class PreparedFrames:
 
 def _encoded(columns: rr.ComponentColumnList) -> list[tuple[rr.ComponentDescriptor, pa.Array]]:
     return [(c.component_descriptor(), c.as_arrow_array()) for c in columns]
+
+
+def _sliced(
+    time: pa.Array, entity: _Entity, start: int, stop: int
+) -> tuple[dict[str, pa.Array], dict[rr.ComponentDescriptor, pa.Array]]:
+    """The timeline and components of frames ``start … stop-1`` of ``entity`` (``entity.rows`` rows a frame)."""
+    first, count = start * entity.rows, (stop - start) * entity.rows
+    return {TIMELINE: time.slice(first, count)}, {d: a.slice(first, count) for d, a in entity.columns}
+
+
+def _first_of_every(lists: pa.ListArray, rows: int) -> pa.ListArray:
+    """``lists`` (one list per frame) spread over ``rows`` rows per frame: each frame's list on its first
+    row, null on the others — a null cell is no data, so a query at that time finds the first row's."""
+    if rows == 1:
+        return lists
+    offsets = lists.offsets.to_numpy()
+    spread = np.empty(len(lists) * rows + 1, dtype=offsets.dtype)
+    spread[0] = offsets[0]
+    spread[1:] = np.repeat(offsets[1:], rows)
+    null = np.ones((len(lists), rows), dtype=bool)
+    null[:, 0] = False
+    return pa.ListArray.from_arrays(pa.array(spread), lists.values, type=lists.type, mask=pa.array(null.reshape(-1)))
 
 
 def _palette(n: int) -> list[tuple[int, int, int, int]]:

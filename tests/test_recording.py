@@ -113,6 +113,9 @@ def test_periscope_is_not_clamped_and_the_excursion_is_reported_once(lap_recordi
     lower = recording["/joints/limited/periscope/lower"].temporal["Scalars:scalars"]
     upper = recording["/joints/limited/periscope/upper"].temporal["Scalars:scalars"]
     assert {v[0] for v in lower} == {-0.5} and {v[0] for v in upper} == {0.0}
+    for bound in ("lower", "upper"):  # each limit line spans the plot: from the first frame to the last
+        times = recording[f"/joints/limited/periscope/{bound}"].times
+        assert times[0] == 0 and times[-1] == recording["/joints/limited"].times[-1]
     texts = [t[0] for t in recording["/warnings"].temporal["TextLog:text"]]
     assert sum("'periscope'" in t for t in texts) == 1
     stderr = lap_recording[1].stderr
@@ -158,11 +161,17 @@ def test_tf_display_axes_on_every_frame_names_off_and_arrows_to_parents(recordin
     assert leg1["CoordinateFrame:frame"][-1] == ["axis"]
     assert np.allclose(leg1["Arrows3D:origins"][-1][0], [0, 0.3, 0], atol=1e-6)
     assert np.allclose(leg1["Arrows3D:vectors"][-1][0], [0, -0.3, 0], atol=1e-6)
-    # odom → axis and head → rod (prismatic) move every frame: their arrows are drawn per frame in odom.
-    moving = recording["/tf_moving_arrows"]
+    # odom → axis and head → rod (prismatic) move every frame: their arrows are drawn per frame in odom, on
+    # /tf (one chunk a frame), in the first of each frame's rows; the other rows hold no arrows (null).
+    moving = recording["/tf"]
     assert moving.static["CoordinateFrame:frame"][-1] == ["odom"]
-    origins = np.array(moving.temporal["Arrows3D:origins"])  # (frames, 2 arrows, 3)
-    vectors = np.array(moving.temporal["Arrows3D:vectors"])
+    cells = moving.temporal["Arrows3D:origins"]
+    with_arrows = [i for i, cell in enumerate(cells) if cell is not None]
+    rows = 4  # swivel, tilt, periscope and odom → axis
+    assert len(cells) == rows * N_FRAMES and with_arrows == list(range(0, rows * N_FRAMES, rows))
+    assert [moving.times[i] for i in with_arrows] == sorted(set(moving.times))  # one set of arrows per frame
+    origins = np.array([cells[i] for i in with_arrows])  # (frames, 2 arrows, 3)
+    vectors = np.array([moving.temporal["Arrows3D:vectors"][i] for i in with_arrows])
     assert origins.shape == (N_FRAMES, 2, 3)
     reference = state_publisher(N_FRAMES)
     odom_t = np.array([r["odom_translation"] for r in reference])
