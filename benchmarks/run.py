@@ -39,6 +39,8 @@ APP = [PY, "-m", "r2d2_viz"]
 IMPORT_FLOOR = [PY, "-c", "import rerun, yourdfpy, trimesh, numpy"]
 RATE = 30.0
 ROBOT_BLOCK_FRAMES = 100
+ROBOT_BLOCKS = 5
+"""Per-frame robot figures: the median over this many chunks of ROBOT_BLOCK_FRAMES frames, in each repeat."""
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
 
 
@@ -52,6 +54,7 @@ class Sizes:
     memory_seconds: float  # goal 3: 86,400 s = 2.6 M frames
     live_seconds: float  # goal 4: count frames sent after this many seconds at 30 Hz
     cpu_window: tuple[float, float]  # seconds after the first frame
+    cpu_repeats: int  # 30 Hz CPU: runs of the app and of the Rerun SDK floor, alternating
     fast_rate: float
     fast_seconds: float
     robot_sizes: tuple[int, ...]
@@ -59,9 +62,9 @@ class Sizes:
     size_seconds: float  # goal 6: the default recording (one 48 s lap)
 
 
-FULL = Sizes(3600, 5, 3000, 100_000, 7, 86_400, 60, (5.0, 55.0), 1000, 20, (10, 100, 1000, 3000), 3, 48)
+FULL = Sizes(3600, 5, 3000, 100_000, 7, 86_400, 60, (5.0, 35.0), 3, 1000, 20, (10, 100, 1000, 3000), 5, 48)
 """The sizes the issue names."""
-SMOKE = Sizes(60, 1, 60, 2_000, 2, 600, 3, (1.0, 2.5), 1000, 1, (10, 100), 1, 4)
+SMOKE = Sizes(60, 1, 60, 2_000, 2, 600, 3, (1.0, 2.5), 1, 1000, 1, (10, 100), 1, 4)
 
 
 # --- measuring ---------------------------------------------------------------------------------------
@@ -301,14 +304,19 @@ def bench_memory(s: Sizes, tmp: Path, r: Report, batch_rss_mb: float) -> None:
 
 
 def _live_run(
-    tmp: Path, rate: float, seconds: float, cpu_window: tuple[float, float] | None
+    tmp: Path, rate: float, seconds: float, cpu_window: tuple[float, float] | None, *, sdk_floor: bool = False
 ) -> tuple[list[tuple[int, float]], float | None, int]:
-    """A real --realtime run with the pacing log; CPU sampled from /proc over a window after start-up."""
+    """A real --realtime run with the pacing log; CPU sampled from /proc over a window after start-up.
+
+    ``sdk_floor``: instead of the app, :func:`sdk_floor` (Rerun's SDK alone, paced and saved the same way)."""
     log = tmp / f"pacing_{rate:g}.txt"
     out = tmp / f"live_{rate:g}.rrd"
     log.unlink(missing_ok=True)
     env = {**os.environ, PACING_LOG_ENV: str(log)}
-    cmd = [*APP, "--save", str(out), "--realtime", "--rate", str(rate), "--duration", str(seconds)]
+    if sdk_floor:
+        cmd = [PY, str(Path(__file__).resolve()), "--sdk-floor", str(rate), str(seconds), str(out)]
+    else:
+        cmd = [*APP, "--save", str(out), "--realtime", "--rate", str(rate), "--duration", str(seconds)]
     proc = subprocess.Popen(cmd, cwd=tmp, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     cpu_fraction = None
     try:
@@ -331,9 +339,55 @@ def _live_run(
             proc.send_signal(signal.SIGINT)
             proc.wait()
     rows = [(int(a), float(b)) for a, b in (line.split() for line in log.read_text().splitlines())]
-    in_file = _count_rows(out, "/joints/limited")  # one row per frame
+    in_file = 0 if sdk_floor else _count_rows(out, "/joints/limited")  # one row per frame
     out.unlink()
     return rows, cpu_fraction, in_file
+
+
+def _median_or_none(xs: Sequence[float | None]) -> float | None:
+    known = [x for x in xs if x is not None]
+    return median(known) if known else None
+
+
+def sdk_floor(rate: float, seconds: float, out: Path) -> None:
+    """The least a live frame costs through Rerun's SDK: the app's sink (``sinks.open_recording``, live), the
+    app's absolute schedule, one prebuilt 4-row ``Transform3D`` chunk per frame (the R2D2's ``/tf``: three
+    joints and odom → root, frame names included) sent with the binding the app uses — no kinematics, plots,
+    arrows or limit lines. Writes the same pacing log as the app (``R2D2_VIZ_PACING_LOG``)."""
+    import numpy as np
+    import pyarrow as pa
+    import rerun as rr
+    from rerun_bindings import send_arrow_chunk
+
+    from r2d2_viz.sinks import SinkConfig, close_recording, open_recording
+
+    recording = open_recording(SinkConfig(save=out), save_to=out, live=True)
+    native = recording.rec.to_native()
+    rows, block = 4, max(1, round(rate))
+    columns = rr.Transform3D.columns(
+        translation=np.zeros((rows * block, 3)),
+        quaternion=np.tile([0.0, 0.0, 0.0, 1.0], (rows * block, 1)),
+        parent_frame=["base", "body", "head", "odom"] * block,
+        child_frame=["body", "head", "rod", "base"] * block,
+    )
+    encoded = [(c.component_descriptor(), c.as_arrow_array()) for c in columns]
+    n_frames = max(1, round(seconds * rate))
+    with open(os.environ[PACING_LOG_ENV], "w") as log:
+        start = time.monotonic()
+        for k in range(n_frames):
+            delay = start + k / rate - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            i = k % block
+            nanos = np.full(rows, round(k / rate * 1e9), dtype="timedelta64[ns]")
+            send_arrow_chunk(
+                "/tf",
+                timelines={"time": pa.array(nanos)},
+                components={d: a.slice(i * rows, rows) for d, a in encoded},
+                recording=native,
+            )
+            log.write(f"{k} {time.monotonic() - (start + k / rate):.6f}\n")
+    close_recording(recording)
 
 
 def _count_rows(rrd: Path, entity: str) -> int:
@@ -348,6 +402,11 @@ def bench_live(s: Sizes, tmp: Path, r: Report) -> None:
 
     horizon = s.live_seconds
     rows, cpu, in_file = _live_run(tmp, RATE, horizon + 2, s.cpu_window)
+    cpu_runs, floor_runs = [cpu], []
+    for k in range(s.cpu_repeats):  # alternating: the app, then the SDK alone, in the same conditions
+        floor_runs.append(_live_run(tmp, RATE, s.cpu_window[1] + 2, s.cpu_window, sdk_floor=True)[1])
+        if k + 1 < s.cpu_repeats:
+            cpu_runs.append(_live_run(tmp, RATE, s.cpu_window[1] + 2, s.cpu_window)[1])
     # frame k is due at k / rate after the schedule's start; its send returned `lateness` later
     sent_by = sum(1 for k, late in rows if k / RATE + late <= horizon)
     due_by = math.floor(horizon * RATE) + 1  # frames 0 … 30·T are due at T (inclusive)
@@ -372,13 +431,27 @@ def bench_live(s: Sizes, tmp: Path, r: Report) -> None:
         "p99 ≤ 2 ms",
         p99 <= 2.0,
     )
+    cpu = _median_or_none(cpu_runs)
+    floor = _median_or_none(floor_runs)
     if cpu is not None:
         r.add(
-            f"CPU at 30 Hz, {s.cpu_window[0]:g}–{s.cpu_window[1]:g} s after the first frame",
-            f"{cpu * 100:.1f} % of one core",
+            f"CPU at 30 Hz, {s.cpu_window[0]:g}–{s.cpu_window[1]:g} s after the first frame, median of "
+            f"{len(cpu_runs)} runs",
+            f"{cpu * 100:.2f} % of one core (runs: {', '.join(f'{c * 100:.2f}' for c in cpu_runs if c is not None)})",
             "≤ 3 %",
             cpu <= 0.03,
         )
+    if floor is not None:
+        r.add(
+            "  Rerun's SDK alone, same pacing and sink: one 4-row Transform3D chunk a frame, median of "
+            f"{len(floor_runs)}",
+            f"{floor * 100:.2f} % (runs: {', '.join(f'{c * 100:.2f}' for c in floor_runs if c is not None)})",
+        )
+        if cpu is not None:
+            r.add(
+                "  the app beyond that floor",
+                f"{(cpu - floor) * 100:.2f} % = {(cpu - floor) / RATE * 1e6:.0f} µs a frame",
+            )
     r.figures["live"] = {
         "seconds": horizon,
         "frames_sent_by_horizon": sent_by,
@@ -393,6 +466,8 @@ def bench_live(s: Sizes, tmp: Path, r: Report) -> None:
         "fast_frames_in_file": fast_in_file,
         "lateness_fast_ms_p50_p99_max": [p50, p99, worst],
         "cpu_fraction_30hz": cpu,
+        "cpu_fraction_30hz_runs": cpu_runs,
+        "sdk_floor_cpu_fraction_30hz_runs": floor_runs,
         "cpu_window_s": list(s.cpu_window),
     }
 
@@ -409,44 +484,52 @@ def bench_robots(s: Sizes, tmp: Path, r: Report) -> None:
 
     types = ("fixed", "revolute", "continuous", "prismatic")
     table: dict[str, dict[int, dict[str, float]]] = {}
-    for shape in ("chain", "tree"):
-        table[shape] = {}
-        for n in s.robot_sizes:
+    cases = [(shape, n) for shape in ("chain", "tree") for n in s.robot_sizes]
+    runs_of: dict[tuple[str, int], dict[str, list[float]]] = {}
+    moving_of: dict[tuple[str, int], int] = {}
+    for shape, n in cases:
+        (tmp / f"{shape}_{n}.urdf").write_text(random_urdf(n, seed=n, chain=shape == "chain", joint_types=types))
+        runs_of[shape, n] = {"load": [], "static": [], "first": [], "frame": [], "fk": []}
+    for _ in range(s.robot_repeats):  # every size once per repeat: a slow spell of the machine hits them all
+        for shape, n in cases:
             urdf = tmp / f"{shape}_{n}.urdf"
-            urdf.write_text(random_urdf(n, seed=n, chain=shape == "chain", joint_types=types))
-            runs: dict[str, list[float]] = {"load": [], "static": [], "first": [], "frame": [], "fk": []}
-            moving = 0
-            for _ in range(s.robot_repeats):
-                t0 = time.perf_counter()
-                tree = compile_tree(load_urdf(urdf))
-                t1 = time.perf_counter()
-                rec = rr.RecordingStream("bench")
-                rec.save(tmp / "robot.rrd")
-                stream = RobotStream(rec, tree, make_motion(tree.robot), RATE, warn=lambda _: None)
-                stream.log_static()
-                t2 = time.perf_counter()
-                chunks = stream.motion.chunks(None, 1)
-                stream.log_chunk(next(chunks))
-                t3 = time.perf_counter()
-                moving = len(tree.moving)
-                block = ROBOT_BLOCK_FRAMES - 1  # the same chunk length for every size: cost per frame
-                chunk = next(stream.motion.chunks(block + 1, block + 1))  # a fresh source: frames 0 … block
+            runs = runs_of[shape, n]
+            t0 = time.perf_counter()
+            tree = compile_tree(load_urdf(urdf))
+            t1 = time.perf_counter()
+            rec = rr.RecordingStream("bench")
+            rec.save(tmp / "robot.rrd")
+            stream = RobotStream(rec, tree, make_motion(tree.robot), RATE, warn=lambda _: None)
+            stream.log_static()
+            t2 = time.perf_counter()
+            chunks = stream.motion.chunks(None, 1)
+            stream.log_chunk(next(chunks))
+            t3 = time.perf_counter()
+            moving = len(tree.moving)
+            block = ROBOT_BLOCK_FRAMES  # the same chunk length for every size: cost per frame
+            per_frame, per_frame_fk = [], []
+            for chunk in stream.motion.chunks(block * ROBOT_BLOCKS, block):  # a fresh source from frame 0
                 t4 = time.perf_counter()
                 stream.log_chunk(chunk)
                 t5 = time.perf_counter()
                 joint_transforms(tree, chunk.positions)
                 t6 = time.perf_counter()
-                rec.flush()
-                rec.disconnect()
-                runs["load"].append(t1 - t0)
-                runs["static"].append(t2 - t1)
-                runs["first"].append(t3 - t2)
-                runs["frame"].append((t5 - t4) / (block + 1))
-                runs["fk"].append((t6 - t5) / (block + 1))
-            table[shape][n] = {k: median(v) for k, v in runs.items()} | {"moving": moving}
+                per_frame.append((t5 - t4) / block)
+                per_frame_fk.append((t6 - t5) / block)
+            rec.flush()
+            rec.disconnect()
+            runs["load"].append(t1 - t0)
+            runs["static"].append(t2 - t1)
+            runs["first"].append(t3 - t2)
+            runs["frame"].append(median(per_frame))
+            runs["fk"].append(median(per_frame_fk))
+            moving_of[shape, n] = moving
+    for shape, n in cases:
+        table.setdefault(shape, {})[n] = {k: median(v) for k, v in runs_of[shape, n].items()}
+        table[shape][n] |= {"moving": moving_of[shape, n]}
     r.section(f"5. Generated robots ({'/'.join(types)} joints, 15 % mimic), medians of {s.robot_repeats}")
     r.add(
-        f"links: shape (per frame: chunks of {ROBOT_BLOCK_FRAMES} frames)",
+        f"links: shape (per frame: median of {ROBOT_BLOCKS} chunks of {ROBOT_BLOCK_FRAMES} frames)",
         "load | static | first frame | per frame (log) | per frame (FK)",
     )
     for shape, by_n in table.items():
@@ -500,7 +583,7 @@ def bench_size(s: Sizes, tmp: Path, r: Report) -> None:
     for e in per_frame_entities:
         for name, nbytes in temporal[e].items():
             key = name.split(":")[-1] if ":" in name else name
-            by_component[key] = by_component.get(key, 0) + nbytes / rows[e]
+            by_component[key] = by_component.get(key, 0) + nbytes / frames  # /tf has several rows a frame
     r.section(f"6. Size: the default recording (one {s.size_seconds:g} s lap, {frames:,} frames)")
     r.add("file", f"{files[s.size_seconds]:,} B ({2 * s.size_seconds:g} s: {files[2 * s.size_seconds]:,} B)")
     r.add("bytes per frame (file growth per extra frame)", f"{per_frame:,.0f} B")
@@ -574,7 +657,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, default=None, metavar="PATH", help="also write the figures as JSON")
     parser.add_argument("--only", default=None, help="comma-separated sections: batch,kin,memory,live,robots,size")
     parser.add_argument("--rrlog-baseline", nargs=2, metavar=("FRAMES", "OUT"), help=argparse.SUPPRESS)
+    parser.add_argument("--sdk-floor", nargs=3, metavar=("RATE", "SECONDS", "OUT"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.sdk_floor:
+        sdk_floor(float(args.sdk_floor[0]), float(args.sdk_floor[1]), Path(args.sdk_floor[2]))
+        return 0
     if args.rrlog_baseline:
         rrlog_baseline(int(args.rrlog_baseline[0]), Path(args.rrlog_baseline[1]))
         return 0
