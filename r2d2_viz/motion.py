@@ -175,10 +175,12 @@ def sweep_cycle(joint: Joint, step: float = SWEEP_STEP) -> tuple[F64, int]:
     lo, hi = (-math.pi, math.pi) if continuous else (joint.limit.lower, joint.limit.upper)  # type: ignore[union-attr]
     pos = 0.0 if lo <= 0.0 <= hi else (lo + hi) / 2
     forward = True
-    seen: dict[tuple[float, bool], int] = {}
+    # frame at which each (position, direction) state was first seen; one dict per direction, keyed by
+    # float, because tuples would be tracked by the cyclic collector (and trigger it every few hundred)
+    seen: dict[bool, dict[float, int]] = {True: {}, False: {}}
     values: list[float] = []
-    while (pos, forward) not in seen:
-        seen[(pos, forward)] = len(values)
+    while pos not in seen[forward]:
+        seen[forward][pos] = len(values)
         values.append(pos)
         if forward:
             pos += step
@@ -188,7 +190,7 @@ def sweep_cycle(joint: Joint, step: float = SWEEP_STEP) -> tuple[F64, int]:
             pos -= step
             if pos < lo:
                 pos, forward = lo, True
-    return np.array(values), seen[(pos, forward)]
+    return np.array(values), seen[forward][pos]
 
 
 def _sweep(motion: Motion) -> _Source:
