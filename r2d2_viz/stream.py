@@ -13,7 +13,8 @@ Entity layout (every name is a URDF link or joint name, escaped for entity paths
 * ``/tf_axes/<frame>`` — ``TransformAxes3D`` for every frame (RViz TF "Show Axes"; names off);
 * ``/tf_arrows/<child>`` — an arrow from each child frame's origin to its parent's (RViz "Show Arrows"),
   static in the parent frame (the arrows that move are on ``/tf``);
-* ``/joints/limited`` — values of the joints with limits, one series each; ``…/<joint>/lower|upper`` the limits;
+* ``/joints/limited`` — values of the joints with limits, one series each; ``/joints/limited/limits`` their
+  lower and upper limits, two series per joint (one entity: a row for every limit line is one chunk);
 * ``/joints/continuous`` — values of continuous joints (they grow without bound: their own plot);
 * ``/warnings`` — ``TextLog`` lines, e.g. a joint leaving its limits.
 
@@ -60,6 +61,9 @@ Warn = Callable[[str], None]
 def path(*parts: str) -> str:
     """An entity path from unescaped parts (link names may hold spaces, slashes, non-ASCII)."""
     return "/" + "/".join(rr.escape_entity_path_part(p) for p in parts)
+
+
+LIMITS_ENTITY = path("joints", "limited", "limits")
 
 
 def _rgba8(rgba: Rgba | None, default: tuple[int, ...]) -> tuple[int, ...]:
@@ -125,11 +129,8 @@ class RobotStream:
         ]
         self._arrow_links = sorted({i for pair in self._arrow_ends for i in pair if i >= 0})
         self._reported: set[str] = set()
-        self._limit_lines = [
-            (path("joints", "limited", name, bound), dict(_encoded(rr.Scalars.columns(scalars=[value]))))
-            for name, bounds in self._limits.items()
-            for bound, value in zip(("lower", "upper"), bounds, strict=True)
-        ]
+        bounds = [bound for name in self.tree.moving if name in self._limits for bound in self._limits[name]]
+        self._limit_row = dict(_encoded(rr.Scalars.columns(scalars=bounds).partition([len(bounds)])))
         self._native = self.rec.to_native()
         self._pending_block: PreparedFrames | None = None
         self._plot_from = self._sent_to = 0
@@ -200,16 +201,17 @@ class RobotStream:
                 rr.SeriesLines(colors=[palette[m] for m in ms], names=names, widths=[2.0] * len(ms)),
                 static=True,
             )
-        for m, name in enumerate(tree.moving):
-            color = palette[m]
-            if name in self._limits:
-                faded = (*color[:3], 140)
-                for bound in ("lower", "upper"):
-                    rec.log(
-                        path("joints", "limited", name, bound),
-                        rr.SeriesLines(colors=[faded], names=[f"{name} {bound} limit"], widths=[1.0]),
-                        static=True,
-                    )
+        limited = [(m, name) for m, name in enumerate(tree.moving) if name in self._limits]
+        if limited:  # lower, upper for each joint, in the order of self._limit_row
+            rec.log(
+                LIMITS_ENTITY,
+                rr.SeriesLines(
+                    colors=[(*palette[m][:3], 140) for m, _ in limited for _ in range(2)],
+                    names=[f"{name} {bound} limit" for _, name in limited for bound in ("lower", "upper")],
+                    widths=[1.0] * (2 * len(limited)),
+                ),
+                static=True,
+            )
 
     def _log_arrow_static(self, parent: str, child: str, t_parent_child: F64) -> None:
         if float(np.linalg.norm(t_parent_child)) == 0.0:
@@ -374,11 +376,12 @@ class RobotStream:
             self._log_limits(self._last_frame / self.rate)
 
     def _log_limits(self, time_s: float) -> None:
-        """One row on every limit line at ``time_s``: columns encoded once, a chunk per line (no ``rr.log``:
-        a robot with a thousand limited joints has two thousand lines)."""
+        """One row on every limit line at ``time_s``: one chunk, encoded once (a robot with a thousand limited
+        joints has two thousand lines; a chunk per line made the cost of a frame grow with their square)."""
+        if not self._limits:
+            return
         time = pa.array(np.array([round(time_s * 1e9)], dtype="timedelta64[ns]"))
-        for entity, columns in self._limit_lines:
-            _send_arrow_chunk(entity, timelines={TIMELINE: time}, components=columns, recording=self._native)
+        _send_arrow_chunk(LIMITS_ENTITY, timelines={TIMELINE: time}, components=self._limit_row, recording=self._native)
 
     def _check_limits(self, frame: npt.NDArray[np.int64], values: F64) -> None:
         for m, name in enumerate(self.tree.moving):

@@ -110,12 +110,14 @@ def test_periscope_is_not_clamped_and_the_excursion_is_reported_once(lap_recordi
     values = np.array([v[column] for v in recording["/joints/limited"].temporal["Scalars:scalars"]])
     assert values.max() == pytest.approx(0.2, abs=1e-9)  # URDF upper limit is 0: not clamped
     assert values.min() == pytest.approx(0.0, abs=1e-9)
-    lower = recording["/joints/limited/periscope/lower"].temporal["Scalars:scalars"]
-    upper = recording["/joints/limited/periscope/upper"].temporal["Scalars:scalars"]
-    assert {v[0] for v in lower} == {-0.5} and {v[0] for v in upper} == {0.0}
-    for bound in ("lower", "upper"):  # each limit line spans the plot: from the first frame to the last
-        times = recording[f"/joints/limited/periscope/{bound}"].times
-        assert times[0] == 0 and times[-1] == recording["/joints/limited"].times[-1]
+    limits = recording["/joints/limited/limits"]  # every limit line, two series per limited joint
+    line_names = limits.static["SeriesLines:names"][-1]
+    assert line_names == [f"{j} {b} limit" for j in ("tilt", "periscope") for b in ("lower", "upper")]
+    rows = limits.temporal["Scalars:scalars"]
+    lower, upper = line_names.index("periscope lower limit"), line_names.index("periscope upper limit")
+    assert {row[lower] for row in rows} == {-0.5} and {row[upper] for row in rows} == {0.0}
+    # the lines span the plot: from the first frame to the last
+    assert limits.times[0] == 0 and limits.times[-1] == recording["/joints/limited"].times[-1]
     texts = [t[0] for t in recording["/warnings"].temporal["TextLog:text"]]
     assert sum("'periscope'" in t for t in texts) == 1
     stderr = lap_recording[1].stderr
