@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Performance benchmarks of r2d2-viz (issue #4): one script, one table.
 
-    python benchmarks/run.py               # full run (~14 min on 2 cores)
+    python benchmarks/run.py               # full run (~8 min on 2 cores)
     python benchmarks/run.py --smoke       # tiny sizes, for CI (well under a minute); no thresholds
     python benchmarks/run.py --json out.json
 
@@ -39,13 +39,10 @@ PY = sys.executable
 APP = [PY, "-m", "r2d2_viz"]
 IMPORT_FLOOR = [PY, "-c", "import rerun, yourdfpy, trimesh, numpy"]
 RATE = 30.0
-ROBOT_BLOCK_CELLS = 100_000
-ROBOT_BLOCK_MAX_FRAMES = 1_000
+ROBOT_BLOCK_FRAMES = 150
 ROBOT_BLOCKS = 5
-"""Per-frame robot figures: the median over this many chunks, in each repeat. A chunk holds about
-ROBOT_BLOCK_CELLS joint values (frames × moving joints, at most ROBOT_BLOCK_MAX_FRAMES frames), as the app's
-batch chunks hold a fixed number of values: the arrays per chunk stay the same size at every robot size, so
-the growth measured is the code's, not the CPU caches' (100 frames of 2,235 joints overflow them)."""
+"""Per-frame robot figures: the median over this many chunks of ROBOT_BLOCK_FRAMES frames (a live block at
+30 Hz: five seconds), in each repeat."""
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
 
 
@@ -511,7 +508,7 @@ def bench_robots(s: Sizes, tmp: Path, r: Report) -> None:
             stream.log_chunk(next(chunks))
             t3 = time.perf_counter()
             moving = len(tree.moving)
-            block = max(1, min(ROBOT_BLOCK_MAX_FRAMES, round(ROBOT_BLOCK_CELLS / max(1, moving))))
+            block = ROBOT_BLOCK_FRAMES  # the same chunk length for every size, as live runs have
             per_frame, per_frame_fk = [], []
             for chunk in stream.motion.chunks(block * ROBOT_BLOCKS, block):  # a fresh source from frame 0
                 t4 = time.perf_counter()
@@ -538,7 +535,7 @@ def bench_robots(s: Sizes, tmp: Path, r: Report) -> None:
         table[shape][n] |= {"moving": moving_of[shape, n]}
     r.section(f"5. Generated robots ({'/'.join(types)} joints, 15 % mimic), medians of {s.robot_repeats}")
     r.add(
-        f"links: shape (per frame: median of {ROBOT_BLOCKS} chunks of ~{ROBOT_BLOCK_CELLS:,} joint values)",
+        f"links: shape (per frame: median of {ROBOT_BLOCKS} chunks of {ROBOT_BLOCK_FRAMES} frames)",
         "load | static | first frame | per frame (log) | per frame (FK)",
     )
     for shape, by_n in table.items():
