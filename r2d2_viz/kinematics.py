@@ -61,6 +61,14 @@ class KinematicTree:
     static_child: I64
     static_T: F64  # (S, 4, 4) T_parent_child
 
+    @property
+    def link_parent(self) -> I64:
+        """Parent link of every link (indices into ``links``); -1 for the root and below a floating joint."""
+        parent = np.full(len(self.links), -1, dtype=np.int64)
+        parent[self.static_child] = self.static_parent
+        parent[self.moving_child] = self.moving_parent
+        return parent
+
     def static_translation_quat(self) -> tuple[F64, F64]:
         """Fixed-joint transforms as ``(translation (S, 3), quaternion xyzw (S, 4))``."""
         return self.static_T[:, :3, 3].copy(), matrix_to_quat(self.static_T[:, :3, :3])
@@ -262,9 +270,7 @@ class _Plan:
 @lru_cache(maxsize=8)
 def _composition_plan(tree: KinematicTree, links: tuple[int, ...]) -> _Plan:
     """Which links to compose, grouped by depth: linear in the number of links (iterative walks)."""
-    parent = np.full(len(tree.links), -1, dtype=np.int64)
-    parent[tree.static_child] = tree.static_parent
-    parent[tree.moving_child] = tree.moving_parent
+    parent = tree.link_parent
     moving_of = dict(zip(tree.moving_child.tolist(), range(len(tree.moving)), strict=True))
     static_of = dict(zip(tree.static_child.tolist(), range(len(tree.static)), strict=True))
     depth: dict[int, int] = {0: 0}  # links connected to the root; links below a floating joint stay out
@@ -321,14 +327,12 @@ def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.Array
     T_joint[..., :3, 3] = translation
     T_joint[..., 3, 3] = 1.0
 
-    # parent index and local transform per link, then compose in link order (parents come first).
+    # local transform per link, then compose in link order (parents come first).
     n_links = len(tree.links)
     local = np.full((n_frames, n_links, 4, 4), np.nan)
-    parent = np.full(n_links, -1, dtype=np.int64)
     local[:, tree.static_child] = tree.static_T
-    parent[tree.static_child] = tree.static_parent
     local[:, tree.moving_child] = T_joint
-    parent[tree.moving_child] = tree.moving_parent
+    parent = tree.link_parent
 
     poses = np.empty((n_frames, n_links, 4, 4))
     poses[:, 0] = np.eye(4) if T_fixed_root is None else np.asarray(T_fixed_root, dtype=np.float64)

@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -287,16 +287,17 @@ class RobotStream:
         times = {r: pa.array(np.repeat(nanos, r).astype("timedelta64[ns]")) for r in {e.rows for e in entities}}
         return PreparedFrames(chunk.frame, values, times, entities, self._outside(values))
 
-    def _outside(self, values: F64) -> npt.NDArray[np.int64] | None:
-        """Frames of the block where a joint not yet reported is outside its limits (checked once a block)."""
+    def _outside(self, values: F64) -> dict[int, int]:
+        """Each joint not yet reported that leaves its limits in this block → the first frame it is outside
+        (an index into the block). Checked once a block, vectorised; reported when that frame is sent."""
         pending = [m for m, name in enumerate(self.tree.moving) if name in self._limits and name not in self._reported]
         if not pending:
-            return None
+            return {}
         lower = np.array([self._limits[self.tree.moving[m]][0] for m in pending])
         upper = np.array([self._limits[self.tree.moving[m]][1] for m in pending])
         block = values[:, pending]
-        frames = np.flatnonzero(((block < lower) | (block > upper)).any(axis=1))
-        return frames if len(frames) else None
+        out = (block < lower) | (block > upper)  # (n, pending)
+        return {pending[j]: int(out[:, j].argmax()) for j in np.flatnonzero(out.any(axis=0))}
 
     def _moving_arrow_columns(
         self, chunk: MotionChunk, translation: F64, quat: F64
@@ -337,8 +338,9 @@ class RobotStream:
         self._sent_to = stop
         if stop == n or stop - self._plot_from >= self._plot_every:
             self._flush_plots()
-        if frames.outside is not None and start <= int(frames.outside.max()) and int(frames.outside.min()) < stop:
-            self._check_limits(frames.frame[start:stop], frames.values[start:stop])
+        for m, k in frames.outside.items():
+            if start <= k < stop:
+                self._report_outside(m, int(frames.frame[k]), float(frames.values[k, m]))
         self._last_frame = int(frames.frame[stop - 1])
 
     def _flush_plots(self) -> None:
@@ -363,10 +365,13 @@ class RobotStream:
         The columns were built by Rerun's own ``…columns()`` and sliced here, so they are valid by
         construction; calling the binding that ``send_columns`` ends in, directly, halves the cost of a live
         frame. (rerun-sdk is pinned to 0.41: this is the same call its ``send_columns`` makes.)"""
+        time = frames.times[entity.rows]
         if start == 0 and stop == len(frames.frame):
-            timelines, components = {TIMELINE: frames.times[entity.rows]}, dict(entity.columns)
+            timelines, components = {TIMELINE: time}, dict(entity.columns)
         else:
-            timelines, components = _sliced(frames.times[entity.rows], entity, start, stop)
+            first, count = start * entity.rows, (stop - start) * entity.rows
+            timelines = {TIMELINE: time.slice(first, count)}
+            components = {d: a.slice(first, count) for d, a in entity.columns}
         _send_arrow_chunk(entity.path, timelines=timelines, components=components, recording=self._native)
 
     def finish(self) -> None:
@@ -383,24 +388,21 @@ class RobotStream:
         time = pa.array(np.array([round(time_s * 1e9)], dtype="timedelta64[ns]"))
         _send_arrow_chunk(LIMITS_ENTITY, timelines={TIMELINE: time}, components=self._limit_row, recording=self._native)
 
-    def _check_limits(self, frame: npt.NDArray[np.int64], values: F64) -> None:
-        for m, name in enumerate(self.tree.moving):
-            if name in self._reported or name not in self._limits:
-                continue
-            lower, upper = self._limits[name]
-            outside = np.flatnonzero((values[:, m] < lower) | (values[:, m] > upper))
-            if len(outside) == 0:
-                continue
-            k = outside[0]
-            self._reported.add(name)
-            t = float(frame[k]) / self.rate
-            message = (
-                f"joint {name!r} left its URDF limits [{lower:g}, {upper:g}] at t={t:.3f} s "
-                f"(value {values[k, m]:.4g}); shown unclamped, like robot_state_publisher"
-            )
-            self.warn(message)
-            self.rec.set_time(TIMELINE, duration=t)
-            self.rec.log("/warnings", rr.TextLog(message, level=rr.TextLogLevel.WARN))
+    def _report_outside(self, m: int, frame: int, value: float) -> None:
+        """Warn, once per joint, that moving joint ``m`` is outside its limits at ``frame``."""
+        name = self.tree.moving[m]
+        if name in self._reported:
+            return
+        self._reported.add(name)
+        lower, upper = self._limits[name]
+        t = frame / self.rate
+        message = (
+            f"joint {name!r} left its URDF limits [{lower:g}, {upper:g}] at t={t:.3f} s "
+            f"(value {value:.4g}); shown unclamped, like robot_state_publisher"
+        )
+        self.warn(message)
+        self.rec.set_time(TIMELINE, duration=t)
+        self.rec.log("/warnings", rr.TextLog(message, level=rr.TextLogLevel.WARN))
 
 
 @dataclass(frozen=True, eq=False)
@@ -422,8 +424,8 @@ class PreparedFrames:
     values: F64  # (n, M) moving-joint values, for the limit checks
     times: dict[int, pa.Array]  # rows per frame → the ``time`` column, each frame's time repeated that often
     entities: list[_Entity]
-    outside: npt.NDArray[np.int64] | None = None
-    """Frames (indices into ``frame``) where some joint is outside its limits, or None: nothing to check."""
+    outside: dict[int, int] = field(default_factory=dict)
+    """Moving joint → first frame (an index into ``frame``) it is outside its limits, for joints not yet reported."""
 
     @staticmethod
     def empty(values: F64) -> PreparedFrames:
@@ -432,14 +434,6 @@ class PreparedFrames:
 
 def _encoded(columns: rr.ComponentColumnList) -> list[tuple[rr.ComponentDescriptor, pa.Array]]:
     return [(c.component_descriptor(), c.as_arrow_array()) for c in columns]
-
-
-def _sliced(
-    time: pa.Array, entity: _Entity, start: int, stop: int
-) -> tuple[dict[str, pa.Array], dict[rr.ComponentDescriptor, pa.Array]]:
-    """The timeline and components of frames ``start … stop-1`` of ``entity`` (``entity.rows`` rows a frame)."""
-    first, count = start * entity.rows, (stop - start) * entity.rows
-    return {TIMELINE: time.slice(first, count)}, {d: a.slice(first, count) for d, a in entity.columns}
 
 
 def _first_of_every(lists: pa.ListArray, rows: int) -> pa.ListArray:
