@@ -19,7 +19,8 @@ from pathlib import Path
 import rerun as rr
 import rerun.blueprint as rrb
 
-from .stream import APP_ID, ODOM, TIMELINE, path
+from .entities import APP_ID, TIMELINE, path
+from .motion import ODOM
 
 # --- values read off r2d2.rviz --------------------------------------------------------------------
 BACKGROUND_RGB = (48, 48, 48)  # Global Options / Background Color

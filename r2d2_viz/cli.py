@@ -50,9 +50,9 @@ def build_parser() -> argparse.ArgumentParser:
         type=_number,
         default=None,
         metavar="SECONDS",
-        help="robot time to generate (default: one lap, 1,440 frames, for --save; until Ctrl-C for live sinks)",
+        help="robot time to generate (default: one lap, 1,440 samples, for --save; until Ctrl-C for live sinks)",
     )
-    parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="frames per second (default 30)")
+    parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="samples per second (default 30)")
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
     sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
     sinks.add_argument("--save", type=Path, default=None, metavar="PATH", help="write a recording (.rrd)")
@@ -103,8 +103,6 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError(f"choose one live sink, not {' and '.join(live)}")
     if args.headless and (live or args.save):
         raise UsageError("--headless shows nothing; it cannot be combined with a sink")
-    if args.motion is not None and args.motion not in MOTIONS:
-        raise UsageError(f"unknown motion {args.motion!r}; expected one of {', '.join(MOTIONS)}")
     spawn = args.spawn or not (live or args.save or args.headless)
     sink = SinkConfig(
         spawn=spawn,

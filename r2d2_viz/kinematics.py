@@ -1,4 +1,4 @@
-"""The pinned kinematics core: joint values → joint transforms and link poses, vectorised over frames.
+"""The pinned kinematics core: joint values → joint transforms and link poses, vectorised over samples.
 
 It does what robot_state_publisher does with a URDF and a stream of joint states:
 
@@ -7,7 +7,7 @@ It does what robot_state_publisher does with a URDF and a stream of joint states
   to the URDF limits; a mimic joint follows ``multiplier * master + offset``;
 * a *floating* joint is skipped (no transform: its subtree is not connected to the root).
 
-Inputs are ``q`` with shape ``(T, A)``: T frames × A actuated joints (``KinematicTree.actuated``).
+Inputs are ``q`` with shape ``(T, A)``: T samples × A actuated joints (``KinematicTree.actuated``).
 Pure numpy; no rerun import.
 """
 
@@ -20,12 +20,10 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
+from .arrays import F64, I64
 from .errors import UrdfError
 from .model import Robot
 from .transforms import matrix_to_quat, quat_multiply, quat_to_matrix
-
-F64 = npt.NDArray[np.float64]
-I64 = npt.NDArray[np.int64]
 
 REVOLUTE, PRISMATIC = 0, 1
 
@@ -39,7 +37,7 @@ class KinematicTree:
     actuated: tuple[str, ...]
     """Names of the joints whose values make up a row of ``q`` (movable, not mimic)."""
     moving: tuple[str, ...]
-    """Joints that get a transform per frame: revolute, continuous, prismatic (mimics included)."""
+    """Joints that get a transform per sample: revolute, continuous, prismatic (mimics included)."""
     static: tuple[str, ...]
     """Joints whose transform never changes: fixed and planar."""
     warnings: tuple[str, ...]
@@ -85,7 +83,7 @@ class KinematicTree:
 
 
 def compile_tree(robot: Robot) -> KinematicTree:
-    """Compile ``robot`` for :func:`joint_transforms` and :func:`link_poses`."""
+    """Compile ``robot`` for :func:`joint_transforms` and :func:`link_positions`."""
     link_index = {link.name: i for i, link in enumerate(robot.links)}
     actuated = tuple(j.name for j in robot.actuated_joints)
     column = {name: i for i, name in enumerate(actuated)}
@@ -109,13 +107,13 @@ def compile_tree(robot: Robot) -> KinematicTree:
         seen = {j.name}
         while master.mimic is not None:  # follow mimic chains: a mimic of a mimic
             nxt = by_name.get(master.mimic.joint)
-            if nxt is None or not nxt.movable:
+            if nxt is None or not nxt.movable:  # (a missing one is refused or dropped when the model is read)
                 raise UrdfError(
                     f"{robot.source}: joint {master.name!r}: mimics {master.mimic.joint!r}, "
                     "which is not a revolute, continuous or prismatic joint"
                 )
-            if nxt.name in seen:
-                raise UrdfError(f"{robot.source}: joint {j.name!r}: mimic joints form a cycle")
+            if nxt.name in seen:  # urdf_check refuses mimic loops; never loop forever all the same
+                raise RuntimeError(f"joint {j.name!r}: mimic joints form a cycle")
             seen.add(nxt.name)
             multiplier, offset = multiplier * master.mimic.multiplier, multiplier * master.mimic.offset + offset
             master = nxt
@@ -150,7 +148,7 @@ def compile_tree(robot: Robot) -> KinematicTree:
     )
 
 
-def _as_frames(tree: KinematicTree, q: npt.ArrayLike) -> F64:
+def _as_samples(tree: KinematicTree, q: npt.ArrayLike) -> F64:
     q = np.asarray(q, dtype=np.float64)
     if q.ndim == 1:
         q = q[None, :]
@@ -161,7 +159,7 @@ def _as_frames(tree: KinematicTree, q: npt.ArrayLike) -> F64:
 
 def moving_values(tree: KinematicTree, q: npt.ArrayLike) -> F64:
     """Values ``(T, M)`` of every moving joint, mimics resolved."""
-    q = _as_frames(tree, q)
+    q = _as_samples(tree, q)
     return q[:, tree.moving_source] * tree.moving_multiplier + tree.moving_offset
 
 
@@ -175,8 +173,8 @@ def transforms_from_values(tree: KinematicTree, values: F64) -> tuple[F64, F64]:
 
     Per joint, ``origin ⊗ rot(axis, θ) = sin(θ/2) · (origin ⊗ (axis, 0)) + cos(θ/2) · origin`` and a
     prismatic shift is ``d · (R_origin · axis)``: the per-joint factors are computed once per call, the
-    per-frame work is one sin, one cos and a few multiply-adds. The arithmetic runs joint by joint over
-    long runs of frames (numpy is slow on many short rows); the results are views ``(T, M, k)`` of arrays
+    per-sample work is one sin, one cos and a few multiply-adds. The arithmetic runs joint by joint over
+    long runs of samples (numpy is slow on many short rows); the results are views ``(T, M, k)`` of arrays
     laid out ``(M, T, k)``, so ``translation[:, m]`` is contiguous.
     """
     n_moving = len(tree.moving)
@@ -187,18 +185,18 @@ def transforms_from_values(tree: KinematicTree, values: F64) -> tuple[F64, F64]:
     direction = np.einsum("mij,mj->mi", tree.moving_origin_R, tree.moving_axis)  # (M, 3)
 
     by_joint = np.asarray(values, dtype=np.float64).T  # (M, T)
-    n_frames = by_joint.shape[1]
+    n_samples = by_joint.shape[1]
     half = np.where(revolute, by_joint, 0.0)
     half *= 0.5
     sin, cos = np.sin(half), np.cos(half)
-    quat = np.empty((n_moving, n_frames, 4))
-    scratch = np.empty((n_moving, n_frames))
+    quat = np.empty((n_moving, n_samples, 4))
+    scratch = np.empty((n_moving, n_samples))
     for k in range(4):
         np.multiply(sin, origin_axis_q[:, k, None], out=quat[..., k])
         np.multiply(cos, origin_q[:, k, None], out=scratch)
         quat[..., k] += scratch
     shift = np.where(revolute, 0.0, by_joint)
-    translation = np.empty((n_moving, n_frames, 3))
+    translation = np.empty((n_moving, n_samples, 3))
     for k in range(3):  # prismatic: t = t_origin + R_origin · (axis · d) = t_origin + d · (R_origin · axis)
         np.multiply(shift, direction[:, k, None], out=translation[..., k])
         translation[..., k] += tree.moving_origin_t[:, k, None]
@@ -218,10 +216,10 @@ def link_positions(
     their ancestors are composed, as rotation and translation (no 4×4 matrices for the whole tree), one
     depth of the tree at a time (a few numpy calls per depth, however many links share it).
     Links below a floating joint are NaN."""
-    n_frames = translation.shape[0]
+    n_samples = translation.shape[0]
     plan = _composition_plan(tree, tuple(int(link) for link in links))
-    R = np.empty((n_frames, len(plan.links), 3, 3))
-    t = np.empty((n_frames, len(plan.links), 3))
+    R = np.empty((n_samples, len(plan.links), 3, 3))
+    t = np.empty((n_samples, len(plan.links), 3))
     if T_fixed_root is None:
         R[:, 0], t[:, 0] = np.eye(3), 0.0
     else:
@@ -240,7 +238,7 @@ def link_positions(
     out = {}
     for link in links:
         k = plan.compact.get(int(link))
-        out[link] = t[:, k] if k is not None else np.full((n_frames, 3), np.nan)
+        out[link] = t[:, k] if k is not None else np.full((n_samples, 3), np.nan)
     return out
 
 
@@ -315,28 +313,3 @@ def _composition_plan(tree: KinematicTree, links: tuple[int, ...]) -> _Plan:
                 )
         levels.append(tuple(groups))
     return _Plan(tuple(order), compact, tuple(levels))
-
-
-def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.ArrayLike | None = None) -> F64:
-    """Pose of every link in the fixed frame, ``(T, L, 4, 4)``; the root's pose is ``T_fixed_root``
-    (identity by default). Links below a floating joint are NaN."""
-    translation, quat = joint_transforms(tree, q)
-    n_frames = translation.shape[0]
-    T_joint = np.zeros((n_frames, len(tree.moving), 4, 4))
-    T_joint[..., :3, :3] = quat_to_matrix(quat)
-    T_joint[..., :3, 3] = translation
-    T_joint[..., 3, 3] = 1.0
-
-    # local transform per link, then compose in link order (parents come first).
-    n_links = len(tree.links)
-    local = np.full((n_frames, n_links, 4, 4), np.nan)
-    local[:, tree.static_child] = tree.static_T
-    local[:, tree.moving_child] = T_joint
-    parent = tree.link_parent
-
-    poses = np.empty((n_frames, n_links, 4, 4))
-    poses[:, 0] = np.eye(4) if T_fixed_root is None else np.asarray(T_fixed_root, dtype=np.float64)
-    for i in range(1, n_links):
-        p = parent[i]
-        poses[:, i] = np.nan if p < 0 else poses[:, p] @ local[:, i]
-    return poses

@@ -12,6 +12,7 @@ Poses are 4×4 homogeneous matrices named after the frames they map between:
 from __future__ import annotations
 
 import gc
+import io
 import warnings
 from collections import deque
 from collections.abc import Iterator
@@ -20,7 +21,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -28,10 +28,12 @@ import yourdfpy
 from lxml import etree
 
 from .errors import UrdfError
-from .urdf_check import check_robot, read_urdf_xml, resolve_mesh_path
+from .urdf_check import JOINT_TYPES, check_robot, parse_urdf_xml, read_urdf_xml, resolve_mesh_path
 
-JointType = Literal["fixed", "revolute", "continuous", "prismatic", "floating", "planar"]
-MOVABLE_TYPES: tuple[str, ...] = ("revolute", "continuous", "prismatic")
+JointType = str
+"""One of :data:`r2d2_viz.urdf_check.JOINT_TYPES` (checked before a model is built)."""
+MOVABLE_TYPES: tuple[str, ...] = JOINT_TYPES[:3]
+"""revolute, continuous, prismatic: the joints a joint state moves."""
 
 Mat4 = npt.NDArray[np.float64]
 Rgba = tuple[float, float, float, float]
@@ -183,8 +185,22 @@ def load_urdf(path: str | Path) -> Robot:
     path = Path(path)
     with _cyclic_gc_paused():
         root = read_urdf_xml(path)
-        notes = check_robot(root, source=path.name, base_dir=path.parent)
-        robot = build_robot(root, source=path.name, base_dir=path.parent)
+        return _validated(root, source=path.name, base_dir=path.parent)
+
+
+def parse_urdf(text: str | bytes, *, source: str = "robot_description", base_dir: str | Path | None = None) -> Robot:
+    """Validate and convert a robot description given as text (e.g. a bag's ``/robot_description``), through
+    the same checks and one-line errors as :func:`load_urdf`; ``source`` names it in messages, relative mesh
+    paths resolve against ``base_dir`` (the current directory by default)."""
+    base = Path(base_dir) if base_dir is not None else Path.cwd()
+    with _cyclic_gc_paused():
+        root = parse_urdf_xml(text, source=source, base_dir=base)
+        return _validated(root, source=source, base_dir=base)
+
+
+def _validated(root: etree._Element, *, source: str, base_dir: Path) -> Robot:
+    notes = check_robot(root, source=source, base_dir=base_dir)
+    robot = build_robot(root, source=source, base_dir=base_dir)
     return Robot(robot.name, robot.source, robot.root, robot.links, robot.joints, tuple(notes))
 
 
@@ -213,7 +229,13 @@ def build_robot(root: etree._Element, *, source: str, base_dir: Path) -> Robot:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            urdf = yourdfpy.URDF._parse_robot(xml_element=root)
+            urdf = yourdfpy.URDF.load(
+                io.BytesIO(etree.tostring(root)),  # validated, entity-free XML, parsed again by yourdfpy
+                build_scene_graph=False,
+                build_collision_scene_graph=False,
+                load_meshes=False,
+                load_collision_meshes=False,
+            ).robot
     except (ValueError, KeyError, IndexError, TypeError, AttributeError) as exc:  # validator should catch first
         raise UrdfError(f"{source}: cannot parse: {exc}") from None
 
@@ -324,21 +346,20 @@ def _joint(joint: yourdfpy.Joint) -> Joint:
 
 
 def _topological(links: dict[str, Link], joints: list[Joint], source: str) -> tuple[str, list[Joint]]:
-    """Root link and joints ordered parent-first, by an iterative breadth-first walk (no recursion)."""
+    """Root link and joints ordered parent-first, by an iterative breadth-first walk (no recursion).
+
+    :func:`r2d2_viz.urdf_check.check_robot` has already refused robots without exactly one root, with
+    cycles or with joints that reach unknown links."""
     children: dict[str, list[Joint]] = {}
     child_links = set()
     for joint in joints:
         children.setdefault(joint.parent, []).append(joint)
         child_links.add(joint.child)
-    roots = [name for name in links if name not in child_links]
-    if len(roots) != 1:
-        raise UrdfError(f"{source}: robot: expected exactly one root link, found {len(roots)}")
+    root = next(name for name in links if name not in child_links)
     ordered: list[Joint] = []
-    queue = deque([roots[0]])
+    queue = deque([root])
     while queue:
         for joint in children.get(queue.popleft(), ()):
             ordered.append(joint)
             queue.append(joint.child)
-    if len(ordered) != len(joints):
-        raise UrdfError(f"{source}: robot: joints form a cycle or reach unknown links")
-    return roots[0], ordered
+    return root, ordered

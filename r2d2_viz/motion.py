@@ -1,64 +1,69 @@
-"""Motion generators: what drives the joints (and the odom → root transform) frame by frame.
+"""Generated motions: sources (:mod:`r2d2_viz.sources`) that need nothing but the robot.
 
-* ``tutorial`` — exactly what the tutorial's ``state_publisher.py`` publishes at 30 Hz;
+* ``tutorial`` — exactly what the tutorial's ``state_publisher.py`` publishes at 30 Hz, odom → root included;
 * ``sweep`` — joint_state_publisher's ``delta`` behaviour, for any robot;
 * ``still`` — every joint at zero.
 
-Every generator yields :class:`MotionChunk` s of consecutive frames, so a 24 h run never holds all
-its frames at once. Frame ``k`` is at ``t = k / rate``. Pure numpy; no rerun import.
+Sample ``k`` is at ``t = k / rate`` (a duration since the start). Motions yield chunks of consecutive samples,
+so a 24 h run never holds all of them at once. Pure numpy; no rerun import.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from typing import Literal
+from abc import ABC, abstractmethod
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import numpy.typing as npt
 
+from .arrays import F64, I64
 from .errors import UsageError
-from .model import Joint, Robot
+from .sources import Clock, FrameTrack, SampleChunk
 
-F64 = npt.NDArray[np.float64]
+if TYPE_CHECKING:  # the model imports yourdfpy; the CLI imports this module for --help
+    from .model import Joint, Robot
+
 MotionName = Literal["tutorial", "sweep", "still"]
 MOTIONS: tuple[MotionName, ...] = ("tutorial", "sweep", "still")
 TUTORIAL_JOINTS = ("swivel", "tilt", "periscope")
-_Source = Callable[[int, int], "MotionChunk"]
-"""Frames ``start … start+n-1`` of a motion."""
+ODOM = "odom"
+"""The tutorial's fixed frame: state_publisher.py publishes ``odom → axis``."""
 DEGREE = math.pi / 180.0
 SWEEP_STEP = DEGREE
-"""joint_state_publisher's ``delta``: one step per frame, radians or metres."""
+"""joint_state_publisher's ``delta``: one step per sample, radians or metres."""
+SWEEP_MAX_STEPS = 100_000
+"""A joint whose limits are further apart than this many steps (about 1,745 rad or m: ±1e16, ±1e300, inf
+mean "unlimited") sweeps like a continuous joint, over [−π, π]: a cycle over its whole range would never end."""
 
 
-@dataclass(frozen=True, eq=False)
-class MotionChunk:
-    """Frames ``frame[0] … frame[-1]`` (consecutive)."""
+class GeneratedMotion(ABC):
+    """A source computed from the sample index: ``times_ns = rint(k · 10⁹ / rate)``.
 
-    frame: npt.NDArray[np.int64]  # (n,)
-    positions: F64  # (n, A), columns in ``Motion.joints`` order
-    odom_translation: F64 | None  # (n, 3) T_odom_root translation, or None: root stays at odom
-    odom_quat_xyzw: F64 | None  # (n, 4)
+    ``n_samples`` None: forever (live runs until Ctrl-C)."""
 
-
-@dataclass(frozen=True, eq=False)
-class Motion:
     name: MotionName
-    robot: Robot
-    joints: tuple[str, ...]
-    """Columns of ``positions``: the robot's actuated joints, in the robot's order."""
-    moves_root: bool
-    """Whether odom → root changes over time (True only for ``tutorial``)."""
+    clock: Clock = "duration"
 
-    def chunks(self, n_frames: int | None, chunk_size: int) -> Iterator[MotionChunk]:
-        """Frames ``0 … n_frames-1`` (forever when None) in chunks of at most ``chunk_size``."""
-        source = _GENERATORS[self.name](self)
+    def __init__(self, robot: Robot, *, rate: float = 30.0, n_samples: int | None = None) -> None:
+        self.robot = robot
+        self.rate = rate
+        self.n_samples = n_samples
+        self.joints: tuple[str, ...] = tuple(j.name for j in robot.actuated_joints)
+        self.frames: tuple[tuple[str, str], ...] = ()
+
+    def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
         start = 0
-        while n_frames is None or start < n_frames:
-            n = chunk_size if n_frames is None else min(chunk_size, n_frames - start)
-            yield source(start, n)
+        while self.n_samples is None or start < self.n_samples:
+            n = max_samples if self.n_samples is None else min(max_samples, self.n_samples - start)
+            k = np.arange(start, start + n, dtype=np.int64)
+            positions, frames = self.at(k)
+            yield SampleChunk(np.rint(k * (1e9 / self.rate)).astype(np.int64), self.joints, positions, frames)
             start += n
+
+    @abstractmethod
+    def at(self, k: I64) -> tuple[F64, tuple[FrameTrack, ...]]:
+        """Positions ``(n, len(joints))`` and frame tracks of samples ``k``."""
 
 
 def default_motion(robot: Robot) -> MotionName:
@@ -66,19 +71,18 @@ def default_motion(robot: Robot) -> MotionName:
     return "tutorial" if set(TUTORIAL_JOINTS) <= names else "sweep"
 
 
-def make_motion(robot: Robot, name: MotionName | None = None) -> Motion:
+def make_motion(
+    robot: Robot, name: str | None = None, *, rate: float = 30.0, n_samples: int | None = None
+) -> GeneratedMotion:
     """The named motion for ``robot`` (``default_motion`` when None)."""
     name = name or default_motion(robot)
-    if name not in MOTIONS:
-        raise UsageError(f"unknown motion {name!r}; expected one of {', '.join(MOTIONS)}")
-    joints = tuple(j.name for j in robot.actuated_joints)
-    if name == "tutorial" and not set(TUTORIAL_JOINTS) <= set(joints):
-        missing = sorted(set(TUTORIAL_JOINTS) - set(joints))
-        raise UsageError(
-            f"{robot.source}: motion 'tutorial' needs the joints {', '.join(TUTORIAL_JOINTS)}; "
-            f"missing {', '.join(missing)}; use --motion sweep or still"
-        )
-    return Motion(name, robot, joints, moves_root=name == "tutorial")
+    if name == "tutorial":
+        return TutorialMotion(robot, rate=rate, n_samples=n_samples)
+    if name == "sweep":
+        return SweepMotion(robot, rate=rate, n_samples=n_samples)
+    if name == "still":
+        return StillMotion(robot, rate=rate, n_samples=n_samples)
+    raise UsageError(f"unknown motion {name!r}; expected one of {', '.join(MOTIONS)}")
 
 
 # --- tutorial --------------------------------------------------------------------------------------
@@ -88,31 +92,13 @@ TILT_START, TILT_STEP, TILT_LOWER, TILT_UPPER = 0.0, DEGREE, -0.5, 0.0
 HEIGHT_START, HEIGHT_STEP, HEIGHT_LOWER, HEIGHT_UPPER = 0.0, 0.005, 0.0, 0.2
 
 
-def tutorial_reference(n: int) -> tuple[F64, F64]:
-    """Tilt and periscope height of frames ``0 … n-1``: state_publisher.py's loop, literally.
-
-    The reference for :func:`bounce_cycle` (the tests check one against the other)."""
-    tilt, tinc, height, hinc = TILT_START, TILT_STEP, HEIGHT_START, HEIGHT_STEP
-    tilts, heights = np.empty(n), np.empty(n)
-    for k in range(n):
-        tilts[k] = tilt
-        heights[k] = height
-        tilt += tinc
-        if tilt < TILT_LOWER or tilt > TILT_UPPER:
-            tinc *= -1
-        height += hinc
-        if height > HEIGHT_UPPER or height < HEIGHT_LOWER:
-            hinc *= -1
-    return tilts, heights
-
-
 def bounce_cycle(start: float, step: float, lower: float, upper: float, max_steps: int = 1_000_000) -> tuple[F64, int]:
     """One variable of state_publisher.py's bouncing loop (``x += inc; if x < lower or x > upper: inc *= -1``),
     as ``(values, loop_start)`` like :func:`sweep_cycle`.
 
     The loop's whole state is the pair ``(x, inc)`` of floats, and the next state is a function of it
     alone, so once a state (compared bit for bit) comes back, everything after repeats exactly: the
-    published value of frame ``k`` is ``values[k]`` for ``k < len(values)``, then
+    published value of sample ``k`` is ``values[k]`` for ``k < len(values)``, then
     ``values[loop_start + (k - loop_start) % (len(values) - loop_start)]`` — the literal loop's
     floating-point values, rounding included, at any ``k``. (Tilt repeats after 89 steps, the
     periscope after 105.)
@@ -131,33 +117,43 @@ def bounce_cycle(start: float, step: float, lower: float, upper: float, max_step
     return np.array(values), seen[state]
 
 
-def _cycle_values(cycle: tuple[F64, int], frame: npt.NDArray[np.int64]) -> F64:
+def _cycle_values(cycle: tuple[F64, int], k: I64) -> F64:
     values, loop = cycle
     period = len(values) - loop
-    index = np.where(frame < len(values), frame, loop + (frame - loop) % period)
+    index = np.where(k < len(values), k, loop + (k - loop) % period)
     out: F64 = values[index]
     return out
 
 
-def _tutorial(motion: Motion) -> _Source:
+class TutorialMotion(GeneratedMotion):
     """state_publisher.py, step for step: publish the state, then advance it (see :func:`bounce_cycle`)."""
-    tilt = bounce_cycle(TILT_START, TILT_STEP, TILT_LOWER, TILT_UPPER)
-    height = bounce_cycle(HEIGHT_START, HEIGHT_STEP, HEIGHT_LOWER, HEIGHT_UPPER)
-    column = {name: i for i, name in enumerate(motion.joints)}
 
-    def source(start: int, n: int) -> MotionChunk:
-        frame = np.arange(start, start + n, dtype=np.int64)
-        positions = np.zeros((n, len(motion.joints)))
-        positions[:, column["swivel"]] = frame * DEGREE  # swivel += degree, never wrapped
-        positions[:, column["tilt"]] = _cycle_values(tilt, frame)
-        positions[:, column["periscope"]] = _cycle_values(height, frame)
-        angle = frame * (DEGREE / 4)  # angle += degree / 4
+    name: MotionName = "tutorial"
+
+    def __init__(self, robot: Robot, *, rate: float = 30.0, n_samples: int | None = None) -> None:
+        super().__init__(robot, rate=rate, n_samples=n_samples)
+        missing = [name for name in TUTORIAL_JOINTS if name not in self.joints]
+        if missing:
+            raise UsageError(
+                f"{robot.source}: motion 'tutorial' needs the joints {', '.join(TUTORIAL_JOINTS)}; "
+                f"missing {', '.join(missing)}; use --motion sweep or still"
+            )
+        self.frames = ((ODOM, robot.root),)
+        self._tilt = bounce_cycle(TILT_START, TILT_STEP, TILT_LOWER, TILT_UPPER)
+        self._height = bounce_cycle(HEIGHT_START, HEIGHT_STEP, HEIGHT_LOWER, HEIGHT_UPPER)
+        self._column = {name: i for i, name in enumerate(self.joints)}
+
+    def at(self, k: I64) -> tuple[F64, tuple[FrameTrack, ...]]:
+        n = len(k)
+        positions = np.zeros((n, len(self.joints)))
+        positions[:, self._column["swivel"]] = k * DEGREE  # swivel += degree, never wrapped
+        positions[:, self._column["tilt"]] = _cycle_values(self._tilt, k)
+        positions[:, self._column["periscope"]] = _cycle_values(self._height, k)
+        angle = k * (DEGREE / 4)  # angle += degree / 4
         translation = np.stack([2 * np.cos(angle), 2 * np.sin(angle), np.full(n, 0.7)], axis=-1)
         yaw = angle + math.pi / 2  # euler_to_quaternion(0, 0, angle + pi/2)
         quat = np.stack([np.zeros(n), np.zeros(n), np.sin(yaw / 2), np.cos(yaw / 2)], axis=-1)
-        return MotionChunk(frame, positions, translation, quat)
-
-    return source
+        return positions, (FrameTrack(ODOM, self.robot.root, translation, quat),)
 
 
 # --- sweep -----------------------------------------------------------------------------------------
@@ -166,16 +162,23 @@ def _tutorial(motion: Motion) -> _Source:
 def sweep_cycle(joint: Joint, step: float = SWEEP_STEP) -> tuple[F64, int]:
     """The exact sequence of one joint under joint_state_publisher's ``delta`` update.
 
-    Returns ``(values, loop_start)``: frame ``k`` is ``values[k]`` for ``k < len(values)``, after
+    Returns ``(values, loop_start)``: sample ``k`` is ``values[k]`` for ``k < len(values)``, after
     which the sequence repeats ``values[loop_start:]``. Like joint_state_publisher, a joint starts
-    at 0 (or mid-range if 0 is outside its limits), moves ``step`` per frame, stops at a limit and
-    turns back; a continuous joint keeps turning (wrapping from +π to −π).
+    at 0 (or mid-range if 0 is outside its limits), moves ``step`` per sample, stops at a limit and
+    turns back; a continuous joint keeps turning (wrapping from +π to −π), and so does a joint whose
+    limits are too far apart to mean anything (see :data:`SWEEP_MAX_STEPS`).
     """
-    continuous = joint.type == "continuous" or joint.limit is None
-    lo, hi = (-math.pi, math.pi) if continuous else (joint.limit.lower, joint.limit.upper)  # type: ignore[union-attr]
+    limit = joint.limit
+    continuous = (
+        joint.type == "continuous"
+        or limit is None
+        or not (math.isfinite(limit.lower) and math.isfinite(limit.upper))
+        or (limit.upper - limit.lower) / step > SWEEP_MAX_STEPS
+    )
+    lo, hi = (-math.pi, math.pi) if continuous or limit is None else (limit.lower, limit.upper)
     pos = 0.0 if lo <= 0.0 <= hi else (lo + hi) / 2
     forward = True
-    # frame at which each (position, direction) state was first seen; one dict per direction, keyed by
+    # sample at which each (position, direction) state was first seen; one dict per direction, keyed by
     # float, because tuples would be tracked by the cyclic collector (and trigger it every few hundred)
     seen: dict[bool, dict[float, int]] = {True: {}, False: {}}
     values: list[float] = []
@@ -193,25 +196,22 @@ def sweep_cycle(joint: Joint, step: float = SWEEP_STEP) -> tuple[F64, int]:
     return np.array(values), seen[forward][pos]
 
 
-def _sweep(motion: Motion) -> _Source:
-    cycles = [sweep_cycle(motion.robot.joint(name)) for name in motion.joints]
+class SweepMotion(GeneratedMotion):
+    name: MotionName = "sweep"
 
-    def source(start: int, n: int) -> MotionChunk:
-        frame = np.arange(start, start + n, dtype=np.int64)
-        positions = np.empty((n, len(cycles)))
-        for c, cycle in enumerate(cycles):
-            positions[:, c] = _cycle_values(cycle, frame)
-        return MotionChunk(frame, positions, None, None)
+    def __init__(self, robot: Robot, *, rate: float = 30.0, n_samples: int | None = None) -> None:
+        super().__init__(robot, rate=rate, n_samples=n_samples)
+        self._cycles = [sweep_cycle(robot.joint(name)) for name in self.joints]
 
-    return source
-
-
-def _still(motion: Motion) -> _Source:
-    def source(start: int, n: int) -> MotionChunk:
-        frame = np.arange(start, start + n, dtype=np.int64)
-        return MotionChunk(frame, np.zeros((n, len(motion.joints))), None, None)
-
-    return source
+    def at(self, k: I64) -> tuple[F64, tuple[FrameTrack, ...]]:
+        positions = np.empty((len(k), len(self._cycles)))
+        for c, cycle in enumerate(self._cycles):
+            positions[:, c] = _cycle_values(cycle, k)
+        return positions, ()
 
 
-_GENERATORS: dict[str, Callable[[Motion], _Source]] = {"tutorial": _tutorial, "sweep": _sweep, "still": _still}
+class StillMotion(GeneratedMotion):
+    name: MotionName = "still"
+
+    def at(self, k: I64) -> tuple[F64, tuple[FrameTrack, ...]]:
+        return np.zeros((len(k), len(self.joints))), ()

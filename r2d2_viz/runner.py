@@ -1,4 +1,4 @@
-"""One run of the app: model → motion → kinematics → stream, batch or paced to the wall clock.
+"""One run of the app: model → source → kinematics → stream, batch or paced to the wall clock.
 
 No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.sinks` and written by
 :mod:`r2d2_viz.stream`.
@@ -18,36 +18,39 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
 
+import numpy as np
+
 from .errors import UsageError
 from .kinematics import compile_tree
-from .model import load_urdf
-from .motion import MotionName, make_motion
+from .model import Robot, load_urdf
+from .motion import make_motion
 from .sinks import SinkConfig, close_recording, open_recording
+from .sources import Source
 from .stream import RobotStream
 
-BATCH_CHUNK_FRAMES = 20_000
-"""Frames per columnar chunk in batch runs: memory stays flat however long the run."""
+BATCH_CHUNK_SAMPLES = 20_000
+"""Samples per columnar chunk in batch runs: memory stays flat however long the run."""
 BATCH_CHUNK_CELLS = 1_000_000
 """…and at most this many moving-joint values per chunk, so a robot with thousands of joints stays flat too."""
 LIVE_BLOCK_SECONDS = 5.0
-"""Live runs compute and encode this much robot time at once (about 1.5 ms of work plus 3 µs a frame), then
-send each frame when it is due; the sinks are waited for once a block (backpressure)…"""
-LIVE_BLOCK_FRAMES = 1000
-"""…and a block has at most this many frames, so at high rates computing one makes only a frame or two late."""
+"""Live runs compute and encode this much robot time at once (about 1.5 ms of work plus 3 µs a sample), then
+send each sample when it is due; the sinks are waited for once a block (backpressure)…"""
+LIVE_BLOCK_SAMPLES = 1000
+"""…and a block has at most this many samples, so at high rates computing one makes only a sample or two late."""
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
-"""Benchmark hook: if set to a path, live runs write one line per frame, ``frame lateness_seconds``
+"""Benchmark hook: if set to a path, live runs write one line per sample, ``sample lateness_seconds``
 (when its send returned, minus when it was due). Off by default; costs nothing when unset."""
-LAP_FRAMES = 1440
-"""One lap of the tutorial's odom circle: 360° / (¼° per frame) — 48 s at the default 30 Hz."""
+LAP_SAMPLES = 1440
+"""One lap of the tutorial's odom circle: 360° / (¼° per sample) — 48 s at the default 30 Hz."""
 
 
 @dataclass(frozen=True)
 class RunConfig:
     urdf: Path
-    motion: MotionName | None = None
+    motion: str | None = None
     rate: float = 30.0
     duration: float | None = None
-    """Seconds of robot time; None: one lap (1,440 frames) for batch saves, forever for live runs."""
+    """Seconds of robot time; None: one lap (1,440 samples) for batch saves, forever for live runs."""
     sink: SinkConfig = field(default_factory=SinkConfig)
     realtime: bool = False
     """Pace to the wall clock even when only saving."""
@@ -57,15 +60,19 @@ class RunConfig:
         return self.sink.live or self.realtime
 
     @property
-    def n_frames(self) -> int | None:
+    def n_samples(self) -> int | None:
         if self.duration is None:
-            return None if self.live else LAP_FRAMES
+            return None if self.live else LAP_SAMPLES
         return max(1, round(self.duration * self.rate))
+
+    def source(self, robot: Robot) -> Source:
+        """What drives the robot in this run."""
+        return make_motion(robot, self.motion, rate=self.rate, n_samples=self.n_samples)
 
 
 @dataclass
 class RunResult:
-    frames: int
+    samples: int
     interrupted: bool
     saved: Path | None
 
@@ -79,26 +86,27 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
     _check_numbers(config)
     robot = load_urdf(config.urdf)
     tree = compile_tree(robot)
-    motion = make_motion(robot, config.motion)
+    source = config.source(robot)
     save = config.sink.save
     tmp = _temp_path(save) if save is not None else None
-    frames = 0
+    samples = 0
     interrupted = False
     try:
         recording = open_recording(config.sink, save_to=tmp, live=config.live, on_ready=on_ready)
         try:
-            streamer = RobotStream(recording.rec, tree, motion, config.rate)
+            streamer = RobotStream(recording.rec, tree, frames=source.frames, clock=source.clock)
             streamer.log_static()
             if config.live:
-                frames, interrupted = _paced(streamer, config)
+                block = max(1, min(round(config.rate * LIVE_BLOCK_SECONDS), LIVE_BLOCK_SAMPLES))
+                samples, interrupted = _paced(streamer, source, block=block)
             else:
                 with _sigterm_raises():
-                    for k, chunk in enumerate(motion.chunks(config.n_frames, batch_chunk_frames(len(tree.moving)))):
+                    for k, chunk in enumerate(source.chunks(batch_chunk_samples(len(tree.moving)))):
                         prepared = streamer.prepare(chunk)  # meanwhile the sinks write the previous chunk
                         if k:
                             recording.rec.flush()  # backpressure: one chunk in flight, memory stays flat
                         streamer.send(prepared)
-                        frames += len(chunk.frame)
+                        samples += len(chunk)
             streamer.finish()
         finally:
             close_recording(recording)
@@ -108,7 +116,7 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
         if tmp is not None:
             tmp.unlink(missing_ok=True)
         raise
-    return RunResult(frames=frames, interrupted=interrupted, saved=save)
+    return RunResult(samples=samples, interrupted=interrupted, saved=save)
 
 
 def _check_numbers(config: RunConfig) -> None:
@@ -132,54 +140,53 @@ def _temp_path(save: Path) -> Path:
     return save.with_name(f".{save.name}.{os.getpid()}.partial")
 
 
-def batch_chunk_frames(n_moving: int) -> int:
-    """Frames per chunk of a batch run for a robot with ``n_moving`` moving joints."""
-    return max(1, min(BATCH_CHUNK_FRAMES, BATCH_CHUNK_CELLS // max(1, n_moving)))
+def batch_chunk_samples(n_moving: int) -> int:
+    """Samples per chunk of a batch run for a robot with ``n_moving`` moving joints."""
+    return max(1, min(BATCH_CHUNK_SAMPLES, BATCH_CHUNK_CELLS // max(1, n_moving)))
 
 
-def _paced(streamer: RobotStream, config: RunConfig) -> tuple[int, bool]:
-    """Send frame k at ``start + k / rate`` (an absolute schedule: no drift; ``start`` is when the first block
-    is ready) until done or signalled.
+def _paced(streamer: RobotStream, source: Source, *, block: int, speed: float = 1.0) -> tuple[int, bool]:
+    """Send each sample at ``start + (t - t₀) / speed`` of the wall clock (an absolute schedule: no drift;
+    ``start`` is when the first block is ready, ``t₀`` the first sample's time) until done or signalled.
 
-    Frames are computed a block at a time (:meth:`RobotStream.prepare`); each is sent on its own
-    when due. If the process falls behind, every frame already due goes out in one send, so a late
-    frame does not push the next ones later.
+    Samples are computed ``block`` at a time (:meth:`RobotStream.prepare`); each is sent on its own when due.
+    If the process falls behind, every sample already due goes out in one send, so a late sample does not
+    push the next ones later.
     """
     stop = threading.Event()
-    frames = 0
-    rate = config.rate
-    block = max(1, min(round(rate * LIVE_BLOCK_SECONDS), LIVE_BLOCK_FRAMES))
+    sent = 0
     log_path = os.environ.get(PACING_LOG_ENV)
     with _signals_set(stop), open(log_path, "w") if log_path else nullcontext() as log:
         start = math.nan
-        for chunk in streamer.motion.chunks(config.n_frames, block):
+        t0 = 0
+        for chunk in source.chunks(block):
             prepared = streamer.prepare(chunk)
-            if math.isnan(start):  # the schedule starts when the first frame is ready to go
-                start = time.monotonic()
-            first, n = int(chunk.frame[0]), len(chunk.frame)
+            n = len(chunk)
+            if n == 0:
+                continue
+            if math.isnan(start):  # the schedule starts when the first sample is ready to go
+                start, t0 = time.monotonic(), int(chunk.times_ns[0])
+            due = start + (chunk.times_ns - t0) * (1e-9 / speed)
             i = 0
             while i < n:
-                delay = start + (first + i) / rate - time.monotonic()
-                if delay > 0:  # at most one frame period: a signal's handler sets `stop`, seen right after
+                delay = due[i] - time.monotonic()
+                if delay > 0:  # at most one sample period: a signal's handler sets `stop`, seen right after
                     time.sleep(delay)
                 if stop.is_set():
                     break
-                now = time.monotonic()
-                j = i + 1
-                while j < n and start + (first + j) / rate <= now:
-                    j += 1
+                j = i + 1 + int(np.searchsorted(due[i + 1 :], time.monotonic(), side="right"))
                 streamer.send(prepared, i, j)
                 if log is not None:
-                    sent = time.monotonic()
-                    log.writelines(f"{k} {sent - (start + k / rate):.6f}\n" for k in range(first + i, first + j))
-                frames += j - i
+                    now = time.monotonic()
+                    log.writelines(f"{sent + k - i} {now - due[k]:.6f}\n" for k in range(i, j))
+                sent += j - i
                 i = j
             if i < n:
                 break
             # Backpressure, once a block (five seconds): wait until the sinks have taken what was sent, so a
-            # sink slower than the frame rate makes frames late instead of piling them up in memory.
+            # sink slower than the sample rate makes samples late instead of piling them up in memory.
             streamer.rec.flush()
-    return frames, stop.is_set()
+    return sent, stop.is_set()
 
 
 @contextmanager
@@ -221,4 +228,4 @@ def _handlers(
 def print_summary(result: RunResult, config: RunConfig) -> None:
     where = f" to {result.saved}" if result.saved else ""
     how = " (stopped by signal)" if result.interrupted else ""
-    print(f"r2d2-viz: {result.frames} frames at {config.rate:g} Hz{where}{how}", file=sys.stderr)
+    print(f"r2d2-viz: {result.samples} samples at {config.rate:g} Hz{where}{how}", file=sys.stderr)

@@ -20,8 +20,8 @@ from urllib.parse import quote
 import rerun as rr
 
 from .blueprint import generate_blueprint
+from .entities import APP_ID
 from .errors import SinkError
-from .stream import APP_ID
 
 DEFAULT_GRPC_PORT = 9876
 DEFAULT_WEB_PORT = 9090

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-F64 = npt.NDArray[np.float64]
+from .arrays import F64
 
 
 def quat_from_axis_angle(axis: npt.ArrayLike, angle: npt.ArrayLike) -> F64:

@@ -83,6 +83,16 @@ def read_urdf_xml(path: Path) -> etree._Element:
     return _parse_bytes(data, name, str(path.absolute()))
 
 
+def parse_urdf_xml(text: str | bytes, *, source: str, base_dir: Path) -> etree._Element:
+    """:func:`read_urdf_xml` for a description given as text; ``source`` names it in messages and
+    ``base_dir`` is where its relative mesh paths resolve."""
+    data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
+    name = _one_line(source) or "robot_description"
+    if len(data) > MAX_FILE_BYTES:
+        _fail(name, f"description is too large ({len(data)} bytes; the limit is {MAX_FILE_BYTES} bytes)")
+    return _parse_bytes(data, name, str(Path(base_dir).absolute() / "robot_description.urdf"))
+
+
 def _parse_bytes(data: bytes, name: str, url: str) -> etree._Element:
     if not data.strip():
         _fail(name, "file is empty")

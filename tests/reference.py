@@ -22,8 +22,8 @@ def euler_to_quaternion(roll: float, pitch: float, yaw: float) -> tuple[float, f
     return (qx, qy, qz, qw)
 
 
-def state_publisher(n_frames: int) -> list[dict[str, object]]:
-    """What state_publisher.py publishes on each of its first ``n_frames`` loop iterations."""
+def state_publisher(n_samples: int) -> list[dict[str, object]]:
+    """What state_publisher.py publishes on each of its first ``n_samples`` loop iterations."""
     degree = pi / 180.0
     tilt = 0.0
     tinc = degree
@@ -32,7 +32,7 @@ def state_publisher(n_frames: int) -> list[dict[str, object]]:
     height = 0.0
     hinc = 0.005
     out: list[dict[str, object]] = []
-    for _ in range(n_frames):
+    for _ in range(n_samples):
         out.append(
             {
                 "joint_state": {"swivel": swivel, "tilt": tilt, "periscope": height},
@@ -52,7 +52,7 @@ def state_publisher(n_frames: int) -> list[dict[str, object]]:
 
 
 def joint_state_publisher_delta(
-    lower: float, upper: float, *, continuous: bool, delta: float, n_frames: int
+    lower: float, upper: float, *, continuous: bool, delta: float, n_samples: int
 ) -> list[float]:
     """joint_state_publisher's ``update(delta)`` for one free joint, published before each update."""
     if continuous:
@@ -60,7 +60,7 @@ def joint_state_publisher_delta(
     position = 0.0 if lower <= 0.0 <= upper else (lower + upper) / 2
     forward = True
     out = []
-    for _ in range(n_frames):
+    for _ in range(n_samples):
         out.append(position)
         if forward:
             position += delta
@@ -93,3 +93,21 @@ def quat_xyzw_to_matrix(q):  # type: ignore[no-untyped-def]
         ],
         -2,
     )
+
+
+def state_publisher_bounces(n: int) -> tuple[list[float], list[float]]:
+    """Tilt and periscope height of state_publisher.py's first ``n`` iterations: its loop, literally, with
+    nothing else (fast enough for a day of samples)."""
+    degree = pi / 180.0
+    tilt, tinc, height, hinc = 0.0, degree, 0.0, 0.005
+    tilts, heights = [0.0] * n, [0.0] * n
+    for k in range(n):
+        tilts[k] = tilt
+        heights[k] = height
+        tilt += tinc
+        if tilt < -0.5 or tilt > 0.0:
+            tinc *= -1
+        height += hinc
+        if height > 0.2 or height < 0.0:
+            hinc *= -1
+    return tilts, heights

@@ -71,7 +71,7 @@ def test_any_urdf_sweeps_by_default(tmp_path: Path) -> None:
 def test_headless_computes_and_writes_nothing(tmp_path: Path) -> None:
     result = cli("--headless", "--duration", "1", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    assert "30 frames" in result.stderr and not list(tmp_path.iterdir())
+    assert "30 samples" in result.stderr and not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize(

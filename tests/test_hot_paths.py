@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from reference import state_publisher_bounces
 
 from r2d2_viz.kinematics import compile_tree, joint_transforms, moving_values
 from r2d2_viz.model import load_urdf
@@ -16,12 +17,11 @@ from r2d2_viz.motion import (
     TILT_STEP,
     TILT_UPPER,
     bounce_cycle,
-    tutorial_reference,
 )
 from r2d2_viz.synth import random_urdf
 from r2d2_viz.transforms import quat_multiply
 
-DAY_FRAMES = 24 * 3600 * 30
+DAY_SAMPLES = 24 * 3600 * 30
 
 
 def _at(cycle: tuple[np.ndarray, int], frame: np.ndarray) -> np.ndarray:
@@ -30,8 +30,8 @@ def _at(cycle: tuple[np.ndarray, int], frame: np.ndarray) -> np.ndarray:
 
 
 def test_bounce_cycle_is_the_literal_loop_bit_for_bit_over_a_day() -> None:
-    tilts, heights = tutorial_reference(DAY_FRAMES)
-    frame = np.arange(DAY_FRAMES)
+    tilts, heights = (np.array(v) for v in state_publisher_bounces(DAY_SAMPLES))
+    frame = np.arange(DAY_SAMPLES)
     tilt = _at(bounce_cycle(TILT_START, TILT_STEP, TILT_LOWER, TILT_UPPER), frame)
     height = _at(bounce_cycle(HEIGHT_START, HEIGHT_STEP, HEIGHT_LOWER, HEIGHT_UPPER), frame)
     assert tilt.tobytes() == tilts.tobytes()

@@ -17,7 +17,9 @@ import rerun as rr
 import yourdfpy
 from reference import quat_xyzw_to_matrix
 
-from r2d2_viz.kinematics import compile_tree, joint_transforms, link_poses, moving_values
+from fk import link_poses
+
+from r2d2_viz.kinematics import compile_tree, joint_transforms, moving_values
 from r2d2_viz.model import load_urdf
 from r2d2_viz.synth import random_urdf
 from r2d2_viz.transforms import matrix_to_quat, quat_to_matrix
@@ -143,11 +145,13 @@ def _rerun_poses(urdf_path: Path, tree, q: np.ndarray) -> np.ndarray:
             mimic = rj.mimic
             values = value_of[joint.name] if mimic is None else mimic.multiplier * value_of[mimic.joint] + mimic.offset
             value_of[joint.name] = values
-            # the raw output of UrdfJoint.compute_transform_columns (Rust), before it is wrapped in columns
-            raw = rj._inner.compute_transform_columns([float(v) for v in values], clamp=False)
+            # UrdfJoint.compute_transform_columns (public API): Transform3D columns, read back from Arrow
+            columns = rj.compute_transform_columns([float(v) for v in values], clamp=False)
+            raw = {str(c.component_descriptor()).split(":")[-1]: c.as_arrow_array() for c in columns}
+            raw = {k: np.asarray(raw[k].flatten().flatten()) for k in ("translation", "quaternion")}
             local = np.zeros((n, 4, 4))
-            local[:, :3, :3] = quat_xyzw_to_matrix(raw["quaternions_xyzw"])
-            local[:, :3, 3] = raw["translations"]
+            local[:, :3, :3] = quat_xyzw_to_matrix(raw["quaternion"].reshape(-1, 4))
+            local[:, :3, 3] = raw["translation"].reshape(-1, 3)
             local[:, 3, 3] = 1.0
         if joint.parent in poses:
             poses[joint.child] = poses[joint.parent] @ local

@@ -92,7 +92,7 @@ def test_a_signal_finalises_a_live_save(tmp_path: Path, signum: int) -> None:
     # frames go out one by one here: each joint's excursion is still reported once (tilt +1°, periscope > 0)
     assert stderr.count("'tilt' left its URDF limits") == 1 and stderr.count("'periscope' left its URDF limits") == 1
     frames = len(tf_by_child(read_recording(out))["axis"].times)
-    reported = int(stderr.split("r2d2-viz: ")[1].split(" frames")[0])
+    reported = int(stderr.split("r2d2-viz: ")[1].split(" samples")[0])
     assert frames == reported and frames >= 30
     assert not list(tmp_path.glob("*.partial"))
 

@@ -245,7 +245,7 @@ def test_spawn_opens_the_native_viewer_and_streams_live(x_display, artifacts_dir
     ]
     try:
         assert result.returncode == 0, log.read_text()
-        assert "90 frames" in log.read_text()
+        assert "90 samples" in log.read_text()
         assert viewer_pids, "the viewer should outlive the app, like an RViz window"
         client = ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
         state = client.get_state()

@@ -1,0 +1,115 @@
+"""What drives a robot: the source protocol, and the chunks of samples every source yields.
+
+A *source* names the joints it drives and yields :class:`SampleChunk` s: the times of its samples (int64
+nanoseconds on its clock), the positions of some of the robot's joints, and extra named-frame transforms
+(such as ``odom → base_link`` of a driving robot). Generated motions (:mod:`r2d2_viz.motion`) and recorded
+ones (bags) are sources; the runner and the stream do not know which one runs.
+
+A chunk may carry a subset of the joints, and a sample may leave a joint out (``NaN``): the joint then
+keeps its last value, as robot_state_publisher does (:class:`JointState`). Before its first value a joint
+is at 0. A *sample* is a time step; a *frame* is always a TF frame. Pure numpy; no rerun import.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Literal, Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from .arrays import F64, I64
+
+Clock = Literal["duration", "timestamp"]
+"""``duration``: time since the start (generated motions); ``timestamp``: nanoseconds since the Unix epoch."""
+
+
+@dataclass(frozen=True, eq=False)
+class FrameTrack:
+    """``T_parent_child`` of one named-frame edge at every sample of a chunk."""
+
+    parent: str
+    child: str
+    translation: F64  # (n, 3)
+    quat_xyzw: F64  # (n, 4)
+
+
+@dataclass(frozen=True, eq=False)
+class SampleChunk:
+    """Consecutive samples of a source."""
+
+    times_ns: I64  # (n,) non-decreasing, on the source's clock
+    joints: tuple[str, ...]
+    """The columns of ``positions``: some of the robot's actuated joints."""
+    positions: F64  # (n, len(joints)); NaN: not given in that sample (the joint keeps its last value)
+    frames: tuple[FrameTrack, ...] = ()
+    """One track per edge of :attr:`Source.frames`, in that order."""
+
+    def __len__(self) -> int:
+        return len(self.times_ns)
+
+
+class Source(Protocol):
+    """Anything that yields samples for a robot (see the module docstring)."""
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """The joints this source drives (a subset of the robot's actuated joints)."""
+        ...
+
+    @property
+    def frames(self) -> tuple[tuple[str, str], ...]:
+        """``(parent, child)`` of the extra transforms every chunk carries (:attr:`SampleChunk.frames`)."""
+        ...
+
+    @property
+    def clock(self) -> Clock: ...
+
+    def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
+        """All samples, in chunks of at most ``max_samples``; may never end (live generated motions)."""
+        ...
+
+
+class JointState:
+    """The latest value of every actuated joint, across chunks: robot_state_publisher's joint state.
+
+    :meth:`update` turns a chunk (any subset of the joints, NaN for "not given") into full rows ``(n, A)``
+    in ``joints`` order, each missing value carried forward from the last one given (0 before any)."""
+
+    def __init__(self, joints: Sequence[str]) -> None:
+        self.joints = tuple(joints)
+        self._column = {name: i for i, name in enumerate(self.joints)}
+        self.last = np.zeros(len(self.joints))
+
+    def columns(self, names: Sequence[str]) -> list[int]:
+        """Where each of ``names`` goes in a full row; raises ``KeyError`` naming an unknown joint."""
+        try:
+            return [self._column[name] for name in names]
+        except KeyError as exc:
+            raise KeyError(f"no actuated joint {exc.args[0]!r}; actuated joints are {', '.join(self.joints)}") from None
+
+    def update(self, chunk: SampleChunk) -> F64:
+        n = len(chunk)
+        if chunk.joints == self.joints:
+            rows = np.array(chunk.positions, dtype=np.float64)
+        else:
+            rows = np.full((n, len(self.joints)), np.nan)
+            rows[:, self.columns(chunk.joints)] = chunk.positions
+        if n == 0:
+            return rows.reshape(0, len(self.joints))
+        missing = np.isnan(rows)
+        if missing.any():
+            rows = _carry_forward(rows, missing, self.last)
+        self.last = rows[-1].copy()
+        return rows
+
+
+def _carry_forward(rows: F64, missing: npt.NDArray[np.bool_], last: F64) -> F64:
+    """Each NaN replaced by the latest value above it in its column, or by ``last`` (vectorised)."""
+    n = len(rows)
+    padded = np.vstack([last[None, :], rows])
+    index = np.where(np.vstack([np.zeros((1, rows.shape[1]), dtype=bool), missing]), 0, np.arange(n + 1)[:, None])
+    np.maximum.accumulate(index, axis=0, out=index)
+    filled: F64 = np.take_along_axis(padded, index, axis=0)[1:]
+    return filled
