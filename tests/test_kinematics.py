@@ -15,9 +15,8 @@ import numpy as np
 import pytest
 import rerun as rr
 import yourdfpy
-from reference import quat_xyzw_to_matrix
-
 from fk import link_poses
+from reference import quat_xyzw_to_matrix
 
 from r2d2_viz.kinematics import compile_tree, joint_transforms, moving_values
 from r2d2_viz.model import load_urdf
