@@ -113,3 +113,30 @@ def _carry_forward(rows: F64, missing: npt.NDArray[np.bool_], last: F64) -> F64:
     np.maximum.accumulate(index, axis=0, out=index)
     filled: F64 = np.take_along_axis(padded, index, axis=0)[1:]
     return filled
+
+
+class ArraySource:
+    """Samples already in memory (``times_ns (T,)``, ``positions (T, J)`` of ``joints``, full-length frame
+    tracks) as a source, handed out in chunks."""
+
+    def __init__(
+        self,
+        times_ns: I64,
+        joints: Sequence[str],
+        positions: F64,
+        *,
+        tracks: Sequence[FrameTrack] = (),
+        clock: Clock = "duration",
+    ) -> None:
+        n = len(times_ns)
+        if positions.shape != (n, len(joints)) or any(len(t.translation) != n or len(t.quat_xyzw) != n for t in tracks):
+            raise ValueError(f"{n} times need positions of shape ({n}, {len(joints)}) and {n} poses per track")
+        self.times_ns, self.joints, self.positions = times_ns, tuple(joints), positions
+        self.tracks, self.clock = tuple(tracks), clock
+        self.frames = tuple((t.parent, t.child) for t in self.tracks)
+
+    def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
+        for start in range(0, len(self.times_ns), max_samples):
+            part = slice(start, start + max_samples)
+            tracks = tuple(FrameTrack(t.parent, t.child, t.translation[part], t.quat_xyzw[part]) for t in self.tracks)
+            yield SampleChunk(self.times_ns[part], self.joints, self.positions[part], tracks)

@@ -1,0 +1,135 @@
+"""The Python API for Rerun users: log *your* robot and *your* joint trajectories into *your* recording.
+
+    import numpy as np, rerun as rr, r2d2_viz
+
+    rr.init("my_app", spawn=True)
+    robot = r2d2_viz.load_urdf("arm.urdf")             # or r2d2_viz.parse_urdf(text)
+    logger = r2d2_viz.RobotLogger(robot)                # the current recording, or recording=rec
+    logger.log_static()                                 # meshes, fixed transforms, TF axes and arrows, plot styles
+    t = np.linspace(0, 10, 1001)
+    logger.log_joint_positions(t, np.sin(t)[:, None] * np.ones(len(logger.joints)))
+    logger.finish()                                     # limit lines up to the last sample
+
+Same pinned kinematics and the same entities as the ``r2d2-viz`` command line (``/tf``, ``/tf_static/…``,
+``/robot/visual/…``, ``/joints/…``); :func:`r2d2_viz.generate_blueprint` gives the RViz-like layout.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+import rerun as rr
+
+from .entities import TIMELINE
+from .errors import UsageError
+from .kinematics import compile_tree
+from .model import Robot, load_urdf
+from .motion import ODOM
+from .notices import Warn, to_stderr
+from .runner import BATCH_CHUNK_SAMPLES
+from .sources import ArraySource, Clock, FrameTrack, Source
+from .stream import RobotStream
+
+
+class RobotLogger:
+    """Logs one robot into a Rerun recording.
+
+    ``moving_root``: every :meth:`log_joint_positions` call also gives the root's pose in ``fixed_frame``
+    (``root_translation``, ``root_quat_xyzw``); otherwise the root sits at the fixed frame's origin.
+    ``timestamps``: times are seconds since the Unix epoch (a timestamp timeline) instead of seconds since
+    the start (a duration timeline)."""
+
+    def __init__(
+        self,
+        robot: Robot | str | Path,
+        *,
+        recording: rr.RecordingStream | None = None,
+        fixed_frame: str = ODOM,
+        moving_root: bool = False,
+        timestamps: bool = False,
+        timeline: str = TIMELINE,
+        warn: Warn = to_stderr,
+    ) -> None:
+        self.robot = robot if isinstance(robot, Robot) else load_urdf(robot)
+        rec = recording if recording is not None else rr.get_data_recording()
+        if rec is None:
+            raise UsageError("no Rerun recording: call rr.init(...) first or pass recording=")
+        self.tree = compile_tree(self.robot)
+        self._frames = ((fixed_frame, self.robot.root),) if moving_root else ()
+        self._clock: Clock = "timestamp" if timestamps else "duration"
+        self.stream = RobotStream(
+            rec,
+            self.tree,
+            frames=self._frames,
+            clock=self._clock,
+            fixed_frame=fixed_frame,
+            timeline=timeline,
+            warn=warn,
+        )
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """The robot's actuated joints: the default columns of :meth:`log_joint_positions`."""
+        return self.tree.actuated
+
+    def log_static(self) -> None:
+        """Everything that does not move; once, before any sample."""
+        self.stream.log_static()
+
+    def log_joint_positions(
+        self,
+        times: npt.ArrayLike,
+        positions: npt.ArrayLike,
+        *,
+        joints: Sequence[str] | None = None,
+        root_translation: npt.ArrayLike | None = None,
+        root_quat_xyzw: npt.ArrayLike | None = None,
+    ) -> None:
+        """Log ``positions`` ``(T, J)`` of ``joints`` (default :attr:`joints`) at ``times`` ``(T,)`` in seconds
+        (floats, or numpy ``timedelta64`` / ``datetime64``). Joints left out, or NaN, keep their last value.
+        Mimic joints follow their masters; values outside the URDF limits are shown unclamped and reported."""
+        times_ns = _nanoseconds(times)
+        names = tuple(self.joints if joints is None else joints)
+        q = np.asarray(positions, dtype=np.float64).reshape(len(times_ns), -1)
+        if q.shape[1] != len(names):
+            raise UsageError(f"positions have {q.shape[1]} columns for {len(names)} joints ({', '.join(names)})")
+        unknown = [name for name in names if name not in self.joints]
+        if unknown:
+            raise UsageError(
+                f"not actuated joints of {self.robot.name!r}: {', '.join(unknown)}; "
+                f"expected some of {', '.join(self.joints)}"
+            )
+        tracks: list[FrameTrack] = []
+        for parent, child in self._frames:
+            if root_translation is None or root_quat_xyzw is None:
+                raise UsageError("moving_root=True: give root_translation (T, 3) and root_quat_xyzw (T, 4)")
+            translation = np.asarray(root_translation, dtype=np.float64).reshape(-1, 3)
+            quat = np.asarray(root_quat_xyzw, dtype=np.float64).reshape(-1, 4)
+            tracks.append(FrameTrack(parent, child, translation, quat))
+        self.log_source(ArraySource(times_ns, names, q, tracks=tracks, clock=self._clock))
+
+    def log_source(self, source: Source) -> None:
+        """Log every sample of a finite ``source`` (e.g. ``r2d2_viz.make_motion(robot, "sweep", n_samples=300)``).
+        Its frame tracks must be the ones this logger was made for."""
+        if tuple(source.frames) != self._frames:
+            raise UsageError(f"the source moves frames {source.frames}, this logger was made for {self._frames}")
+        for chunk in source.chunks(BATCH_CHUNK_SAMPLES):
+            self.stream.send(self.stream.prepare(chunk))
+
+    def finish(self) -> None:
+        """Pending plot values and the limit lines up to the last sample."""
+        self.stream.finish()
+
+
+def _nanoseconds(times: npt.ArrayLike) -> npt.NDArray[np.int64]:
+    array = np.asarray(times)
+    if np.issubdtype(array.dtype, np.datetime64) or np.issubdtype(array.dtype, np.timedelta64):
+        unit = "datetime64[ns]" if np.issubdtype(array.dtype, np.datetime64) else "timedelta64[ns]"
+        return array.astype(unit).astype(np.int64).reshape(-1)
+    seconds = array.astype(np.float64).reshape(-1)
+    if not np.isfinite(seconds).all():
+        raise UsageError("times must be finite numbers of seconds")
+    return np.rint(seconds * 1e9).astype(np.int64)
