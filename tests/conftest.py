@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import shutil
 import socket
 import subprocess
 import sys
@@ -46,8 +45,9 @@ def lap_recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, subpr
 
 
 def rerun_viewer() -> str | None:
-    beside = Path(sys.executable).parent / "rerun"
-    return str(beside) if beside.exists() else shutil.which("rerun")
+    from r2d2_viz.sinks import viewer_executable
+
+    return viewer_executable()
 
 
 def pytest_configure(config: pytest.Config) -> None:
