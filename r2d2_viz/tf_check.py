@@ -31,9 +31,7 @@ def disagreement(tree: KinematicTree, records: TfRecords, times_ns: I64, q: F64)
     1 mm or 1 mrad on some edge the URDF defines; else None. Records before the first state are not checked."""
     edges = urdf_edges(tree)
     rows = [i for i, edge in enumerate(zip(records.parents, records.children, strict=True)) if edge in edges]
-    if not rows or (
-        len(times_ns) == 0 and not any(edges[records.parents[i], records.children[i]][0] == "static" for i in rows)
-    ):
+    if not rows:
         return None
     static_t, static_q = tree.static_translation_quat()
     worst: tuple[float, float, str] = (0.0, 0.0, "")
