@@ -14,8 +14,9 @@ import rerun as rr
 
 from . import entities
 from .columns import encoded, send, tiled, time_array
-from .scene import ARROW_COLOR, AXIS_LENGTH
+from .scene import ARROW_COLOR
 from .sources import Clock, TfRecords
+from .view_fit import AXIS_LENGTH
 
 
 class RecordedTf:

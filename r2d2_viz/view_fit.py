@@ -22,7 +22,7 @@ FOV_Y = math.radians(45.0)
 """The 3D view's vertical field of view (Rerun's default eye)."""
 MARGIN = 1.15
 """Room around the robot."""
-AXIS_LENGTH_AT_SCALE_1 = 0.1
+AXIS_LENGTH = 0.1
 """RViz draws TF axes 0.1 m long at marker scale 1."""
 MANY_FRAMES = 40
 """Above this many TF frames the arrows are hidden and the axes are half as long: they would cover the robot."""
@@ -48,7 +48,7 @@ class ViewFit:
         return scale / 2 if self.frames > MANY_FRAMES else scale
 
     def axis_length(self) -> float:
-        return AXIS_LENGTH_AT_SCALE_1 * self.marker_scale()
+        return AXIS_LENGTH * self.marker_scale()
 
     @property
     def show_arrows(self) -> bool:
