@@ -25,3 +25,7 @@ class UsageError(R2d2VizError):
 
 class SinkError(R2d2VizError):
     """A sink cannot be opened: no viewer possible, port in use, unwritable output."""
+
+
+class BagError(R2d2VizError):
+    """A ROS 2 bag cannot be read or holds the wrong thing: ``run.mcap: /joint_states is std_msgs/msg/String``."""

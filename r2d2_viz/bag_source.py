@@ -1,0 +1,270 @@
+"""A bag as a source: ``/joint_states`` (``sensor_msgs/msg/JointState``) in chunks of samples, plus the bag's
+latest ``/robot_description`` and its ``/tf`` and ``/tf_static`` as columns.
+
+Messages are decoded in bulk: messages with the same joint names share a byte layout (:mod:`r2d2_viz.ros_cdr`),
+so each is checked against its layout with one bytes comparison and all positions of a chunk become one numpy
+array; anything else (big-endian, malformed) goes through rosbags' deserializer. Pure: no rerun import.
+
+A message names some joints: its sample gives those, NaN elsewhere (the joint keeps its last value, as with
+robot_state_publisher). Names that are not actuated joints of the robot are ignored, with one warning; a
+message whose name and position lengths differ is skipped, and the skipped ones are counted in one warning.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from .arrays import F64, I64
+from .bag import Bag, Warn
+from .errors import BagError
+from .ros_cdr import STAMP, JointStateLayout, TfLayout, joint_state_layout, tf_layout
+from .sources import Clock, SampleChunk, TfRecords
+
+JOINT_STATE = "sensor_msgs/msg/JointState"
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+STRING = "std_msgs/msg/String"
+TimeSource = Literal["receive", "header"]
+_STAMP = np.dtype([("sec", "<i4"), ("nsec", "<u4")])
+
+
+def stamps_ns(stamps: bytes) -> I64:
+    """``builtin_interfaces/Time`` records (8 bytes each) to int64 nanoseconds."""
+    s = np.frombuffer(stamps, dtype=_STAMP)
+    ns: I64 = s["sec"].astype(np.int64) * 1_000_000_000 + s["nsec"].astype(np.int64)
+    return ns
+
+
+@dataclass
+class _Group:
+    """Messages of one layout within a chunk."""
+
+    layout: JointStateLayout
+    rows: list[int] = field(default_factory=list)
+    values: list[bytes | memoryview] = field(default_factory=list)
+
+
+class BagSource:
+    """``/joint_states`` of an open bag as a :class:`~r2d2_viz.sources.Source` (clock: timestamp)."""
+
+    clock: Clock = "timestamp"
+    frames: tuple[tuple[str, str], ...] = ()
+
+    def __init__(
+        self,
+        bag: Bag,
+        actuated: Sequence[str],
+        *,
+        topic: str = "/joint_states",
+        time: TimeSource = "receive",
+        warn: Warn | None = None,
+    ) -> None:
+        if time not in ("receive", "header"):
+            raise ValueError(f"time must be 'receive' or 'header', not {time!r}")
+        self.bag, self.topic, self.time = bag, topic, time
+        self.warn = warn or bag.warn
+        self.joints = tuple(actuated)
+        self._column = {name: i for i, name in enumerate(self.joints)}
+        self.present = bag.require_type(topic, JOINT_STATE)
+        self.skipped = self.undecodable = 0
+        self.unknown: set[str] = set()
+        self._layouts: list[JointStateLayout] = []
+
+    def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
+        if not self.present:
+            return
+        last_ns = np.iinfo(np.int64).min
+        moved = 0
+        pending: list[tuple[int, bytes | memoryview]] = []
+        self.skipped, self.undecodable, self.unknown = 0, 0, set()
+        for message in self.bag.raw(self.topic):
+            pending.append(message)
+            if len(pending) >= max_samples:
+                chunk = self._decode(pending)
+                pending = []
+                if chunk is not None:
+                    chunk, last_ns, moved = _monotonic(chunk, last_ns, moved)
+                    yield chunk
+        if pending and (chunk := self._decode(pending)) is not None:
+            chunk, last_ns, moved = _monotonic(chunk, last_ns, moved)
+            yield chunk
+        self._report(moved)
+
+    def _report(self, moved: int) -> None:
+        where = f"{self.bag.path}: {self.topic}"
+        if self.unknown:
+            names = ", ".join(sorted(self.unknown)[:10]) + (", ..." if len(self.unknown) > 10 else "")
+            self.warn(f"{where}: ignored joints that are not actuated joints of the robot: {names}")
+        if self.skipped:
+            self.warn(f"{where}: skipped {self.skipped} messages whose name and position lengths differ")
+        if self.undecodable:
+            self.warn(f"{where}: skipped {self.undecodable} messages that cannot be decoded")
+        if moved:
+            self.warn(f"{where}: {moved} header stamps went back in time; they are shown at the previous stamp")
+
+    def _layout_of(self, data: bytes | memoryview) -> JointStateLayout | None:
+        for layout in self._layouts:
+            if layout.matches(data):
+                return layout
+        try:
+            layout = joint_state_layout(data)
+        except ValueError:
+            return None
+        self._layouts.append(layout)
+        for name in layout.names:
+            if name not in self._column:
+                self.unknown.add(name)
+        return layout
+
+    def _decode(self, messages: list[tuple[int, bytes | memoryview]]) -> SampleChunk | None:
+        groups: dict[int, _Group] = {}
+        times: list[int] = []
+        stamps: list[bytes | memoryview] = []
+        singles: list[tuple[int, tuple[str, ...], F64]] = []  # messages rosbags had to decode
+        for receive_ns, data in messages:
+            layout = self._layout_of(data)
+            if layout is None:
+                try:
+                    names, positions, stamp_ns = self._generic(data)
+                except BagError:
+                    self.undecodable += 1
+                    continue
+                if len(names) != len(positions):
+                    self.skipped += 1
+                    continue
+                singles.append((len(times), names, positions))
+                times.append(receive_ns)
+                stamps.append(_stamp_bytes(*divmod(stamp_ns, 1_000_000_000)))
+                continue
+            if layout.count != len(layout.names):
+                self.skipped += 1
+                continue
+            group = groups.setdefault(id(layout), _Group(layout))
+            group.rows.append(len(times))
+            group.values.append(data[layout.positions : layout.end])
+            times.append(receive_ns)
+            stamps.append(data[STAMP])
+        if not times:
+            return None
+        seen = {name for g in groups.values() for name in g.layout.names} | {n for s in singles for n in s[1]}
+        joints = tuple(j for j in self.joints if j in seen)
+        column = {name: i for i, name in enumerate(joints)}
+        positions = np.full((len(times), len(joints)), np.nan)
+        for group in groups.values():
+            names = group.layout.names
+            keep = [i for i, name in enumerate(names) if name in column]
+            if not keep:
+                continue
+            block = np.frombuffer(b"".join(group.values), dtype="<f8").reshape(len(group.rows), len(names))
+            positions[np.asarray(group.rows)[:, None], [column[names[i]] for i in keep]] = block[:, keep]
+        for row, names, values in singles:
+            for name, value in zip(names, values, strict=True):
+                if name in column:
+                    positions[row, column[name]] = value
+                elif name not in self._column:
+                    self.unknown.add(name)
+        if self.time == "receive":
+            times_ns: I64 = np.asarray(times, dtype=np.int64)
+        else:
+            times_ns = stamps_ns(b"".join(stamps))
+        return SampleChunk(times_ns, joints, positions)
+
+    def _generic(self, data: bytes | memoryview) -> tuple[tuple[str, ...], F64, int]:
+        msg = self.bag.deserialize(data, JOINT_STATE)
+        stamp = msg.header.stamp
+        return tuple(msg.name), np.asarray(msg.position, dtype=np.float64), int(stamp.sec) * 10**9 + int(stamp.nanosec)
+
+
+def _monotonic(chunk: SampleChunk, last_ns: int, moved: int) -> tuple[SampleChunk, int, int]:
+    """Times made non-decreasing (header stamps of several publishers may interleave out of order)."""
+    t = chunk.times_ns
+    fixed = np.maximum.accumulate(np.concatenate([[last_ns], t]))[1:]
+    changed = int(np.count_nonzero(fixed != t))
+    if changed:
+        chunk = SampleChunk(fixed, chunk.joints, chunk.positions, chunk.frames)
+    return chunk, int(fixed[-1]), moved + changed
+
+
+def read_robot_description(bag: Bag, topic: str = "/robot_description") -> str | None:
+    """The latest ``std_msgs/msg/String`` on ``topic`` (the URDF robot_state_publisher published), or None."""
+    if not bag.require_type(topic, STRING):
+        return None
+    last: bytes | memoryview | None = None
+    for _, data in bag.raw(topic):
+        last = data
+    if last is None:
+        return None
+    text = bag.deserialize(last, STRING).data
+    return str(text)
+
+
+def read_tf(bag: Bag, *, time: TimeSource = "receive") -> list[TfRecords]:
+    """``/tf_static`` (static) and ``/tf`` of the bag as transform rows, each at its message's receive time or
+    (``time="header"``) its own stamp; topics the bag lacks are left out."""
+    out = []
+    for topic, static in (("/tf_static", True), ("/tf", False)):
+        if bag.require_type(topic, TF_MESSAGE):
+            records = _read_tf_topic(bag, topic, static, time)
+            if len(records):
+                out.append(records)
+    return out
+
+
+def _read_tf_topic(bag: Bag, topic: str, static: bool, time: TimeSource) -> TfRecords:
+    layouts: list[TfLayout] = []
+    receive: list[int] = []
+    stamps: list[bytes | memoryview] = []
+    numbers: list[bytes | memoryview] = []
+    parents: list[str] = []
+    children: list[str] = []
+    bad = 0
+    for receive_ns, data in bag.raw(topic):
+        layout = next((lay for lay in layouts if lay.matches(data)), None)
+        if layout is None:
+            try:
+                layout = tf_layout(data)
+            except ValueError:
+                try:
+                    _generic_tf(bag, data, receive_ns, receive, stamps, numbers, parents, children)
+                except BagError:
+                    bad += 1
+                continue
+            layouts.append(layout)
+        for stamp, translation in zip(layout.stamps, layout.translations, strict=True):
+            stamps.append(data[stamp : stamp + 8])
+            numbers.append(data[translation : translation + 56])
+        receive.extend([receive_ns] * len(layout.stamps))
+        parents.extend(layout.parents)
+        children.extend(layout.children)
+    if bad:
+        bag.warn(f"{bag.path}: {topic}: skipped {bad} messages that cannot be decoded")
+    values = np.frombuffer(b"".join(numbers), dtype="<f8").reshape(-1, 7)
+    times = np.asarray(receive, dtype=np.int64) if time == "receive" else stamps_ns(b"".join(stamps))
+    return TfRecords(times, tuple(parents), tuple(children), values[:, :3].copy(), values[:, 3:].copy(), static)
+
+
+def _generic_tf(
+    bag: Bag,
+    data: bytes | memoryview,
+    receive_ns: int,
+    receive: list[int],
+    stamps: list[bytes | memoryview],
+    numbers: list[bytes | memoryview],
+    parents: list[str],
+    children: list[str],
+) -> None:
+    msg = bag.deserialize(data, TF_MESSAGE)
+    for t in msg.transforms:
+        s, v, q = t.header.stamp, t.transform.translation, t.transform.rotation
+        stamps.append(_stamp_bytes(s.sec, s.nanosec))
+        numbers.append(np.array([v.x, v.y, v.z, q.x, q.y, q.z, q.w], dtype="<f8").tobytes())
+        receive.append(receive_ns)
+        parents.append(t.header.frame_id)
+        children.append(t.child_frame_id)
+
+
+def _stamp_bytes(sec: int, nsec: int) -> bytes:
+    return np.array([(sec, nsec)], dtype=_STAMP).tobytes()

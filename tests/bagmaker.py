@@ -1,0 +1,105 @@
+"""Bags for the tests, written by ``rosbags`` itself (its own serializer and writer: independent of
+:mod:`r2d2_viz.bag_write`), in either storage and in metadata versions 4 to 9."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+from ruamel.yaml import YAML
+
+TS = get_typestore(Stores.ROS2_HUMBLE)
+JointState = TS.types["sensor_msgs/msg/JointState"]
+Header = TS.types["std_msgs/msg/Header"]
+Time = TS.types["builtin_interfaces/msg/Time"]
+String = TS.types["std_msgs/msg/String"]
+TFMessage = TS.types["tf2_msgs/msg/TFMessage"]
+TransformStamped = TS.types["geometry_msgs/msg/TransformStamped"]
+Transform = TS.types["geometry_msgs/msg/Transform"]
+Vector3 = TS.types["geometry_msgs/msg/Vector3"]
+Quaternion = TS.types["geometry_msgs/msg/Quaternion"]
+T0 = 1_700_000_000_000_000_000
+STORAGES = {"mcap": StoragePlugin.MCAP, "sqlite3": StoragePlugin.SQLITE3}
+
+
+def stamp(ns: int):
+    return Time(*divmod(int(ns), 1_000_000_000))
+
+
+def joint_state(stamp_ns: int, names: Sequence[str], position: Sequence[float], frame_id: str = "") -> bytes:
+    msg = JointState(
+        Header(stamp(stamp_ns), frame_id),
+        list(names),
+        np.asarray(position, dtype=np.float64),
+        np.zeros(0),
+        np.zeros(0),
+    )
+    return bytes(TS.serialize_cdr(msg, "sensor_msgs/msg/JointState"))
+
+
+def tf_message(items: Sequence[tuple[int, str, str, Sequence[float], Sequence[float]]]) -> bytes:
+    """``(stamp ns, parent, child, xyz, quaternion xyzw)`` per transform."""
+    transforms = [
+        TransformStamped(Header(stamp(t), parent), child, Transform(Vector3(*xyz), Quaternion(*q)))
+        for t, parent, child, xyz, q in items
+    ]
+    return bytes(TS.serialize_cdr(TFMessage(transforms), "tf2_msgs/msg/TFMessage"))
+
+
+def string(text: str) -> bytes:
+    return bytes(TS.serialize_cdr(String(text), "std_msgs/msg/String"))
+
+
+TYPES = {
+    "/joint_states": "sensor_msgs/msg/JointState",
+    "/tf": "tf2_msgs/msg/TFMessage",
+    "/tf_static": "tf2_msgs/msg/TFMessage",
+    "/robot_description": "std_msgs/msg/String",
+}
+
+
+@dataclass
+class BagSpec:
+    messages: list[tuple[str, int, bytes]] = field(default_factory=list)  # (topic, receive ns, data)
+    types: dict[str, str] = field(default_factory=lambda: dict(TYPES))
+
+    def add(self, topic: str, receive_ns: int, data: bytes) -> BagSpec:
+        self.messages.append((topic, receive_ns, data))
+        return self
+
+
+def write_bag(path: Path, spec: BagSpec, *, storage: str = "mcap", version: int = 9) -> Path:
+    """A rosbag2 directory at ``path``; versions 4..7 are version 8 bags whose metadata.yaml is rewritten
+    the way those versions wrote it (rosbags writes 8 and 9 only)."""
+    with Writer(path, version=9 if version == 9 else 8, storage_plugin=STORAGES[storage]) as writer:
+        connections = {}
+        for topic, _, _ in spec.messages:
+            if topic not in connections:
+                connections[topic] = writer.add_connection(topic, spec.types[topic], typestore=TS)
+        for topic, t, data in spec.messages:
+            writer.write(connections[topic], t, data)
+    if version < 8:
+        meta = path / "metadata.yaml"
+        yaml = YAML(typ="safe")
+        info = yaml.load(meta.read_text())
+        top = info["rosbag2_bagfile_information"]
+        top["version"] = version
+        top.pop("ros_distro", None)
+        if version < 7:
+            for topic in top["topics_with_message_count"]:
+                topic["topic_metadata"].pop("type_description_hash", None)
+        if version < 6:
+            top.pop("custom_data", None)
+        if version < 5:
+            top.pop("files", None)
+        with meta.open("w") as f:
+            yaml.dump(info, f)
+    return path
+
+
+def storage_file(bag_dir: Path) -> Path:
+    return next(p for p in bag_dir.iterdir() if p.suffix in (".mcap", ".db3"))
