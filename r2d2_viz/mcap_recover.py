@@ -23,7 +23,7 @@ else:
     from backports import zstd
 
 MAGIC = b"\x89MCAP0\r\n"
-_OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK = 0x03, 0x04, 0x05, 0x06
+_OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK, _OP_DATA_END = 0x03, 0x04, 0x05, 0x06, 0x0F
 _U16, _U32, _U64 = struct.Struct("<H"), struct.Struct("<I"), struct.Struct("<Q")
 _MESSAGE = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
 
@@ -93,13 +93,13 @@ class RecoveredMcap:
         self.topics: dict[str, tuple[str, int]] = {}
         """topic → (message type, messages recovered)."""
         counts: dict[int, int] = {}
-        channels: list[_Channel] = []
+        channels: dict[int, _Channel] = {}
         for record in self._scan():
             if isinstance(record, _Channel):
-                channels.append(record)
+                channels[record.id] = record
             else:
                 counts[record.channel] = counts.get(record.channel, 0) + 1
-        for channel in channels:
+        for channel in channels.values():
             old = self.topics.get(channel.topic, (channel.msgtype, 0))
             self.topics[channel.topic] = (channel.msgtype, old[1] + counts.get(channel.id, 0))
 
@@ -111,6 +111,8 @@ class RecoveredMcap:
                 return
             try:
                 for op, body in _records(bio, self.path.stat().st_size):
+                    if op == _OP_DATA_END:  # the summary follows: indexes, no more messages
+                        return
                     inner = _chunk_records(body) if op == _OP_CHUNK else iter([(op, body)])
                     for op2, body2 in inner:
                         if op2 == _OP_SCHEMA:
