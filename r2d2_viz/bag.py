@@ -17,6 +17,7 @@ import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from functools import cache
+from itertools import islice
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -27,7 +28,7 @@ from rosbags.typesys.store import Typestore
 from ruamel.yaml import YAML
 
 from .errors import BagError
-from .mcap_recover import RecoveredMcap
+from .mcap_scan import McapScan
 
 Warn = Callable[[str], None]
 
@@ -55,49 +56,35 @@ def _problem(exc: BaseException) -> str:
 
 
 class _File:
-    """One storage file: rosbags' reader, or (an MCAP file that breaks off) :class:`RecoveredMcap`."""
+    """One storage file. ``rosbags`` opens it and says what it holds; an MCAP file's messages are then read by
+    :class:`McapScan` (several times faster than rosbags' reader), which also reads one that breaks off."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
         self.note = ""
-        """Why the file was read by scanning it (it breaks off), if it was."""
-        self.recovered: RecoveredMcap | None = None
+        """Why the file was read without its index (it breaks off), if it was."""
         self.reader: Reader | None = None
+        self.scan = McapScan(path) if path.suffix == ".mcap" else None
         try:
             reader = Reader(path)
             reader.open()
             self.reader = reader
             self.topics = {c.topic: (c.msgtype, c.msgcount) for c in reader.connections}
         except Exception as exc:
-            if path.suffix != ".mcap" or not _TRUNCATED.search(str(exc)):
+            if self.scan is None or not _TRUNCATED.search(str(exc)):
                 raise
-            self.recovered = RecoveredMcap(path)
-            self.topics = dict(self.recovered.topics)
+            self.topics = self.scan.topics()
             count = sum(n for _, n in self.topics.values())
             if not count:
                 raise
             self.note = f"{path}: the file breaks off ({_problem(exc)}): recovered {count} messages"
 
     def messages(self, topic: str) -> Iterator[tuple[int, bytes | memoryview]]:
-        if self.recovered is not None:
-            yield from self.recovered.messages(topic)
-            return
+        if self.scan is not None:
+            return self.scan.messages(topic)
         assert self.reader is not None
         connections = [c for c in self.reader.connections if c.topic == topic]
-        if not connections:
-            return
-        done = 0
-        try:
-            for _, time_ns, data in self.reader.messages(connections):
-                yield time_ns, data
-                done += 1
-        except Exception:
-            if self.path.suffix != ".mcap":
-                raise
-            # a damaged chunk: what a scan from the start can read beyond the messages already given
-            for i, message in enumerate(RecoveredMcap(self.path).messages(topic)):
-                if i >= done:
-                    yield message
+        return ((time_ns, data) for _, time_ns, data in self.reader.messages(connections)) if connections else iter(())
 
     def close(self) -> None:
         if self.reader is not None:
@@ -163,16 +150,22 @@ class Bag:
         return found is not None
 
     def raw(self, topic: str) -> Iterator[tuple[int, bytes | memoryview]]:
-        """``(receive time ns, CDR bytes)`` of every message on ``topic``, in time order.
+        """``(receive time ns, CDR bytes)`` of every message on ``topic``, in time order (see :meth:`batches`)."""
+        for batch in self.batches(topic, 4096):
+            yield from batch
+
+    def batches(self, topic: str, size: int) -> Iterator[list[tuple[int, bytes | memoryview]]]:
+        """:meth:`raw` in lists of at most ``size`` messages (cheaper per message).
 
         If the bag breaks off, stops there with one warning (or a BagError when nothing could be read)."""
         expected = self.topics[topic].count if topic in self.topics else 0
         got = 0
         try:
             for f in self._files:
-                for message in f.messages(topic):
-                    got += 1
-                    yield message
+                messages = f.messages(topic)
+                while batch := list(islice(messages, size)):
+                    got += len(batch)
+                    yield batch
         except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
             if got == 0:
                 raise BagError(f"{self.path}: cannot read {topic}: {_problem(exc)}") from None

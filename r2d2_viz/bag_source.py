@@ -44,7 +44,7 @@ class _Group:
 
     layout: JointStateLayout
     rows: list[int] = field(default_factory=list)
-    values: list[bytes | memoryview] = field(default_factory=list)
+    values: list[bytes | memoryview] = field(default_factory=list)  # whole messages, all of one length
 
 
 class BagSource:
@@ -78,19 +78,12 @@ class BagSource:
             return
         last_ns = np.iinfo(np.int64).min
         moved = 0
-        pending: list[tuple[int, bytes | memoryview]] = []
         self.skipped, self.undecodable, self.unknown = 0, 0, set()
-        for message in self.bag.raw(self.topic):
-            pending.append(message)
-            if len(pending) >= max_samples:
-                chunk = self._decode(pending)
-                pending = []
-                if chunk is not None:
-                    chunk, last_ns, moved = _monotonic(chunk, last_ns, moved)
-                    yield chunk
-        if pending and (chunk := self._decode(pending)) is not None:
-            chunk, last_ns, moved = _monotonic(chunk, last_ns, moved)
-            yield chunk
+        for batch in self.bag.batches(self.topic, max_samples):
+            chunk = self._decode(batch)
+            if chunk is not None:
+                chunk, last_ns, moved = _monotonic(chunk, last_ns, moved)
+                yield chunk
         self._report(moved)
 
     def _report(self, moved: int) -> None:
@@ -120,11 +113,18 @@ class BagSource:
         return layout
 
     def _decode(self, messages: list[tuple[int, bytes | memoryview]]) -> SampleChunk | None:
-        groups: dict[int, _Group] = {}
+        groups: dict[tuple[int, int], _Group] = {}  # (layout, message length) → its messages: one matrix
         times: list[int] = []
-        stamps: list[bytes | memoryview] = []
-        singles: list[tuple[int, tuple[str, ...], F64]] = []  # messages rosbags had to decode
+        singles: list[tuple[int, tuple[str, ...], F64, int]] = []  # messages rosbags had to decode
+        group: _Group | None = None
+        key, key_end, size = b"", 0, -1
         for receive_ns, data in messages:
+            if len(data) == size and data[12:key_end] == key:  # the same layout as the last message
+                assert group is not None
+                group.rows.append(len(times))
+                group.values.append(data)
+                times.append(receive_ns)
+                continue
             layout = self._layout_of(data)
             if layout is None:
                 try:
@@ -135,41 +135,41 @@ class BagSource:
                 if len(names) != len(positions):
                     self.skipped += 1
                     continue
-                singles.append((len(times), names, positions))
+                singles.append((len(times), names, positions, stamp_ns))
                 times.append(receive_ns)
-                stamps.append(_stamp_bytes(*divmod(stamp_ns, 1_000_000_000)))
                 continue
             if layout.count != len(layout.names):
                 self.skipped += 1
                 continue
-            group = groups.setdefault(id(layout), _Group(layout))
+            group = groups.setdefault((id(layout), len(data)), _Group(layout))
+            key, key_end, size = layout.key, 12 + len(layout.key), len(data)
             group.rows.append(len(times))
-            group.values.append(data[layout.positions : layout.end])
+            group.values.append(data)
             times.append(receive_ns)
-            stamps.append(data[STAMP])
         if not times:
             return None
         seen = {name for g in groups.values() for name in g.layout.names} | {n for s in singles for n in s[1]}
         joints = tuple(j for j in self.joints if j in seen)
         column = {name: i for i, name in enumerate(joints)}
         positions = np.full((len(times), len(joints)), np.nan)
-        for group in groups.values():
-            names = group.layout.names
+        header = np.zeros(len(times), dtype=np.int64)
+        for (_, length), g in groups.items():
+            rows = np.asarray(g.rows)
+            raw = np.frombuffer(b"".join(g.values), dtype=np.uint8).reshape(len(rows), length)
+            header[rows] = stamps_ns(raw[:, STAMP].tobytes())
+            names = g.layout.names
             keep = [i for i, name in enumerate(names) if name in column]
-            if not keep:
-                continue
-            block = np.frombuffer(b"".join(group.values), dtype="<f8").reshape(len(group.rows), len(names))
-            positions[np.asarray(group.rows)[:, None], [column[names[i]] for i in keep]] = block[:, keep]
-        for row, names, values in singles:
+            if keep:
+                block = raw[:, g.layout.positions : g.layout.end].copy().view("<f8")
+                positions[rows[:, None], [column[names[i]] for i in keep]] = block[:, keep]
+        for row, names, values, stamp_ns in singles:
+            header[row] = stamp_ns
             for name, value in zip(names, values, strict=True):
                 if name in column:
                     positions[row, column[name]] = value
                 elif name not in self._column:
                     self.unknown.add(name)
-        if self.time == "receive":
-            times_ns: I64 = np.asarray(times, dtype=np.int64)
-        else:
-            times_ns = stamps_ns(b"".join(stamps))
+        times_ns: I64 = np.asarray(times, dtype=np.int64) if self.time == "receive" else header
         return SampleChunk(times_ns, joints, positions)
 
     def _generic(self, data: bytes | memoryview) -> tuple[tuple[str, ...], F64, int]:
