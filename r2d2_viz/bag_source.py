@@ -1,5 +1,5 @@
-"""A bag as a source: ``/joint_states`` (``sensor_msgs/msg/JointState``) in chunks of samples, plus the bag's
-latest ``/robot_description`` and its ``/tf`` and ``/tf_static`` as columns.
+"""A bag as a source: ``/joint_states`` (``sensor_msgs/msg/JointState``) in chunks of samples, and the bag's
+latest ``/robot_description`` (its ``/tf`` and ``/tf_static``: :mod:`r2d2_viz.bag_tf`).
 
 Messages are decoded in bulk: messages with the same joint names share a byte layout (:mod:`r2d2_viz.ros_cdr`),
 so each is checked against its layout with one bytes comparison and all positions of a chunk become one numpy
@@ -21,11 +21,10 @@ import numpy as np
 from .arrays import F64, I64
 from .bag import Bag, Warn
 from .errors import BagError
-from .ros_cdr import STAMP, JointStateLayout, TfLayout, joint_state_layout, tf_layout
-from .sources import Clock, SampleChunk, TfRecords
+from .ros_cdr import STAMP, JointStateLayout, joint_state_layout
+from .sources import Clock, SampleChunk
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
-TF_MESSAGE = "tf2_msgs/msg/TFMessage"
 STRING = "std_msgs/msg/String"
 TimeSource = Literal["receive", "header"]
 _STAMP = np.dtype([("sec", "<i4"), ("nsec", "<u4")])
@@ -199,72 +198,3 @@ def read_robot_description(bag: Bag, topic: str = "/robot_description") -> str |
         return None
     text = bag.deserialize(last, STRING).data
     return str(text)
-
-
-def read_tf(bag: Bag, *, time: TimeSource = "receive") -> list[TfRecords]:
-    """``/tf_static`` (static) and ``/tf`` of the bag as transform rows, each at its message's receive time or
-    (``time="header"``) its own stamp; topics the bag lacks are left out."""
-    out = []
-    for topic, static in (("/tf_static", True), ("/tf", False)):
-        if bag.require_type(topic, TF_MESSAGE):
-            records = _read_tf_topic(bag, topic, static, time)
-            if len(records):
-                out.append(records)
-    return out
-
-
-def _read_tf_topic(bag: Bag, topic: str, static: bool, time: TimeSource) -> TfRecords:
-    layouts: list[TfLayout] = []
-    receive: list[int] = []
-    stamps: list[bytes | memoryview] = []
-    numbers: list[bytes | memoryview] = []
-    parents: list[str] = []
-    children: list[str] = []
-    bad = 0
-    for receive_ns, data in bag.raw(topic):
-        layout = next((lay for lay in layouts if lay.matches(data)), None)
-        if layout is None:
-            try:
-                layout = tf_layout(data)
-            except ValueError:
-                try:
-                    _generic_tf(bag, data, receive_ns, receive, stamps, numbers, parents, children)
-                except BagError:
-                    bad += 1
-                continue
-            layouts.append(layout)
-        for stamp, translation in zip(layout.stamps, layout.translations, strict=True):
-            stamps.append(data[stamp : stamp + 8])
-            numbers.append(data[translation : translation + 56])
-        receive.extend([receive_ns] * len(layout.stamps))
-        parents.extend(layout.parents)
-        children.extend(layout.children)
-    if bad:
-        bag.warn(f"{bag.path}: {topic}: skipped {bad} messages that cannot be decoded")
-    values = np.frombuffer(b"".join(numbers), dtype="<f8").reshape(-1, 7)
-    times = np.asarray(receive, dtype=np.int64) if time == "receive" else stamps_ns(b"".join(stamps))
-    return TfRecords(times, tuple(parents), tuple(children), values[:, :3].copy(), values[:, 3:].copy(), static)
-
-
-def _generic_tf(
-    bag: Bag,
-    data: bytes | memoryview,
-    receive_ns: int,
-    receive: list[int],
-    stamps: list[bytes | memoryview],
-    numbers: list[bytes | memoryview],
-    parents: list[str],
-    children: list[str],
-) -> None:
-    msg = bag.deserialize(data, TF_MESSAGE)
-    for t in msg.transforms:
-        s, v, q = t.header.stamp, t.transform.translation, t.transform.rotation
-        stamps.append(_stamp_bytes(s.sec, s.nanosec))
-        numbers.append(np.array([v.x, v.y, v.z, q.x, q.y, q.z, q.w], dtype="<f8").tobytes())
-        receive.append(receive_ns)
-        parents.append(t.header.frame_id)
-        children.append(t.child_frame_id)
-
-
-def _stamp_bytes(sec: int, nsec: int) -> bytes:
-    return np.array([(sec, nsec)], dtype=_STAMP).tobytes()

@@ -1,4 +1,4 @@
-"""BagSource and the /robot_description and /tf readers, on bags written by rosbags: values must equal what
+"""BagSource and the /robot_description reader, on bags written by rosbags: values must equal what
 rosbags' own deserializer reads from the same bytes (bit for bit), times the bag's receive times or stamps."""
 
 from __future__ import annotations
@@ -7,12 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bagmaker import T0, TS, BagSpec, joint_state, storage_file, string, tf_message, write_bag
+from bagmaker import T0, TS, BagSpec, joint_state, storage_file, string, write_bag
 from conftest import REPO
 from rosbags.rosbag2 import Reader
 
 from r2d2_viz.bag import open_bag
-from r2d2_viz.bag_source import BagSource, read_robot_description, read_tf
+from r2d2_viz.bag_source import BagSource, read_robot_description
 from r2d2_viz.errors import BagError
 
 ARM = ["shoulder", "elbow", "wrist", "gripper"]
@@ -146,34 +146,3 @@ def test_robot_description_is_the_latest(tmp_path: Path) -> None:
     with open_bag(REPO / "tests/data/bags/talker_db3/talker.db3") as bag:  # a String recorded by ROS 2
         assert read_robot_description(bag) is None
         assert read_robot_description(bag, "/topic") == "Hello, world! 9"
-
-
-def test_tf_and_tf_static_as_columns(tmp_path: Path) -> None:
-    rng = np.random.default_rng(3)
-    spec = BagSpec().add("/tf_static", T0, tf_message([(T0 - 5, "base_link", "camera", (0.1, 0, 0.3), (0, 0, 0, 1))]))
-    expected = []
-    for k in range(40):
-        t = T0 + k * 10**7
-        q = rng.normal(size=4)
-        q /= np.linalg.norm(q)
-        items = [(t - 7, "odom", "base_link", rng.normal(size=3), q)]
-        if k % 2:
-            items.append((t - 3, "map", "odom", (k, 0, 0), (0, 0, 0, 1)))
-        spec.add("/tf", t, tf_message(items))
-        expected += [(t, s, p, c, np.asarray(v, float), np.asarray(qq, float)) for s, p, c, v, qq in items]
-    with open_bag(write_bag(tmp_path / "b", spec)) as bag:
-        static, moving = read_tf(bag)
-        stamped = read_tf(bag, time="header")[1]
-    assert static.static and static.parents == ("base_link",) and static.children == ("camera",)
-    np.testing.assert_array_equal(static.translation, [[0.1, 0, 0.3]])
-    assert not moving.static and len(moving) == len(expected)
-    assert moving.times_ns.tolist() == [e[0] for e in expected]
-    assert stamped.times_ns.tolist() == [e[1] for e in expected]
-    assert moving.parents == tuple(e[2] for e in expected) and moving.children == tuple(e[3] for e in expected)
-    np.testing.assert_array_equal(moving.translation, [e[4] for e in expected])
-    np.testing.assert_array_equal(moving.quat_xyzw, [e[5] for e in expected])
-
-
-def test_bag_without_tf(tmp_path: Path) -> None:
-    with open_bag(write_bag(tmp_path / "b", BagSpec().add("/robot_description", T0, string("x")))) as bag:
-        assert read_tf(bag) == []

@@ -12,7 +12,8 @@ from rosbags.interfaces import QosDurability
 from rosbags.rosbag2 import Reader
 
 from r2d2_viz.bag import open_bag
-from r2d2_viz.bag_source import BagSource, read_robot_description, read_tf
+from r2d2_viz.bag_source import BagSource, read_robot_description
+from r2d2_viz.bag_tf import read_tf
 from r2d2_viz.bag_write import BagWriter, StaticTransform
 from r2d2_viz.errors import BagError
 from r2d2_viz.sources import FrameTrack
