@@ -138,6 +138,11 @@ class Bag:
         if sum(t.count for t in topics.values()) == 0:
             raise BagError(f"{path}: empty bag (no messages)")
 
+    @property
+    def files(self) -> tuple[Path, ...]:
+        """The storage files (``.mcap`` ones can go to :func:`r2d2_viz.bag_topics.log_other_topics`)."""
+        return tuple(f.path for f in self._files)
+
     def topic_type(self, topic: str) -> str | None:
         info = self.topics.get(topic)
         return info.msgtype if info else None

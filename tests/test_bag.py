@@ -47,6 +47,7 @@ def test_every_metadata_version_and_storage(tmp_path: Path, storage: str, versio
     path = write_bag(tmp_path / "b", _spec(), storage=storage, version=version)
     for form in (path, storage_file(path)):
         with open_bag(form) as bag:
+            assert bag.files == (storage_file(path),)
             assert bag.topics["/joint_states"].count == 20
             assert [t for t, _ in bag.raw("/joint_states")] == [T0 + k * 10**7 for k in range(20)]
             assert _strings(bag, "/robot_description") == ["<robot name='r'/>"]

@@ -82,8 +82,8 @@ def test_rosbags_reads_back_every_value(tmp_path: Path) -> None:
 
 
 def test_our_reader_reads_it_back(tmp_path: Path) -> None:
-    times, positions, track = _write(tmp_path / "run")
-    with open_bag(tmp_path / "run") as bag:
+    times, positions, track = _write(tmp_path / "run.mcap")  # a rosbag2 directory named like a file
+    with open_bag(tmp_path / "run.mcap") as bag:
         assert read_robot_description(bag) == URDF
         chunks = list(BagSource(bag, JOINTS).chunks(100))
         static, moving = read_tf(bag)
