@@ -221,7 +221,7 @@ def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:
         if compression and compression.lower() != "none":
             raise BagError(
                 f"{meta}: compressed bags ({info.get('compression_format')}, per {compression.lower()}) are not "
-                "supported; decompress it first (ros2 bag decompress, or ros2 bag convert)"
+                "supported; decompress it first (ros2 bag convert)"
             )
         storage = info["storage_identifier"]
         if storage not in ("sqlite3", "mcap"):
