@@ -7,6 +7,7 @@ Exit codes: 0 done, 2 bad usage or bad input (one line on stderr, no traceback),
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import traceback
@@ -53,9 +54,28 @@ def build_parser() -> argparse.ArgumentParser:
         help="robot time to generate (default: one lap, 1,440 samples, for --save; until Ctrl-C for live sinks)",
     )
     parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="samples per second (default 30)")
+    bags = parser.add_argument_group("replaying a ROS 2 bag (a rosbag2 directory, a .mcap or a .db3 file)")
+    bags.add_argument("--bag", type=Path, default=None, metavar="PATH", help="replay this bag instead of a motion")
+    bags.add_argument(
+        "--speed", type=_number, default=1.0, metavar="FACTOR", help="replay speed, like ros2 bag play --rate"
+    )
+    bags.add_argument(
+        "--time",
+        choices=("receive", "header"),
+        default="receive",
+        help="a bag's times: when messages were recorded (default) or their header stamps",
+    )
+    bags.add_argument(
+        "--fixed-frame",
+        default=None,
+        metavar="FRAME",
+        help="the 3D view's frame (default: the TF tree's root, or odom)",
+    )
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
     sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
-    sinks.add_argument("--save", type=Path, default=None, metavar="PATH", help="write a recording (.rrd)")
+    sinks.add_argument(
+        "--save", type=Path, default=None, metavar="PATH", help="write a recording (.rrd), or a ROS 2 bag (.mcap)"
+    )
     sinks.add_argument(
         "--connect",
         nargs="?",
@@ -94,7 +114,6 @@ def main(argv: list[str] | None = None) -> int:
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     # Heavy imports (rerun, yourdfpy, trimesh) only after the arguments parsed: --help stays instant.
     from .errors import UsageError
-    from .model import default_urdf_path
     from .runner import RunConfig, print_summary, run
     from .sinks import SinkConfig
 
@@ -103,6 +122,12 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError(f"choose one live sink, not {' and '.join(live)}")
     if args.headless and (live or args.save):
         raise UsageError("--headless shows nothing; it cannot be combined with a sink")
+    if args.bag is not None and args.motion is not None:
+        raise UsageError("--motion and --bag both say what moves the robot; choose one")
+    if args.save is not None and args.save.suffix == ".mcap" and (live or args.realtime):
+        raise UsageError(f"--save {args.save}: a bag is written as fast as it can, not with a live sink or --realtime")
+    if not (math.isfinite(args.speed) and args.speed > 0):
+        raise UsageError(f"--speed must be a positive factor, got {args.speed:g}")
     spawn = args.spawn or not (live or args.save or args.headless)
     sink = SinkConfig(
         spawn=spawn,
@@ -115,12 +140,16 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         web_port=args.web_port,
     )
     config = RunConfig(
-        urdf=args.urdf if args.urdf is not None else default_urdf_path(),
+        urdf=args.urdf,
         motion=args.motion,
         rate=args.rate,
         duration=args.duration,
         sink=sink,
         realtime=args.realtime,
+        bag=args.bag,
+        speed=args.speed,
+        time=args.time,
+        fixed_frame=args.fixed_frame,
     )
     result = run(config, on_ready=lambda message: print(message, file=sys.stderr, flush=True))
     print_summary(result, config)

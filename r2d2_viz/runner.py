@@ -1,32 +1,36 @@
 """One run of the app: model → source → kinematics → stream, batch or paced to the wall clock.
 
 No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.sinks` and written by
-:mod:`r2d2_viz.stream`.
+:mod:`r2d2_viz.stream` (and, for a bag's recorded transforms, :mod:`r2d2_viz.tf_recorded`).
 """
 
 from __future__ import annotations
 
 import math
 import os
-import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager, nullcontext
+from collections.abc import Callable
+from contextlib import ExitStack, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
-from types import FrameType
 
 import numpy as np
 
+from .bag import open_bag
+from .bag_source import TimeSource
 from .errors import UsageError
 from .kinematics import compile_tree
-from .model import Robot, load_urdf
-from .motion import make_motion
+from .model import Robot, default_urdf_path, load_urdf
+from .motion import ODOM, make_motion
+from .notices import Notices
+from .replay import Replay, open_replay, robot_loader
+from .signals import signals_set, sigterm_raises
 from .sinks import SinkConfig, close_recording, open_recording
 from .sources import Source
 from .stream import RobotStream
+from .tf_recorded import RecordedTf, TfFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""
@@ -46,7 +50,8 @@ LAP_SAMPLES = 1440
 
 @dataclass(frozen=True)
 class RunConfig:
-    urdf: Path
+    urdf: Path | None = None
+    """URDF or xacro; None: the tutorial's R2D2 — or, replaying a bag, its /robot_description."""
     motion: str | None = None
     rate: float = 30.0
     duration: float | None = None
@@ -54,6 +59,13 @@ class RunConfig:
     sink: SinkConfig = field(default_factory=SinkConfig)
     realtime: bool = False
     """Pace to the wall clock even when only saving."""
+    bag: Path | None = None
+    """Replay this ROS 2 bag instead of a generated motion."""
+    speed: float = 1.0
+    """Replay speed, like ``ros2 bag play --rate``."""
+    time: TimeSource = "receive"
+    """A bag's times: when each message was received (recorded), or its header stamp."""
+    fixed_frame: str | None = None
 
     @property
     def live(self) -> bool:
@@ -66,7 +78,7 @@ class RunConfig:
         return max(1, round(self.duration * self.rate))
 
     def source(self, robot: Robot) -> Source:
-        """What drives the robot in this run."""
+        """What drives the robot in a run without a bag."""
         return make_motion(robot, self.motion, rate=self.rate, n_samples=self.n_samples)
 
 
@@ -77,37 +89,68 @@ class RunResult:
     saved: Path | None
 
 
-class _StopRequested(KeyboardInterrupt):  # a signal, not an error
-    """Raised in a batch run by SIGTERM so the partial file is removed."""
-
-
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
     """Run the whole pipeline. Raises R2d2VizError for bad input; never leaves a half-written file."""
     _check_numbers(config)
-    robot = load_urdf(config.urdf)
-    tree = compile_tree(robot)
-    source = config.source(robot)
+    with ExitStack() as inputs:
+        plan = _plan(config, inputs)
+        save = config.sink.save
+        if save is not None and save.suffix == ".mcap":
+            from .bag_out import write_bag
+
+            with sigterm_raises():
+                samples = write_bag(save, plan, config.urdf or default_urdf_path())
+            return RunResult(samples=samples, interrupted=False, saved=save)
+        return _record(config, plan, on_ready)
+
+
+def _plan(config: RunConfig, inputs: ExitStack) -> Replay:
+    """The robot, its source, recorded transforms and the fixed frame of this run."""
+    if config.bag is not None:
+        bag = inputs.enter_context(open_bag(config.bag))
+        replay = open_replay(
+            bag, load_robot=robot_loader(config.urdf), time=config.time, fixed_frame=config.fixed_frame
+        )
+        replay.mcap_files = [f for f in bag.files if f.suffix == ".mcap"]
+        return replay
+    robot = load_urdf(config.urdf or default_urdf_path())
+    return Replay(compile_tree(robot), config.source(robot), None, None, config.fixed_frame or ODOM)
+
+
+def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | None) -> RunResult:
     save = config.sink.save
     tmp = _temp_path(save) if save is not None else None
-    samples = 0
-    interrupted = False
+    samples, interrupted = 0, False
+    source, tree = plan.source, plan.tree
+    clock = source.clock if source is not None else "timestamp"
     try:
         recording = open_recording(config.sink, save_to=tmp, live=config.live, on_ready=on_ready)
         try:
-            streamer = RobotStream(recording.rec, tree, frames=source.frames, clock=source.clock)
-            streamer.log_static()
+            rec = recording.rec
+            streamer = None
+            if tree is not None:
+                frames = source.frames if source is not None else ()
+                streamer = RobotStream(
+                    rec, tree, frames=frames, clock=clock, fixed_frame=plan.fixed_frame, root_placed=plan.root_placed
+                )
+            notices = streamer.notices if streamer is not None else Notices(rec)
+            for note in plan.notes:
+                notices.report(note)
+            recorded = RecordedTf(rec, clock=clock, skip=plan.skip_edges)
+            if plan.static_tf is not None:
+                recorded.log(plan.static_tf)
+            feed = TfFeed(recorded, plan.moving_tf)
+            if streamer is not None:
+                streamer.log_static()
             if config.live:
-                block = max(1, min(round(config.rate * LIVE_BLOCK_SECONDS), LIVE_BLOCK_SAMPLES))
-                samples, interrupted = _paced(streamer, source, block=block)
+                samples, interrupted = _paced(streamer, source, feed, block=_live_block(config), speed=config.speed)
             else:
-                with _sigterm_raises():
-                    for k, chunk in enumerate(source.chunks(batch_chunk_samples(len(tree.moving)))):
-                        prepared = streamer.prepare(chunk)  # meanwhile the sinks write the previous chunk
-                        if k:
-                            recording.rec.flush()  # backpressure: one chunk in flight, memory stays flat
-                        streamer.send(prepared)
-                        samples += len(chunk)
-            streamer.finish()
+                with sigterm_raises():
+                    samples = _batch(streamer, source, feed, rec.flush, n_moving=len(tree.moving) if tree else 0)
+                    if plan.mcap_files:
+                        _other_topics(plan, config, notices)
+            if streamer is not None:
+                streamer.finish()
         finally:
             close_recording(recording)
         if tmp is not None and save is not None:
@@ -117,6 +160,38 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
             tmp.unlink(missing_ok=True)
         raise
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
+
+
+def _batch(
+    streamer: RobotStream | None, source: Source | None, feed: TfFeed, flush: Callable[[], None], *, n_moving: int
+) -> int:
+    """Every sample as fast as the sinks take them, one chunk in flight (memory stays flat)."""
+    samples = 0
+    if streamer is not None and source is not None:
+        for k, chunk in enumerate(source.chunks(batch_chunk_samples(n_moving))):
+            prepared = streamer.prepare(chunk)  # meanwhile the sinks write the previous chunk
+            if k:
+                flush()  # backpressure
+            streamer.send(prepared)
+            if len(chunk):
+                feed.until(int(chunk.times_ns[-1]))
+            samples += len(chunk)
+    feed.until(None)
+    return samples or feed.recorded.rows
+
+
+def _other_topics(plan: Replay, config: RunConfig, notices: Notices) -> None:
+    """What Rerun's own MCAP decoders show of the bag's other topics (batch runs; .mcap storage only)."""
+    from .bag_topics import log_other_topics
+
+    result = log_other_topics(notices.rec, plan.mcap_files, time=config.time)
+    if result.skipped:
+        notices.report(f"{config.bag}: {result.summary()}")
+
+
+def _live_block(config: RunConfig) -> int:
+    rate = config.rate if config.bag is None else 100.0  # a bag's rate is its own: blocks of about a second
+    return max(1, min(round(rate * LIVE_BLOCK_SECONDS), LIVE_BLOCK_SAMPLES))
 
 
 def _check_numbers(config: RunConfig) -> None:
@@ -145,18 +220,22 @@ def batch_chunk_samples(n_moving: int) -> int:
     return max(1, min(BATCH_CHUNK_SAMPLES, BATCH_CHUNK_CELLS // max(1, n_moving)))
 
 
-def _paced(streamer: RobotStream, source: Source, *, block: int, speed: float = 1.0) -> tuple[int, bool]:
+def _paced(
+    streamer: RobotStream | None, source: Source | None, feed: TfFeed, *, block: int, speed: float = 1.0
+) -> tuple[int, bool]:
     """Send each sample at ``start + (t - t₀) / speed`` of the wall clock (an absolute schedule: no drift;
     ``start`` is when the first block is ready, ``t₀`` the first sample's time) until done or signalled.
 
-    Samples are computed ``block`` at a time (:meth:`RobotStream.prepare`); each is sent on its own when due.
-    If the process falls behind, every sample already due goes out in one send, so a late sample does not
-    push the next ones later.
+    Samples are computed ``block`` at a time (:meth:`RobotStream.prepare`); each is sent on its own when due,
+    after the recorded transforms up to its time. If the process falls behind, every sample already due goes
+    out in one send, so a late sample does not push the next ones later.
     """
+    if streamer is None or source is None:
+        return _paced_tf(feed, speed=speed)
     stop = threading.Event()
     sent = 0
     log_path = os.environ.get(PACING_LOG_ENV)
-    with _signals_set(stop), open(log_path, "w") if log_path else nullcontext() as log:
+    with signals_set(stop), open(log_path, "w") if log_path else nullcontext() as log:
         start = math.nan
         t0 = 0
         for chunk in source.chunks(block):
@@ -175,6 +254,7 @@ def _paced(streamer: RobotStream, source: Source, *, block: int, speed: float = 
                 if stop.is_set():
                     break
                 j = i + 1 + int(np.searchsorted(due[i + 1 :], time.monotonic(), side="right"))
+                feed.until(int(chunk.times_ns[j - 1]))
                 streamer.send(prepared, i, j)
                 if log is not None:
                     now = time.monotonic()
@@ -186,46 +266,34 @@ def _paced(streamer: RobotStream, source: Source, *, block: int, speed: float = 
             # Backpressure, once a block (five seconds): wait until the sinks have taken what was sent, so a
             # sink slower than the sample rate makes samples late instead of piling them up in memory.
             streamer.rec.flush()
+        if not stop.is_set():
+            feed.until(None)
     return sent, stop.is_set()
 
 
-@contextmanager
-def _signals_set(stop: threading.Event) -> Iterator[None]:
-    """SIGINT and SIGTERM end a live run cleanly (the recording is finalised)."""
-
-    def handler(signum: int, frame: FrameType | None) -> None:
-        stop.set()
-
-    with _handlers(handler):
-        yield
-
-
-@contextmanager
-def _sigterm_raises() -> Iterator[None]:
-    def handler(signum: int, frame: FrameType | None) -> None:
-        raise _StopRequested
-
-    with _handlers(handler, signals=(signal.SIGTERM,)):
-        yield
-
-
-@contextmanager
-def _handlers(
-    handler: Callable[[int, FrameType | None], None],
-    signals: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM),
-) -> Iterator[None]:
-    if threading.current_thread() is not threading.main_thread():  # tests may run us in a thread
-        yield
-        return
-    previous = {s: signal.signal(s, handler) for s in signals}
-    try:
-        yield
-    finally:
-        for s, h in previous.items():
-            signal.signal(s, h)
+def _paced_tf(feed: TfFeed, *, speed: float) -> tuple[int, bool]:
+    """A TF-only replay: the recorded transforms, each at its time on the wall clock."""
+    stop = threading.Event()
+    times = feed.times_ns
+    with signals_set(stop):
+        if len(times) == 0:
+            return 0, False
+        start = time.monotonic()
+        due = start + (times - times[0]) * (1e-9 / speed)
+        i = 0
+        while i < len(times) and not stop.is_set():
+            delay = due[i] - time.monotonic()
+            if delay > 0:
+                time.sleep(min(delay, 0.1))
+                continue
+            j = int(np.searchsorted(due, time.monotonic(), side="right"))
+            feed.until(int(times[j - 1]))
+            i = j
+    return i, stop.is_set()
 
 
 def print_summary(result: RunResult, config: RunConfig) -> None:
     where = f" to {result.saved}" if result.saved else ""
     how = " (stopped by signal)" if result.interrupted else ""
-    print(f"r2d2-viz: {result.samples} samples at {config.rate:g} Hz{where}{how}", file=sys.stderr)
+    what = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
+    print(f"r2d2-viz: {result.samples} samples {what}{where}{how}", file=sys.stderr)

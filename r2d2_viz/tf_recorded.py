@@ -114,3 +114,40 @@ class RecordedTf:
                 time_array(times_ns[rows], self.clock),
                 encoded(arrows),
             )
+
+
+class TfFeed:
+    """Recorded moving transforms handed to a :class:`RecordedTf` in time order, as far as a replay has got."""
+
+    def __init__(self, recorded: RecordedTf, records: TfRecords | None) -> None:
+        self.recorded = recorded
+        if records is None or len(records) == 0:
+            self._records: TfRecords | None = None
+            return
+        order = np.argsort(records.times_ns, kind="stable")
+        self._records = TfRecords(
+            records.times_ns[order],
+            tuple(records.parents[i] for i in order),
+            tuple(records.children[i] for i in order),
+            records.translation[order],
+            records.quat_xyzw[order],
+        )
+        self._next = 0
+
+    @property
+    def times_ns(self) -> np.ndarray:
+        return self._records.times_ns if self._records is not None else np.zeros(0, dtype=np.int64)
+
+    def until(self, time_ns: int | None = None) -> None:
+        """Log the records up to ``time_ns`` (inclusive; all of them when None) not logged yet."""
+        r = self._records
+        if r is None:
+            return
+        stop = len(r) if time_ns is None else int(np.searchsorted(r.times_ns, time_ns, side="right"))
+        if stop <= self._next:
+            return
+        part = slice(self._next, stop)
+        self.recorded.log(
+            TfRecords(r.times_ns[part], r.parents[part], r.children[part], r.translation[part], r.quat_xyzw[part])
+        )
+        self._next = stop

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yourdfpy
+from conftest import cli
 from reference import quat_xyzw_to_matrix, state_publisher
 from rrd import Rows, read_recording, tf_by_child
 
@@ -31,6 +32,17 @@ def _pose(translation: list[float] | None, xyzw: list[float] | None) -> np.ndarr
 @pytest.fixture(scope="module")
 def recording(lap_recording: tuple[Path, object]) -> dict[str, Rows]:
     return read_recording(lap_recording[0])
+
+
+@pytest.fixture(scope="module")
+def round_trip(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Rows]:
+    """``r2d2-viz --save lap.mcap`` (a ROS 2 bag), then ``r2d2-viz --bag lap.mcap --save lap.rrd``: the robot from
+    the bag's /robot_description, its joints from /joint_states, odom → axis from /tf."""
+    tmp = tmp_path_factory.mktemp("round_trip")
+    for args in (["--save", str(tmp / "lap.mcap")], ["--bag", str(tmp / "lap.mcap"), "--save", str(tmp / "lap.rrd")]):
+        result = cli(*args)
+        assert result.returncode == 0, result.stderr
+    return read_recording(tmp / "lap.rrd")
 
 
 def _edges_static(recording: dict[str, Rows]) -> dict[str, tuple[str, np.ndarray]]:
@@ -64,9 +76,11 @@ def test_fixed_joints_are_static_and_moving_ones_are_not(recording: dict[str, Ro
     assert set(tf_by_child(recording)) == temporal_children  # all on /tf, as on the /tf topic
 
 
+@pytest.mark.parametrize("made", ["recording", "round_trip"])
 def test_every_link_pose_matches_state_publisher_and_robot_state_publisher(
-    recording: dict[str, Rows], tutorial_urdf: Path
+    made: str, tutorial_urdf: Path, request: pytest.FixtureRequest
 ) -> None:
+    recording: dict[str, Rows] = request.getfixturevalue(made)
     static = _edges_static(recording)
     moving = tf_by_child(recording)
     for child, rows in moving.items():
