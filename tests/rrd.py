@@ -77,3 +77,54 @@ def tf_by_child(recording: dict[str, Rows], entity: str = "/tf") -> dict[str, Ro
         for name, values in rows.temporal.items():
             mine.temporal[name].append(values[i])
     return dict(out)
+
+
+def _pose(translation: list[float] | None, xyzw: list[float] | None) -> np.ndarray:
+    from reference import quat_xyzw_to_matrix
+
+    T = np.eye(4)
+    if xyzw is not None:
+        T[:3, :3] = quat_xyzw_to_matrix(xyzw)
+    if translation is not None:
+        T[:3, 3] = translation
+    return T
+
+
+def frame_edges_at(recording: dict[str, Rows], time_ns: int) -> dict[str, tuple[str, np.ndarray]]:
+    """Child frame → (parent frame, T_parent_child) as a viewer resolves them at ``time_ns``: every static
+    ``Transform3D`` naming its frames, then for each child the latest temporal row at or before that time."""
+    edges: dict[str, tuple[str, np.ndarray]] = {}
+    for rows in recording.values():
+        child = rows.static.get("Transform3D:child_frame")
+        if child:
+            T = _pose(
+                rows.static["Transform3D:translation"][-1][0],
+                (rows.static.get("Transform3D:quaternion") or [[None]])[-1][0],
+            )
+            edges[child[-1][0]] = (rows.static["Transform3D:parent_frame"][-1][0], T)
+    for rows in recording.values():
+        children = rows.temporal.get("Transform3D:child_frame")
+        if not children:
+            continue
+        latest: dict[str, int] = {}
+        for i, t in enumerate(rows.times):
+            if t <= time_ns and children[i] is not None:
+                latest[children[i][0]] = i
+        for child, i in latest.items():
+            t, q = (rows.temporal.get(f"Transform3D:{c}", [None] * (i + 1))[i] for c in ("translation", "quaternion"))
+            edges[child] = (rows.temporal["Transform3D:parent_frame"][i][0], _pose(t and t[0], q and q[0]))
+    return edges
+
+
+def pose_in(edges: dict[str, tuple[str, np.ndarray]], frame: str, fixed: str) -> np.ndarray:
+    """T_fixed_frame composed along the edges."""
+    T = np.eye(4)
+    seen = set()
+    while frame != fixed:
+        if frame in seen or frame not in edges:
+            raise KeyError(f"no path from {frame!r} to {fixed!r}")
+        seen.add(frame)
+        parent, T_parent_frame = edges[frame]
+        T = T_parent_frame @ T
+        frame = parent
+    return T
