@@ -15,6 +15,12 @@ is what the child measures around the decoding alone, after its imports. Side by
 * Rerun's ``rerun.chunk.McapReader`` (``ros2msg`` decoder, Rust) to the same arrays (.mcap only);
 * ``rerun mcap convert`` (the CLI of rerun-sdk) from .mcap to .rrd: plots only, no robot.
 
+Whole commands (the issue's goals): ``r2d2-viz --bag BAG --urdf arm8.urdf --save out.rrd`` (an 8-joint chain
+of boxes, written here) beside the import floor (a Python that imports what the app imports, nothing else) and
+``rerun mcap convert`` of the same bag, medians of three runs alternating; the work beyond the floor over
+Rerun's converter's whole wall time (goals: ≤ 1.5× for .mcap, ≤ 3× for .db3). And the peak RSS of
+``r2d2-viz --bag`` on the 1 kHz, 30-joint bag (goal: under 400 MB).
+
 Memory: peak RSS of a child reading the 1 kHz, 30-joint bag chunk by chunk through ``BagSource`` (goal:
 under 400 MB), beside the RSS of the same child's imports alone.
 """
@@ -200,6 +206,49 @@ def write_big_bag(folder: Path, minutes: float) -> Path:
     return path
 
 
+def chain_urdf(path: Path, joints: int) -> Path:
+    """A chain of boxes whose revolute joints are ``joint_0 …``, like the bags' JointStates."""
+    links = "".join(
+        f'<link name="l{i}"><visual><geometry><box size="0.05 0.05 0.2"/></geometry></visual></link>'
+        for i in range(joints + 1)
+    )
+    chain = "".join(
+        f'<joint name="joint_{i}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>'
+        f'<origin xyz="0 0 0.2"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+        for i in range(joints)
+    )
+    path.write_text(f'<robot name="chain">{links}{chain}</robot>')
+    return path
+
+
+FLOOR = "import rerun, yourdfpy, trimesh, numpy, rosbags.rosbag2"
+"""What ``r2d2-viz --bag`` imports before it reads anything."""
+
+
+def whole_commands(folder: Path, bags: dict[str, Path], rerun: str | None, repeats: int) -> dict[str, float]:
+    """Median wall seconds of the import floor, ``r2d2-viz --bag … --save`` per storage and ``rerun mcap
+    convert``, each run ``repeats`` times, alternating."""
+    app = str(Path(PY).parent / "r2d2-viz")
+    urdf = chain_urdf(folder / "arm8.urdf", 8)
+    commands = {"floor": [PY, "-c", FLOOR]}
+    for storage, path in bags.items():
+        commands[f"ours {storage}"] = [app, "--bag", str(path), "--urdf", str(urdf), "--save", str(folder / "o.rrd")]
+    if rerun:
+        commands["rerun mcap convert"] = [
+            rerun,
+            "mcap",
+            "convert",
+            str(storage_file(bags["mcap"])),
+            "-o",
+            str(folder / "r.rrd"),
+        ]
+    walls: dict[str, list[float]] = {name: [] for name in commands}
+    for _ in range(repeats):
+        for name, command in commands.items():
+            walls[name].append(_command(command)[0])
+    return {name: sorted(w)[len(w) // 2] for name, w in walls.items()}
+
+
 def storage_file(bag_dir: Path) -> Path:
     return next(p for p in bag_dir.iterdir() if p.suffix in (".mcap", ".db3"))
 
@@ -254,6 +303,20 @@ def main() -> None:
                 f"ours (decode only) / rerun mcap convert (whole command): {ours_mcap / convert:.2f} (mcap), "
                 f"{ours_db3 / convert:.2f} (db3)"
             )
+        walls = whole_commands(folder, bags, rerun, 1 if args.smoke else 3)
+        floor = walls["floor"]
+        print(f"\nwhole commands, medians: import floor {floor:.2f} s", end="")
+        for storage in bags:
+            print(f"; r2d2-viz --bag ({storage}) --save .rrd {walls[f'ours {storage}']:.2f} s", end="")
+        if "rerun mcap convert" in walls:
+            convert = walls["rerun mcap convert"]
+            print(f"; rerun mcap convert {convert:.2f} s")
+            for storage, goal in (("mcap", 1.5), ("db3", 3.0)):
+                ratio = (walls[f"ours {storage}"] - floor) / convert
+                verdict = "met" if ratio <= goal else "NOT met"
+                what = f"  ({storage}) work beyond the floor / rerun mcap convert"
+                print(f"{what}: {ratio:.2f}x (goal <= {goal:g}x) {verdict}")
+        print()
         for path in bags.values():
             shutil.rmtree(path)
 
@@ -270,6 +333,17 @@ def main() -> None:
         print(
             f"BagSource, chunks of 10,000: peak RSS {rss:.0f} MB (imports alone {floor:.0f} MB; goal < 400 MB), "
             f"decode {decode:.1f} s, wall {wall:.1f} s"
+        )
+        urdf30 = chain_urdf(folder / "arm30.urdf", 30)
+        app = str(Path(PY).parent / "r2d2-viz")
+        minutes = min(args.big_minutes, 10.0)  # the .rrd of an hour at 1 kHz with 30 joints would be ~20 GB
+        if minutes < args.big_minutes:
+            shutil.rmtree(big)
+            big = write_big_bag(folder, minutes)
+        wall, rss = _command([app, "--bag", str(big), "--urdf", str(urdf30), "--save", str(folder / "big.rrd")])
+        print(
+            f"r2d2-viz --bag (1 kHz, 30 joints, {minutes:g} min) --save .rrd: peak RSS {rss:.0f} MB "
+            f"(goal < 400 MB; memory is flat in the length: chunks of 10,000 samples), wall {wall:.1f} s"
         )
 
 

@@ -34,7 +34,7 @@ from .tf_recorded import RecordedTf, TfFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""
-BATCH_CHUNK_CELLS = 1_000_000
+BATCH_CHUNK_CELLS = 100_000
 """…and at most this many moving-joint values per chunk, so a robot with thousands of joints stays flat too."""
 LIVE_BLOCK_SECONDS = 5.0
 """Live runs compute and encode this much robot time at once (about 1.5 ms of work plus 3 µs a sample), then
