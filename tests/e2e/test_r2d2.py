@@ -185,14 +185,14 @@ def test_native_viewer(case: str, recordings: dict[str, Path], x_display, artifa
         assert named == {"odom", "axis", "leg1", "leg2", "body", "head", "rod", "box"}
 
 
-def test_serve_streams_live_to_the_web_viewer(chromium_browser, artifacts_dir: Path) -> None:
-    """``r2d2-viz --serve``: the robot, live, in the browser, on the RViz-like layout."""
+def serve_in_browser(chromium_browser, artifacts_dir: Path, args: list[str], name: str) -> np.ndarray:
+    """``r2d2-viz --serve ARGS`` opened in the browser; the screenshot once the robot shows on our layout."""
     from urllib.parse import quote
 
     grpc_port, web_port = viewers.free_port(), viewers.free_port()
     exe = Path(sys.executable).parent / "r2d2-viz"
-    log = artifacts_dir / "serve.log"
-    command = [str(exe), "--serve", "--port", str(grpc_port), "--web-port", str(web_port), "--duration", "300"]
+    log = artifacts_dir / f"{name}.log"
+    command = [str(exe), "--serve", "--port", str(grpc_port), "--web-port", str(web_port), *args]
     with log.open("w") as sink:
         app = subprocess.Popen(command, stdout=sink, stderr=sink, start_new_session=True)
     try:
@@ -216,11 +216,16 @@ def test_serve_streams_live_to_the_web_viewer(chromium_browser, artifacts_dir: P
 
         # live: the robot moves, so the page never stands still; readiness is the predicate
         png = viewers.wait_until_viewer_ready(page, timeout=150, max_changed=0.2, ready=shows_the_robot)
-        (artifacts_dir / "web_serve.png").write_bytes(png)
+        (artifacts_dir / f"{name}.png").write_bytes(png)
         context.close()
     finally:
         viewers._stop_process_group(app)
-    img = viewers.load_png(artifacts_dir / "web_serve.png")
+    return viewers.load_png(artifacts_dir / f"{name}.png")
+
+
+def test_serve_streams_live_to_the_web_viewer(chromium_browser, artifacts_dir: Path) -> None:
+    """``r2d2-viz --serve``: the robot, live, in the browser, on the RViz-like layout."""
+    img = serve_in_browser(chromium_browser, artifacts_dir, ["--duration", "300"], "web_serve")
     assert layout_problems(img) == [] and not any("white" in p for p in robot_problems(img))
 
 
