@@ -71,6 +71,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FRAME",
         help="the 3D view's frame (default: the TF tree's root, or odom)",
     )
+    parser.add_argument(
+        "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
+    )
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
     sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
     sinks.add_argument(
@@ -150,6 +153,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         speed=args.speed,
         time=args.time,
         fixed_frame=args.fixed_frame,
+        rviz=args.rviz,
     )
     result = run(config, on_ready=lambda message: print(message, file=sys.stderr, flush=True))
     print_summary(result, config)

@@ -20,6 +20,7 @@ import numpy as np
 
 from .bag import open_bag
 from .bag_source import TimeSource
+from .blueprint import generate_blueprint
 from .errors import UsageError
 from .kinematics import compile_tree
 from .model import Robot, default_urdf_path, load_urdf
@@ -31,6 +32,7 @@ from .sinks import SinkConfig, close_recording, open_recording
 from .sources import Source
 from .stream import RobotStream
 from .tf_recorded import RecordedTf, TfFeed
+from .view_plan import plan_view
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""
@@ -66,6 +68,8 @@ class RunConfig:
     time: TimeSource = "receive"
     """A bag's times: when each message was received (recorded), or its header stamp."""
     fixed_frame: str | None = None
+    rviz: Path | None = None
+    """Lay the viewer out as this RViz config does (default: the tutorial's r2d2.rviz, fitted to the robot)."""
 
     @property
     def live(self) -> bool:
@@ -123,20 +127,28 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
     samples, interrupted = 0, False
     source, tree = plan.source, plan.tree
     clock = source.clock if source is not None else "timestamp"
+    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
-        recording = open_recording(config.sink, save_to=tmp, live=config.live, on_ready=on_ready)
+        recording = open_recording(config.sink, save_to=tmp, live=config.live, on_ready=on_ready, blueprint=blueprint)
         try:
             rec = recording.rec
             streamer = None
             if tree is not None:
-                frames = source.frames if source is not None else ()
                 streamer = RobotStream(
-                    rec, tree, frames=frames, clock=clock, fixed_frame=plan.fixed_frame, root_placed=plan.root_placed
+                    rec,
+                    tree,
+                    frames=source.frames if source is not None else (),
+                    clock=clock,
+                    fixed_frame=plan.fixed_frame,
+                    root_placed=plan.root_placed,
+                    axis_length=view.axis_length,
+                    show_names=view.show_names,
                 )
             notices = streamer.notices if streamer is not None else Notices(rec)
-            for note in plan.notes:
+            for note in (*plan.notes, *view.notes):
                 notices.report(note)
-            recorded = RecordedTf(rec, clock=clock, skip=plan.skip_edges)
+            recorded = RecordedTf(rec, clock=clock, skip=plan.skip_edges, axis_length=view.axis_length)
             if plan.static_tf is not None:
                 recorded.log(plan.static_tf)
             feed = TfFeed(recorded, plan.moving_tf)

@@ -34,6 +34,7 @@ def log_scene(
     fixed_frame: str,
     root_is_static: bool,
     axis_length: float = AXIS_LENGTH,
+    show_names: bool = False,
 ) -> None:
     """Model warnings, fixed transforms and static arrows, TF axes and the robot's shapes, all static."""
     robot = tree.robot
@@ -70,7 +71,7 @@ def log_scene(
         rec.log(
             entities.tf_axes(frame),
             rr.CoordinateFrame(frame),
-            rr.TransformAxes3D(axis_length, show_frame=False),
+            rr.TransformAxes3D(axis_length, show_frame=show_names),
             static=True,
         )
 

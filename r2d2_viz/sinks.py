@@ -18,6 +18,7 @@ from pathlib import Path
 from urllib.parse import quote
 
 import rerun as rr
+import rerun.blueprint as rrb
 
 from .blueprint import generate_blueprint
 from .entities import APP_ID
@@ -67,6 +68,7 @@ def open_recording(
     save_to: Path | None = None,
     live: bool = False,
     on_ready: Callable[[str], None] | None = None,
+    blueprint: rrb.Blueprint | None = None,
 ) -> Recording:
     """A recording stream with the configured sinks and the RViz-like default blueprint.
 
@@ -74,7 +76,7 @@ def open_recording(
     run sends small chunks, frame by frame, for hours: its file gets no footer, whose chunk manifest
     Rerun keeps in memory until the end (1.2 GB after 10 minutes at 1 kHz).
     """
-    blueprint = generate_blueprint()
+    blueprint = blueprint or generate_blueprint()
     if config.headless:
         return Recording(rr.RecordingStream(APP_ID, default_enabled=False))
     rec = rr.RecordingStream(APP_ID, send_properties=True)

@@ -85,6 +85,7 @@ class RobotStream:
         warn: Warn = to_stderr,
         root_placed: bool = False,
         axis_length: float = AXIS_LENGTH,
+        show_names: bool = False,
     ) -> None:
         self.rec, self.tree, self.clock, self.timeline = rec, tree, clock, timeline
         self.fixed_frame = fixed_frame
@@ -93,7 +94,7 @@ class RobotStream:
         self.tf = TfRows(tree, tracks=tuple(frames), fixed_frame=fixed_frame)
         self.plots = JointPlots(tree, timeline=timeline, clock=clock)
         self._root_is_static = not root_placed and not any(child == tree.robot.root for _, child in frames)
-        self.axis_length = axis_length
+        self.axis_length, self.show_names = axis_length, show_names
         self._pending: PreparedSamples | None = None
         self._plot_from = self._sent_to = 0
         self._next_limits_ns: int | None = None
@@ -110,6 +111,7 @@ class RobotStream:
             fixed_frame=self.fixed_frame,
             root_is_static=self._root_is_static,
             axis_length=self.axis_length,
+            show_names=self.show_names,
         )
         self.tf.log_static(self.rec, entities.TF)
         self.plots.log_styles(self.rec)
