@@ -1,17 +1,38 @@
-"""URDF shapes → triangle meshes (via trimesh), in their link's frame. No rerun import."""
+"""URDF shapes → what the viewer draws, without rerun: primitives as triangle meshes, mesh files as asset bytes.
+
+Mesh files reach the viewer as they are where Rerun reads them fully (STL, PLY, GLB, OBJ without ``mtllib``):
+:meth:`MeshCache.asset` reads each file once however many links use it. COLLADA (``.dae``), glTF (``.gltf``)
+and OBJ files with material libraries are converted once with trimesh (pycollada for COLLADA) into one GLB that
+embeds their colours, materials and textures (Rerun's own COLLADA reader drops textures); the GLB is kept in a
+disk cache (:class:`DiskCache`) keyed by the file's content, so later runs skip the conversion.
+"""
 
 from __future__ import annotations
 
+import io
+import re
+from collections import Counter
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 import trimesh
 
+from .mesh_disk_cache import DiskCache, sha256
 from .model import Box, Cylinder, MeshFile, Shape, Sphere
 
 CYLINDER_SECTIONS = 48
 SPHERE_SUBDIVISIONS = 3
+CONVERTER_VERSION = 1
+"""Bump when the conversion below changes what it writes: old cache entries are then never looked up."""
+
+GLB = "model/gltf-binary"
+AS_IS = {".stl": "model/stl", ".ply": "application/x-ply", ".glb": GLB, ".obj": "model/obj"}
+"""Formats the viewer reads completely from the file's own bytes (OBJ only without a material library)."""
+CONVERTED = {".dae": "dae", ".gltf": "gltf", ".obj": "obj"}
+"""Formats converted to GLB (their colours live in other files, or Rerun's reader loses them)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -21,12 +42,195 @@ class TriangleMesh:
     triangles: npt.NDArray[np.uint32]  # (F, 3)
 
 
+@dataclass(frozen=True, eq=False)
+class Asset:
+    """A mesh file as the viewer gets it: bytes in the shape's own frame, unscaled."""
+
+    data: bytes
+    media_type: str
+    own_colors: bool
+    """The bytes carry colours, materials or textures (else the viewer would draw one default colour)."""
+
+
+class MeshCache:
+    """Mesh files of one run: each read (and converted, if need be) once, however many shapes use it.
+
+    ``reads`` counts how often each file was opened, for the tests. ``disk`` keeps conversions between runs:
+    True (the default) for :class:`DiskCache` in its default folder, a :class:`DiskCache`, or None to convert
+    every run.
+    """
+
+    def __init__(self, disk: DiskCache | bool | None = True) -> None:
+        self.disk: DiskCache | None = disk if isinstance(disk, DiskCache) else DiskCache() if disk else None
+        self.reads: Counter[Path] = Counter()
+        self._assets: dict[Path, Asset | str] = {}
+
+    def asset(self, path: Path, filename: str | None = None) -> Asset:
+        """The viewer's bytes for mesh file ``path``. Raises ``ValueError`` naming ``filename`` when unreadable."""
+        key = Path(path).resolve()
+        if key not in self._assets:
+            try:
+                self._assets[key] = self._load(key)
+            except ValueError as exc:
+                self._assets[key] = str(exc)
+        found = self._assets[key]
+        if isinstance(found, str):
+            raise ValueError(f"mesh file {filename or str(path)!r} {found}")
+        return found
+
+    def read(self, path: Path) -> bytes:
+        self.reads[path] += 1
+        try:
+            return path.read_bytes()
+        except OSError as exc:
+            raise ValueError(f"cannot be read: {exc.strerror or exc}") from None
+
+    def _load(self, path: Path) -> Asset:
+        suffix = path.suffix.lower()
+        if suffix not in AS_IS and suffix not in CONVERTED:
+            kind = suffix or "(no extension)"
+            raise ValueError(f"has an unsupported format {kind!r} (STL, OBJ, DAE, GLB, GLTF, PLY)")
+        data = self.read(path)
+        if suffix in AS_IS and not (suffix == ".obj" and _obj_material_libraries(data)):
+            return Asset(data, AS_IS[suffix], own_colors=_own_colors(suffix, data))
+        key = _cache_key(suffix, data)
+        if self.disk is not None:
+            glb = self.disk.get(key, lambda name: _dependency(path, name))
+            if glb is not None:
+                return Asset(glb, GLB, own_colors=True)
+        glb, dependencies = convert_to_glb(path, data)
+        if self.disk is not None:
+            self.disk.put(key, glb, dependencies)
+        return Asset(glb, GLB, own_colors=True)
+
+
+# --- conversion ---------------------------------------------------------------------------------------
+
+
+class _RecordingResolver(trimesh.resolvers.FilePathResolver):
+    """Resolves textures and material files next to the mesh (never outside its folder); notes what it read."""
+
+    def __init__(self, source: Path) -> None:
+        super().__init__(str(source))
+        self.read: dict[str, str] = {}
+
+    def get(self, name: str) -> bytes:
+        data: bytes = super().get(name)
+        self.read[name] = sha256(data)
+        return data
+
+
+def _dependency(path: Path, name: str) -> bytes | None:
+    try:
+        data: bytes = trimesh.resolvers.FilePathResolver(str(path)).get(name)
+    except Exception:  # missing, outside the folder, unreadable: the cache entry is stale
+        return None
+    return data
+
+
+def convert_to_glb(path: Path, data: bytes) -> tuple[bytes, dict[str, str]]:
+    """One GLB with the file's colours, materials and textures; and sha256 of each other file it read.
+
+    Raises ``ValueError`` when the file holds no triangles or cannot be parsed.
+    """
+    file_type = CONVERTED[path.suffix.lower()]
+    resolver = _RecordingResolver(path)
+    scene = _load_scene(data, file_type, resolver)
+    if file_type == "dae" and not _has_triangles(scene) and b"<instance_material" in data:
+        # pycollada drops a whole node when one bound material is broken (anymal's foot: a sampler that
+        # names a missing surface); unbind only the broken materials and load again, as RViz shows them.
+        scene = _load_scene(_unbind_broken_materials(data), file_type, resolver)
+    if not _has_triangles(scene):
+        raise ValueError("holds no triangles")
+    if file_type == "dae":
+        unit = _collada_unit(data)
+        if unit is not None and unit != 1.0:
+            scene = scene.scaled(unit)  # RViz (assimp) scales COLLADA by its <unit meter="…">
+    try:
+        glb = scene.export(file_type="glb")  # type: ignore[no-untyped-call]
+    except Exception as exc:  # trimesh raises many kinds for odd inputs
+        raise ValueError(f"cannot be converted: {_one_line(exc)}") from None
+    return bytes(glb), dict(resolver.read)
+
+
+def _load_scene(data: bytes, file_type: str, resolver: _RecordingResolver) -> trimesh.Scene:
+    try:
+        return trimesh.load_scene(io.BytesIO(data), file_type=file_type, resolver=resolver)
+    except Exception as exc:  # trimesh and pycollada raise many kinds for unreadable files
+        raise ValueError(f"cannot be read: {_one_line(exc)}") from None
+
+
+def _has_triangles(scene: trimesh.Scene) -> bool:
+    return any(isinstance(g, trimesh.Trimesh) and len(g.faces) > 0 for g in scene.geometry.values())
+
+
+def _unbind_broken_materials(data: bytes) -> bytes:
+    """The COLLADA document without the ``<instance_material>`` bindings pycollada cannot resolve."""
+    import collada
+    from lxml import etree
+
+    ignore = [collada.common.DaeBrokenRefError, collada.common.DaeUnsupportedError, collada.common.DaeError]
+    try:
+        loaded = collada.Collada(io.BytesIO(data), ignore=ignore)
+    except Exception:
+        return data
+    good = {material.id for material in loaded.materials}
+    root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=True))
+    for element in root.iter("{*}instance_material"):
+        if str(element.get("target", "")).lstrip("#") not in good:
+            parent = element.getparent()
+            if parent is not None:
+                parent.remove(element)
+    result: bytes = etree.tostring(root)
+    return result
+
+
+def _collada_unit(data: bytes) -> float | None:
+    match = re.search(rb"<unit\b[^>]*\bmeter\s*=\s*\"([^\"]+)\"", data[:65536])
+    try:
+        value = float(match.group(1)) if match else None
+    except ValueError:
+        return None
+    return value if value is not None and np.isfinite(value) and value > 0 else None
+
+
+def _obj_material_libraries(data: bytes) -> bool:
+    return re.search(rb"^\s*mtllib\s", data, re.MULTILINE) is not None
+
+
+def _own_colors(suffix: str, data: bytes) -> bool:
+    if suffix == ".glb":
+        return True
+    if suffix == ".ply":
+        header = data[: data.find(b"end_header")] if b"end_header" in data[:4096] else b""
+        return re.search(rb"property\s+\w+\s+(red|diffuse_red)\b", header) is not None
+    if suffix == ".obj":  # vertex colours: "v x y z r g b"
+        match = re.search(rb"^v\s+(\S+\s+){5}\S+", data, re.MULTILINE)
+        return match is not None
+    return False  # STL: geometry only
+
+
+def _cache_key(suffix: str, data: bytes) -> str:
+    import collada
+
+    versions = f"{CONVERTER_VERSION}|{trimesh.__version__}|{getattr(collada, '__version__', '?')}|{suffix}"
+    return sha256(versions.encode() + b"\0" + data)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())[:200] or type(exc).__name__
+
+
+# --- primitives and baked meshes ----------------------------------------------------------------------
+
+
 def shape_mesh(shape: Shape) -> TriangleMesh:
     """The shape's geometry as a mesh with its ``<origin>`` applied (vertices in the link frame).
 
     Raises ``ValueError`` when a mesh file cannot be read (the caller skips that shape with a warning).
     """
     geometry = shape.geometry
+    mesh: Any
     if isinstance(geometry, Box):
         mesh = trimesh.creation.box(extents=geometry.size)
     elif isinstance(geometry, Cylinder):
@@ -43,7 +247,7 @@ def shape_mesh(shape: Shape) -> TriangleMesh:
         if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
             raise ValueError(f"mesh file {geometry.filename!r} holds no triangles")
         mesh = loaded.copy()
-        mesh.apply_scale(geometry.scale)  # type: ignore[no-untyped-call]
+        mesh.apply_scale(geometry.scale)
     else:  # pragma: no cover - the model only produces the four kinds above
         raise TypeError(f"unknown geometry {geometry!r}")
     if isinstance(geometry, (Box, Cylinder)):

@@ -224,6 +224,16 @@ class RobotStream:
         )
 
     def _log_shape(self, entity: str, link: str, shape: Shape, visual: bool) -> None:
+        from .meshes import MeshCache  # wip-10m: temporary wiring until the lead's split
+        from .visuals import log_shape
+
+        cache = self.__dict__.setdefault("_mesh_cache", MeshCache())
+        return log_shape(self.rec, entity, link, shape, visual=visual, cache=cache, warn=self._warn_source)
+
+    def _warn_source(self, message: str) -> None:
+        self.warn(f"{self.tree.robot.source}: {message}")
+
+    def _old_log_shape(self, entity: str, link: str, shape: Shape, visual: bool) -> None:
         try:
             mesh = shape_mesh(shape)
         except ValueError as exc:
