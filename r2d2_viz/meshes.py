@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-import trimesh
 
 from .mesh_disk_cache import DiskCache, sha256
 from .model import Box, Cylinder, MeshFile, Shape, Sphere
@@ -107,20 +106,30 @@ class MeshCache:
 # --- conversion ---------------------------------------------------------------------------------------
 
 
-class _RecordingResolver(trimesh.resolvers.FilePathResolver):
-    """Resolves textures and material files next to the mesh (never outside its folder); notes what it read."""
+# trimesh (and scipy behind it) is imported only to convert: a warm run reads the cache and never needs it.
 
-    def __init__(self, source: Path) -> None:
-        super().__init__(str(source))
-        self.read: dict[str, str] = {}
 
-    def get(self, name: str) -> bytes:
-        data: bytes = super().get(name)
-        self.read[name] = sha256(data)
-        return data
+def _recording_resolver(source: Path) -> Any:
+    """A trimesh resolver for textures and material files next to the mesh (never outside its folder) that notes
+    the sha256 of each file it reads in ``.read``."""
+    import trimesh
+
+    class RecordingResolver(trimesh.resolvers.FilePathResolver):
+        def __init__(self) -> None:
+            super().__init__(str(source))
+            self.read: dict[str, str] = {}
+
+        def get(self, name: str) -> bytes:
+            data: bytes = super().get(name)
+            self.read[name] = sha256(data)
+            return data
+
+    return RecordingResolver()
 
 
 def _dependency(path: Path, name: str) -> bytes | None:
+    import trimesh
+
     try:
         data: bytes = trimesh.resolvers.FilePathResolver(str(path)).get(name)
     except Exception:  # missing, outside the folder, unreadable: the cache entry is stale
@@ -134,7 +143,7 @@ def convert_to_glb(path: Path, data: bytes) -> tuple[bytes, dict[str, str]]:
     Raises ``ValueError`` when the file holds no triangles or cannot be parsed.
     """
     file_type = CONVERTED[path.suffix.lower()]
-    resolver = _RecordingResolver(path)
+    resolver = _recording_resolver(path)
     scene = _load_scene(data, file_type, resolver)
     if file_type == "dae" and not _has_triangles(scene) and b"<instance_material" in data:
         # pycollada drops a whole node when one bound material is broken (anymal's foot: a sampler that
@@ -147,20 +156,24 @@ def convert_to_glb(path: Path, data: bytes) -> tuple[bytes, dict[str, str]]:
         if unit is not None and unit != 1.0:
             scene = scene.scaled(unit)  # RViz (assimp) scales COLLADA by its <unit meter="…">
     try:
-        glb = scene.export(file_type="glb")  # type: ignore[no-untyped-call]
+        glb = scene.export(file_type="glb")
     except Exception as exc:  # trimesh raises many kinds for odd inputs
         raise ValueError(f"cannot be converted: {_one_line(exc)}") from None
     return bytes(glb), dict(resolver.read)
 
 
-def _load_scene(data: bytes, file_type: str, resolver: _RecordingResolver) -> trimesh.Scene:
+def _load_scene(data: bytes, file_type: str, resolver: Any) -> Any:
+    import trimesh
+
     try:
         return trimesh.load_scene(io.BytesIO(data), file_type=file_type, resolver=resolver)
     except Exception as exc:  # trimesh and pycollada raise many kinds for unreadable files
         raise ValueError(f"cannot be read: {_one_line(exc)}") from None
 
 
-def _has_triangles(scene: trimesh.Scene) -> bool:
+def _has_triangles(scene: Any) -> bool:
+    import trimesh
+
     return any(isinstance(g, trimesh.Trimesh) and len(g.faces) > 0 for g in scene.geometry.values())
 
 
@@ -211,10 +224,18 @@ def _own_colors(suffix: str, data: bytes) -> bool:
 
 
 def _cache_key(suffix: str, data: bytes) -> str:
-    import collada
 
-    versions = f"{CONVERTER_VERSION}|{trimesh.__version__}|{getattr(collada, '__version__', '?')}|{suffix}"
+    versions = f"{CONVERTER_VERSION}|{_version('trimesh')}|{_version('pycollada')}|{suffix}"
     return sha256(versions.encode() + b"\0" + data)
+
+
+def _version(distribution: str) -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(distribution)
+    except PackageNotFoundError:
+        return "-"
 
 
 def _one_line(exc: BaseException) -> str:
@@ -229,6 +250,8 @@ def shape_mesh(shape: Shape) -> TriangleMesh:
 
     Raises ``ValueError`` when a mesh file cannot be read (the caller skips that shape with a warning).
     """
+    import trimesh
+
     geometry = shape.geometry
     mesh: Any
     if isinstance(geometry, Box):
