@@ -227,7 +227,7 @@ class RobotStream:
         from .meshes import MeshCache  # wip-10m: temporary wiring until the lead's split
         from .visuals import log_shape
 
-        cache = self.__dict__.setdefault("_mesh_cache", MeshCache())
+        cache = self.__dict__.get("_mesh_cache") or self.__dict__.setdefault("_mesh_cache", MeshCache())
         return log_shape(self.rec, entity, link, shape, visual=visual, cache=cache, warn=self._warn_source)
 
     def _warn_source(self, message: str) -> None:

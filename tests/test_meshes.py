@@ -1,0 +1,184 @@
+"""Mesh files → viewer bytes, on real meshes of example-robot-data (PyPI, a test dependency).
+
+Golden values come from the files themselves, read here by hand: colours and triangle counts from the COLLADA
+XML (ElementTree), the converted GLB's materials and primitives from its JSON chunk (struct + json).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import struct
+import sysconfig
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from r2d2_viz import meshes
+from r2d2_viz.mesh_disk_cache import APP_DIR, DiskCache, default_cache_dir
+from r2d2_viz.meshes import MeshCache
+
+
+def _robots() -> Path:
+    for root in {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}:
+        robots = Path(root) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+        if robots.is_dir():
+            return robots
+    raise AssertionError("example-robot-data is a test dependency: pip install '.[test]'")
+
+
+ROBOTS = _robots()
+FINGER = ROBOTS / "panda_description/meshes/visual/finger.dae"  # two plain diffuse colours
+FOOT = ROBOTS / "anymal_b_simple_description/meshes/foot/anymal_foot.dae"  # a broken material reference
+G1_PELVIS = ROBOTS / "g1_description/meshes/pelvis.STL"
+NS = {"c": "http://www.collada.org/2005/11/COLLADASchema"}
+
+
+def glb_json(glb: bytes) -> dict:
+    """The JSON chunk of a GLB (glTF 2.0 binary: 12-byte header, then length, type 'JSON', data)."""
+    magic, version, length = struct.unpack("<4sII", glb[:12])
+    assert (magic, version, length) == (b"glTF", 2, len(glb))
+    chunk_length, chunk_type = struct.unpack("<I4s", glb[12:20])
+    assert chunk_type == b"JSON"
+    return json.loads(glb[20 : 20 + chunk_length])
+
+
+def dae_diffuse_colours(path: Path) -> list[tuple[float, ...]]:
+    root = ET.parse(path).getroot()
+    return [
+        tuple(float(v) for v in (color.text or "").split())
+        for color in root.iterfind(".//c:effect//c:diffuse/c:color", NS)
+    ]
+
+
+def dae_triangle_count(path: Path) -> int:
+    root = ET.parse(path).getroot()
+    return sum(int(t.get("count", "0")) for t in root.iterfind(".//c:geometry//c:triangles", NS))
+
+
+def glb_triangle_count(doc: dict) -> int:
+    return sum(doc["accessors"][p["indices"]]["count"] // 3 for m in doc["meshes"] for p in m["primitives"])
+
+
+def glb_base_colours(doc: dict) -> list[list[float]]:
+    return [m["pbrMetallicRoughness"]["baseColorFactor"] for m in doc.get("materials", [])]
+
+
+def test_dae_keeps_its_own_colours_and_triangles() -> None:
+    asset = MeshCache(disk=None).asset(FINGER)
+    assert asset.media_type == "model/gltf-binary" and asset.own_colors
+    doc = glb_json(asset.data)
+    expected = dae_diffuse_colours(FINGER)
+    assert len(expected) == 2  # dark grey and white, from the XML
+    got = glb_base_colours(doc)
+    assert sorted(np.round(got, 2).tolist()) == sorted(np.round(expected, 2).tolist())
+    assert glb_triangle_count(doc) == dae_triangle_count(FINGER) == 262 + 362
+
+
+def test_broken_material_reference_still_shows_geometry() -> None:
+    # anymal_foot.dae: the carbon material's sampler names a surface that does not exist; pycollada then
+    # drops the whole node (r2d2-viz used to say "holds no triangles"). RViz shows the foot.
+    asset = MeshCache(disk=None).asset(FOOT)
+    doc = glb_json(asset.data)
+    assert glb_triangle_count(doc) == dae_triangle_count(FOOT) == 81 + 4484 + 39
+    colours = np.round(glb_base_colours(doc), 2).tolist()
+    solid = [c for c in dae_diffuse_colours(FOOT)]  # the two intact materials keep their colour
+    assert sorted(colours) == sorted(np.round(solid, 2).tolist())
+
+
+def test_stl_goes_to_the_viewer_as_it_is() -> None:
+    asset = MeshCache(disk=None).asset(G1_PELVIS)
+    assert asset.data == G1_PELVIS.read_bytes()
+    assert asset.media_type == "model/stl" and not asset.own_colors
+
+
+def test_each_file_is_read_once_however_often_it_is_asked_for() -> None:
+    cache = MeshCache(disk=None)
+    first = cache.asset(FINGER)
+    for _ in range(3):
+        assert cache.asset(FINGER) is first
+    assert cache.asset(G1_PELVIS) is cache.asset(G1_PELVIS)
+    assert cache.reads == {FINGER.resolve(): 1, G1_PELVIS.resolve(): 1}
+
+
+def test_unreadable_files_name_the_file_and_are_tried_once(tmp_path: Path) -> None:
+    cache = MeshCache(disk=None)
+    odd = tmp_path / "part.3ds"
+    odd.write_bytes(b"\0" * 16)
+    with pytest.raises(ValueError, match=r"mesh file 'package://x/part.3ds' has an unsupported format '.3ds'"):
+        cache.asset(odd, "package://x/part.3ds")
+    garbage = tmp_path / "garbage.dae"
+    garbage.write_bytes(b"<COLLADA><not closed")
+    for _ in range(2):
+        with pytest.raises(ValueError, match=r"garbage.dae' cannot be read"):
+            cache.asset(garbage)
+    assert cache.reads[garbage.resolve()] == 1
+
+
+def _no_conversion(*args: object) -> tuple[bytes, dict[str, str]]:
+    raise AssertionError("converted although the disk cache holds the file")
+
+
+def test_disk_cache_is_keyed_by_content_and_survives_deletion_and_corruption(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    disk = DiskCache(tmp_path / "cache")
+    glb = MeshCache(disk).asset(FINGER).data
+    (entry,) = (tmp_path / "cache").iterdir()
+
+    # Same content under another name and folder: served from the cache, no conversion.
+    copy = tmp_path / "elsewhere" / "renamed.dae"
+    copy.parent.mkdir()
+    shutil.copyfile(FINGER, copy)
+    with monkeypatch.context() as m:
+        m.setattr(meshes, "convert_to_glb", _no_conversion)
+        assert MeshCache(disk).asset(copy).data == glb
+
+    # Changed content: a new entry.
+    copy.write_bytes(FINGER.read_bytes().replace(b"0.2509804 0.2509804 0.2509804", b"1 0 0"))
+    changed = glb_json(MeshCache(disk).asset(copy).data)
+    assert [1.0, 0.0, 0.0, 1.0] in glb_base_colours(changed)
+    assert len(list((tmp_path / "cache").iterdir())) == 2
+
+    # A corrupt entry (one byte flipped, or truncated) is ignored and rewritten.
+    for damage in (lambda b: b[:-100] + bytes([b[-100] ^ 0xFF]) + b[-99:], lambda b: b[: len(b) // 2]):
+        entry.write_bytes(damage(entry.read_bytes()))
+        assert MeshCache(disk).asset(FINGER).data == glb
+        with monkeypatch.context() as m:
+            m.setattr(meshes, "convert_to_glb", _no_conversion)
+            assert MeshCache(disk).asset(FINGER).data == glb
+
+    # Deleting the whole folder is safe.
+    shutil.rmtree(tmp_path / "cache")
+    assert MeshCache(disk).asset(FINGER).data == glb
+    assert entry.exists()
+    assert not [p for p in (tmp_path / "cache").iterdir() if p.name.startswith(".tmp-")]
+
+
+def test_disk_cache_entry_is_stale_when_a_file_it_read_changed(tmp_path: Path) -> None:
+    disk = DiskCache(tmp_path)
+    key = "ab12"
+    disk.put(key, b"payload", {"texture.png": meshes.sha256(b"old texture")})
+    assert disk.get(key, lambda name: b"old texture") == b"payload"
+    assert disk.get(key, lambda name: b"new texture") is None
+    assert disk.get(key, lambda name: None) is None
+    with pytest.raises(ValueError):
+        disk.path("../escape")
+
+
+def test_unwritable_cache_folder_is_not_an_error(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    assert MeshCache(DiskCache(blocker / "cache")).asset(FINGER).media_type == "model/gltf-binary"
+
+
+def test_cache_folder_follows_xdg(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert default_cache_dir() == tmp_path / APP_DIR
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative/not/allowed")
+    assert default_cache_dir() == Path.home() / ".cache" / "r2d2-viz"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    assert default_cache_dir() == Path.home() / ".cache" / "r2d2-viz"
+    assert MeshCache().disk is not None and MeshCache().disk.directory == default_cache_dir()  # type: ignore[union-attr]
