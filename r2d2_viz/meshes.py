@@ -9,6 +9,8 @@ disk cache (:class:`DiskCache`) keyed by the file's content, so later runs skip 
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import io
 import re
 from collections import Counter
@@ -224,11 +226,14 @@ def _own_colors(suffix: str, data: bytes) -> bool:
 
 
 def _cache_key(suffix: str, data: bytes) -> str:
+    """sha256 of the file's bytes and of what shapes the conversion: a new version is a new key."""
+    versions = f"{CONVERTER_VERSION}|{_version('trimesh')}|{_version('pycollada')}|{suffix}\0"
+    digest = hashlib.sha256(versions.encode())
+    digest.update(data)
+    return digest.hexdigest()
 
-    versions = f"{CONVERTER_VERSION}|{_version('trimesh')}|{_version('pycollada')}|{suffix}"
-    return sha256(versions.encode() + b"\0" + data)
 
-
+@functools.cache
 def _version(distribution: str) -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -250,29 +255,36 @@ def shape_mesh(shape: Shape) -> TriangleMesh:
 
     Raises ``ValueError`` when a mesh file cannot be read (the caller skips that shape with a warning).
     """
+    geometry = shape.geometry
+    if isinstance(geometry, MeshFile):
+        vertices, normals, faces = _mesh_file(geometry)
+    elif isinstance(geometry, (Box, Cylinder, Sphere)):
+        vertices, normals, faces = _primitive(geometry)
+    else:  # pragma: no cover - the model only produces the four kinds above
+        raise TypeError(f"unknown geometry {geometry!r}")
+    R, t = shape.T_link_shape[:3, :3], shape.T_link_shape[:3, 3]
+    return TriangleMesh(
+        vertices=np.asarray(vertices @ R.T + t, dtype=np.float32),
+        normals=np.asarray(normals @ R.T, dtype=np.float32),
+        triangles=faces,
+    )
+
+
+Arrays = tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.uint32]]
+
+
+@functools.lru_cache(maxsize=1024)
+def _primitive(geometry: Box | Cylinder | Sphere) -> Arrays:
+    """Vertices, unit normals and triangles of a primitive in its own frame; one per distinct size (read-only)."""
     import trimesh
 
-    geometry = shape.geometry
     mesh: Any
     if isinstance(geometry, Box):
         mesh = trimesh.creation.box(extents=geometry.size)
     elif isinstance(geometry, Cylinder):
         mesh = trimesh.creation.cylinder(radius=geometry.radius, height=geometry.length, sections=CYLINDER_SECTIONS)
-    elif isinstance(geometry, Sphere):
+    else:
         mesh = trimesh.creation.icosphere(subdivisions=SPHERE_SUBDIVISIONS, radius=geometry.radius)
-    elif isinstance(geometry, MeshFile):
-        if geometry.path is None:
-            raise ValueError(f"mesh file {geometry.filename!r} not found")
-        try:
-            loaded = trimesh.load(geometry.path, force="mesh")
-        except Exception as exc:  # trimesh raises many kinds for unreadable files
-            raise ValueError(f"mesh file {geometry.filename!r} cannot be read: {exc}") from None
-        if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-            raise ValueError(f"mesh file {geometry.filename!r} holds no triangles")
-        mesh = loaded.copy()
-        mesh.apply_scale(geometry.scale)
-    else:  # pragma: no cover - the model only produces the four kinds above
-        raise TypeError(f"unknown geometry {geometry!r}")
     if isinstance(geometry, (Box, Cylinder)):
         # Flat faces keep sharp edges: one vertex per face corner. Cylinder walls get radial normals.
         mesh.unmerge_vertices()
@@ -283,11 +295,32 @@ def shape_mesh(shape: Shape) -> TriangleMesh:
             normals[wall] = radial / np.linalg.norm(radial, axis=1, keepdims=True)
     else:
         normals = np.asarray(mesh.vertex_normals)
-    R, t = shape.T_link_shape[:3, :3], shape.T_link_shape[:3, 3]
-    vertices = mesh.vertices @ R.T + t
-    normals = normals @ R.T
-    return TriangleMesh(
-        vertices=np.asarray(vertices, dtype=np.float32),
-        normals=np.asarray(normals, dtype=np.float32),
-        triangles=np.asarray(mesh.faces, dtype=np.uint32),
+    return _frozen(mesh.vertices, normals, mesh.faces)
+
+
+def _mesh_file(geometry: MeshFile) -> Arrays:
+    """A mesh file as one triangle soup (trimesh), scaled: for callers that need vertices, not for drawing."""
+    import trimesh
+
+    if geometry.path is None:
+        raise ValueError(f"mesh file {geometry.filename!r} not found")
+    try:
+        loaded = trimesh.load(geometry.path, force="mesh")
+    except Exception as exc:  # trimesh raises many kinds for unreadable files
+        raise ValueError(f"mesh file {geometry.filename!r} cannot be read: {exc}") from None
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise ValueError(f"mesh file {geometry.filename!r} holds no triangles")
+    mesh = loaded.copy()
+    mesh.apply_scale(geometry.scale)  # type: ignore[no-untyped-call]
+    return _frozen(mesh.vertices, mesh.vertex_normals, mesh.faces)
+
+
+def _frozen(vertices: Any, normals: Any, faces: Any) -> Arrays:
+    arrays = (
+        np.array(vertices, dtype=np.float64),
+        np.array(normals, dtype=np.float64),
+        np.array(faces, dtype=np.uint32),
     )
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays

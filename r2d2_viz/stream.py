@@ -35,10 +35,11 @@ import rerun as rr
 from rerun_bindings import send_arrow_chunk as _send_arrow_chunk
 
 from .kinematics import KinematicTree, link_positions, moving_values, transforms_from_values
-from .meshes import shape_mesh
+from .meshes import MeshCache
 from .model import Rgba, Shape
 from .motion import Motion, MotionChunk
 from .transforms import quat_to_matrix
+from .visuals import log_shape
 
 APP_ID = "r2d2_viz"
 TIMELINE = "time"
@@ -224,33 +225,10 @@ class RobotStream:
         )
 
     def _log_shape(self, entity: str, link: str, shape: Shape, visual: bool) -> None:
-        from .meshes import MeshCache  # wip-10m: temporary wiring until the lead's split
-        from .visuals import log_shape
-
+        # wip-10m: temporary wiring to r2d2_viz.visuals.log_shape until the lead's split of this module
         cache = self.__dict__.get("_mesh_cache") or self.__dict__.setdefault("_mesh_cache", MeshCache())
-        return log_shape(self.rec, entity, link, shape, visual=visual, cache=cache, warn=self._warn_source)
-
-    def _warn_source(self, message: str) -> None:
-        self.warn(f"{self.tree.robot.source}: {message}")
-
-    def _old_log_shape(self, entity: str, link: str, shape: Shape, visual: bool) -> None:
-        try:
-            mesh = shape_mesh(shape)
-        except ValueError as exc:
-            self.warn(f"{self.tree.robot.source}: link {link!r}: {exc}; shape skipped")
-            return
-        color = _rgba8(shape.rgba, DEFAULT_VISUAL_COLOR) if visual else COLLISION_COLOR
-        self.rec.log(
-            entity,
-            rr.CoordinateFrame(link),
-            rr.Mesh3D(
-                vertex_positions=mesh.vertices,
-                vertex_normals=mesh.normals,
-                triangle_indices=mesh.triangles,
-                albedo_factor=color,
-            ),
-            static=True,
-        )
+        source = self.tree.robot.source
+        log_shape(self.rec, entity, link, shape, visual=visual, cache=cache, warn=lambda m: self.warn(f"{source}: {m}"))
 
     # --- per frame ---------------------------------------------------------------------------------
 
