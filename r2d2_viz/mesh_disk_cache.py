@@ -84,20 +84,22 @@ class DiskCache:
 
 
 def _parse(raw: bytes) -> tuple[dict[str, str], bytes] | None:
+    """Dependencies and payload of an entry, or None unless it is whole (one copy: the payload's)."""
     if not raw.startswith(MAGIC):
         return None
-    rest = raw[len(MAGIC) :]
-    digest, newline, body = rest.partition(b"\n")
-    if not newline or sha256(body).encode() != digest:
+    digest_end = raw.find(b"\n", len(MAGIC))
+    body = digest_end + 1
+    if digest_end < 0 or hashlib.sha256(memoryview(raw)[body:]).hexdigest().encode() != raw[len(MAGIC) : digest_end]:
         return None
-    header, newline, payload = body.partition(b"\n")
+    header_end = raw.find(b"\n", body)
+    if header_end < 0:
+        return None
     try:
-        meta = json.loads(header)
-        dependencies = meta["dependencies"]
+        dependencies = json.loads(raw[body:header_end])["dependencies"]
     except (ValueError, KeyError, TypeError):
         return None
-    if not newline or not isinstance(dependencies, dict):
+    if not isinstance(dependencies, dict):
         return None
     if not all(isinstance(k, str) and isinstance(v, str) for k, v in dependencies.items()):
         return None
-    return dependencies, payload
+    return dependencies, raw[header_end + 1 :]
