@@ -26,7 +26,7 @@ from .model import Box, Cylinder, MeshFile, Shape, Sphere
 
 CYLINDER_SECTIONS = 48
 SPHERE_SUBDIVISIONS = 3
-CONVERTER_VERSION = 1
+CONVERTER_VERSION = 2
 """Bump when the conversion below changes what it writes: old cache entries are then never looked up."""
 
 GLB = "model/gltf-binary"
@@ -157,6 +157,12 @@ def convert_to_glb(path: Path, data: bytes) -> tuple[bytes, dict[str, str]]:
         unit = _collada_unit(data)
         if unit is not None and unit != 1.0:
             scene = scene.scaled(unit)  # RViz (assimp) scales COLLADA by its <unit meter="…">
+    for geometry in scene.geometry.values():
+        # trimesh writes extra vertex attributes (e.g. an OBJ's per-vertex "color") as custom glTF attributes
+        # ("_color"), which Rerun's glTF reader refuses outright: "invalid semantic name", nothing drawn.
+        attributes = getattr(geometry, "vertex_attributes", None)
+        if attributes:
+            attributes.clear()
     try:
         glb = scene.export(file_type="glb")
     except Exception as exc:  # trimesh raises many kinds for odd inputs

@@ -7,6 +7,7 @@ XML (ElementTree), the converted GLB's materials and primitives from its JSON ch
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import struct
 import sysconfig
@@ -182,3 +183,26 @@ def test_cache_folder_follows_xdg(monkeypatch: pytest.MonkeyPatch, tmp_path: Pat
     monkeypatch.delenv("XDG_CACHE_HOME")
     assert default_cache_dir() == Path.home() / ".cache" / "r2d2-viz"
     assert MeshCache().disk is not None and MeshCache().disk.directory == default_cache_dir()  # type: ignore[union-attr]
+
+
+LAIKAGO = ROBOTS / "laikago_description/meshes"
+GLTF_ATTRIBUTE = r"(POSITION|NORMAL|TANGENT|TEXCOORD_\d+|COLOR_\d+|JOINTS_\d+|WEIGHTS_\d+)"
+
+
+def test_obj_with_material_library_keeps_its_colours_in_a_glb_rerun_can_read() -> None:
+    cache = MeshCache(disk=None)
+    trunk = cache.asset(LAIKAGO / "trunk.obj")  # "mtllib trunk.mtl": Kd 1.0 0.4235 0.0392 (orange)
+    kd = [
+        [float(v) for v in line.split()[1:4]]
+        for line in (LAIKAGO / "trunk.mtl").read_text().splitlines()
+        if line.startswith("Kd ")
+    ]
+    assert trunk.media_type == "model/gltf-binary"
+    got = [c[:3] for c in glb_base_colours(glb_json(trunk.data))]
+    assert got and all(np.allclose(c, kd[0], atol=1 / 255) for c in got)
+    assert cache.reads[(LAIKAGO / "trunk.obj").resolve()] == 1
+    # hip.obj has per-vertex colours ("v x y z r g b"); trimesh would write them as a custom "_color"
+    # attribute, which Rerun's glTF reader refuses ("invalid semantic name"), dropping the whole mesh.
+    hip = glb_json(cache.asset(LAIKAGO / "hip.obj").data)
+    names = {name for mesh in hip["meshes"] for p in mesh["primitives"] for name in p["attributes"]}
+    assert "POSITION" in names and all(re.fullmatch(GLTF_ATTRIBUTE, name) for name in names), names
