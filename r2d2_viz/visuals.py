@@ -17,12 +17,15 @@ import functools
 from collections.abc import Callable
 
 import numpy as np
+import pyarrow as pa
 import rerun as rr
 
 from .meshes import Asset, MeshCache, shape_mesh
 from .model import MeshFile, Rgba, Shape
 from .transforms import matrix_to_quat
 
+BLOB_TYPE = pa.list_(pa.field("item", pa.uint8(), nullable=False))
+"""Arrow type of ``rerun.components.Blob``: an array of exactly this type is taken as it is, without a copy."""
 COLLISION_COLOR = (255, 140, 0, 160)
 DEFAULT_VISUAL_COLOR = (204, 204, 204, 255)
 
@@ -73,8 +76,11 @@ def shape_archetypes(link: str, shape: Shape, *, visual: bool, cache: MeshCache)
 
 @functools.lru_cache(maxsize=256)
 def _blob(asset: Asset) -> rr.components.BlobBatch:
-    """The asset's bytes as Arrow once per file, however many shapes draw it (the conversion copies them)."""
-    return rr.components.BlobBatch(asset.data)
+    """The asset's bytes as one Arrow blob, built once per file and without copying them (Rerun's own conversion
+    copies every byte through numpy, every time a shape logs the file)."""
+    values = pa.Array.from_buffers(pa.uint8(), len(asset.data), [None, pa.py_buffer(asset.data)])
+    offsets = pa.array([0, len(asset.data)], type=pa.int32())
+    return rr.components.BlobBatch(pa.ListArray.from_arrays(offsets, values, type=BLOB_TYPE))
 
 
 def log_shape(

@@ -112,6 +112,8 @@ def test_undrawable_shapes_warn_once_each_and_log_nothing(tmp_path: Path) -> Non
     log_shape(rec, "/a", "base", missing, visual=True, cache=cache, warn=warnings.append)
     log_shape(rec, "/b", "arm", unsupported, visual=True, cache=cache, warn=warnings.append)
     log_shape(rec, "/c", "box", Shape(geometry=Box((1.0, 2.0, 3.0))), visual=True, cache=cache, warn=warnings.append)
+    stl = Shape(geometry=MeshFile("pelvis.STL", G1_PELVIS))
+    log_shape(rec, "/d", "pelvis", stl, visual=True, cache=cache, warn=warnings.append)
     rec.flush()
     rec.disconnect()
     assert warnings == [
@@ -121,6 +123,9 @@ def test_undrawable_shapes_warn_once_each_and_log_nothing(tmp_path: Path) -> Non
     ]
     recording = read_recording(tmp_path / "x.rrd")
     assert "/a" not in recording and "/b" not in recording
+    # an STL reaches the viewer byte for byte
+    assert bytes(recording["/d"].static["Asset3D:blob"][-1][0]) == G1_PELVIS.read_bytes()
+    assert recording["/d"].static["Asset3D:media_type"][-1] == ["model/stl"]
     # primitives stay small Mesh3D with their origin baked in (a 1 x 2 x 3 box spans ±0.5, ±1, ±1.5)
     positions = np.array(recording["/c"].static["Mesh3D:vertex_positions"][-1])
     assert np.allclose(positions.min(axis=0), [-0.5, -1, -1.5]) and np.allclose(positions.max(axis=0), [0.5, 1, 1.5])
