@@ -128,6 +128,12 @@ def main(argv: list[str] | None = None) -> int:
         floors = {
             "import floor, ours (python -c 'import r2d2_viz.cli, rerun')": [PY, "-c", "import r2d2_viz.cli, rerun"],
             "import floor, Rerun (python -c 'import rerun')": [PY, "-c", "import rerun"],
+            # what ours would be without yourdfpy, which imports trimesh and scipy at start-up
+            "import floor, ours without yourdfpy (python -c 'import rerun, numpy, pyarrow, lxml.etree')": [
+                PY,
+                "-c",
+                "import rerun, numpy, pyarrow, lxml.etree",
+            ],
         }
         rows: list[str] = []
         rows_in: list[str] = []
