@@ -112,13 +112,15 @@ class MeshCache:
 
 
 def _recording_resolver(source: Path) -> Any:
-    """A trimesh resolver for textures and material files next to the mesh (never outside its folder) that notes
+    """A trimesh resolver for the textures and material files a mesh names, relative to its folder, that notes
     the sha256 of each file it reads in ``.read``."""
     import trimesh
 
     class RecordingResolver(trimesh.resolvers.FilePathResolver):
         def __init__(self) -> None:
-            super().__init__(str(source))
+            # "../textures/x.png" is common in ROS packages and RViz follows it; a URDF can name any mesh file
+            # anyway, and what is read only reaches the user's own viewer.
+            super().__init__(str(source), allow_anywhere=True)
             self.read: dict[str, str] = {}
 
         def get(self, name: str) -> bytes:
@@ -133,7 +135,7 @@ def _dependency(path: Path, name: str) -> bytes | None:
     import trimesh
 
     try:
-        data: bytes = trimesh.resolvers.FilePathResolver(str(path)).get(name)
+        data: bytes = trimesh.resolvers.FilePathResolver(str(path), allow_anywhere=True).get(name)
     except Exception:  # missing, outside the folder, unreadable: the cache entry is stale
         return None
     return data

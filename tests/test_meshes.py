@@ -206,3 +206,35 @@ def test_obj_with_material_library_keeps_its_colours_in_a_glb_rerun_can_read() -
     hip = glb_json(cache.asset(LAIKAGO / "hip.obj").data)
     names = {name for mesh in hip["meshes"] for p in mesh["primitives"] for name in p["attributes"]}
     assert "POSITION" in names and all(re.fullmatch(GLTF_ATTRIBUTE, name) for name in names), names
+
+
+ANYMAL_BASE = ROBOTS / "anymal_b_simple_description/meshes/base"  # anymal_base.dae + base_uv_texture.jpg
+
+
+def test_textures_are_embedded_and_a_changed_texture_invalidates_the_cache_entry(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    base = tmp_path / "base"
+    shutil.copytree(ANYMAL_BASE, base)
+    dae = base / "anymal_base.dae"
+    root = ET.parse(dae).getroot()
+    images = [e.text for e in root.iterfind(".//c:library_images/c:image/c:init_from", NS)]
+    assert images == ["base_uv_texture.jpg"]
+    disk = DiskCache(tmp_path / "cache")
+    doc = glb_json(MeshCache(disk).asset(dae).data)
+    assert len(doc.get("images", [])) == 1
+    textured = [m for m in doc["materials"] if "baseColorTexture" in m.get("pbrMetallicRoughness", {})]
+    assert textured
+
+    calls: list[Path] = []
+
+    def counting(path: Path, data: bytes) -> tuple[bytes, dict[str, str]]:
+        calls.append(path)
+        return b"glTF", {}
+
+    monkeypatch.setattr(meshes, "convert_to_glb", counting)
+    MeshCache(disk).asset(dae)
+    assert calls == []  # texture unchanged: the entry is used
+    (base / "base_uv_texture.jpg").write_bytes(b"another texture")
+    MeshCache(disk).asset(dae)
+    assert calls == [dae.resolve()]
