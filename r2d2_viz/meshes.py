@@ -12,7 +12,9 @@ from __future__ import annotations
 import functools
 import hashlib
 import io
+import json
 import re
+import struct
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -98,11 +100,11 @@ class MeshCache:
         if self.disk is not None:
             glb = self.disk.get(key, lambda name: _dependency(path, name))
             if glb is not None:
-                return Asset(glb, GLB, own_colors=True)
+                return Asset(glb, GLB, own_colors=glb_has_colours(glb))
         glb, dependencies = convert_to_glb(path, data)
         if self.disk is not None:
             self.disk.put(key, glb, dependencies)
-        return Asset(glb, GLB, own_colors=True)
+        return Asset(glb, GLB, own_colors=glb_has_colours(glb))
 
 
 # --- conversion ---------------------------------------------------------------------------------------
@@ -221,9 +223,20 @@ def _obj_material_libraries(data: bytes) -> bool:
     return re.search(rb"^\s*mtllib\s", data, re.MULTILINE) is not None
 
 
+def glb_has_colours(glb: bytes) -> bool:
+    """Whether a GLB carries materials or vertex colours (else the viewer draws it in one default colour)."""
+    try:
+        magic, _, _, length, kind = struct.unpack_from("<4sIII4s", glb)
+        doc = json.loads(glb[20 : 20 + length]) if magic == b"glTF" and kind == b"JSON" else {}
+        primitives = [p for m in doc.get("meshes", []) for p in m.get("primitives", [])]
+        return bool(doc.get("materials")) or any("COLOR_0" in p.get("attributes", {}) for p in primitives)
+    except (struct.error, ValueError, AttributeError, TypeError):  # not a GLB we can read: say "no colours"
+        return False
+
+
 def _own_colors(suffix: str, data: bytes) -> bool:
     if suffix == ".glb":
-        return True
+        return glb_has_colours(data)
     if suffix == ".ply":
         header = data[: data.find(b"end_header")] if b"end_header" in data[:4096] else b""
         return re.search(rb"property\s+\w+\s+(red|diffuse_red)\b", header) is not None

@@ -238,3 +238,13 @@ def test_textures_are_embedded_and_a_changed_texture_invalidates_the_cache_entry
     (base / "base_uv_texture.jpg").write_bytes(b"another texture")
     MeshCache(disk).asset(dae)
     assert calls == [dae.resolve()]
+
+
+def test_a_dae_without_materials_counts_as_colourless() -> None:
+    # kinova's jaco_mounting_block.dae has no <library_materials> / <library_effects> (checked by hand here),
+    # so a URDF without <material> shows it in the default grey rather than the viewer's own default.
+    block = ROBOTS / "kinova_description/meshes/jaco_mounting_block.dae"
+    root = ET.parse(block).getroot()
+    assert root.find(".//c:material", NS) is None and root.find(".//c:effect", NS) is None
+    assert not MeshCache(disk=None).asset(block).own_colors
+    assert MeshCache(disk=None).asset(FINGER).own_colors
