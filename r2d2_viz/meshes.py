@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from . import primitives
 from .mesh_disk_cache import DiskCache, sha256
 from .model import Box, Cylinder, MeshFile, Shape, Sphere
 
@@ -297,26 +298,11 @@ Arrays = tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.
 @functools.lru_cache(maxsize=1024)
 def _primitive(geometry: Box | Cylinder | Sphere) -> Arrays:
     """Vertices, unit normals and triangles of a primitive in its own frame; one per distinct size (read-only)."""
-    import trimesh
-
-    mesh: Any
     if isinstance(geometry, Box):
-        mesh = trimesh.creation.box(extents=geometry.size)
-    elif isinstance(geometry, Cylinder):
-        mesh = trimesh.creation.cylinder(radius=geometry.radius, height=geometry.length, sections=CYLINDER_SECTIONS)
-    else:
-        mesh = trimesh.creation.icosphere(subdivisions=SPHERE_SUBDIVISIONS, radius=geometry.radius)
-    if isinstance(geometry, (Box, Cylinder)):
-        # Flat faces keep sharp edges: one vertex per face corner. Cylinder walls get radial normals.
-        mesh.unmerge_vertices()
-        normals = np.repeat(mesh.face_normals, 3, axis=0)[np.argsort(mesh.faces.reshape(-1))]
-        if isinstance(geometry, Cylinder):
-            wall = np.abs(normals[:, 2]) < 0.5
-            radial = mesh.vertices[wall] * [1.0, 1.0, 0.0]
-            normals[wall] = radial / np.linalg.norm(radial, axis=1, keepdims=True)
-    else:
-        normals = np.asarray(mesh.vertex_normals)
-    return _frozen(mesh.vertices, normals, mesh.faces)
+        return _frozen(*primitives.box(geometry.size))
+    if isinstance(geometry, Cylinder):
+        return _frozen(*primitives.cylinder(geometry.radius, geometry.length, CYLINDER_SECTIONS))
+    return _frozen(*primitives.sphere(geometry.radius, SPHERE_SUBDIVISIONS))
 
 
 def _mesh_file(geometry: MeshFile) -> Arrays:
