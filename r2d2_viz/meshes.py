@@ -150,6 +150,10 @@ def convert_to_glb(path: Path, data: bytes) -> tuple[bytes, dict[str, str]]:
     Raises ``ValueError`` when the file holds no triangles or cannot be parsed.
     """
     file_type = CONVERTED[path.suffix.lower()]
+    if file_type == "dae" and re.search(rb"<!(DOCTYPE|ENTITY)", data[: max(data.find(b"<COLLADA"), 0)]):
+        # pycollada parses with entity expansion on and lxml's size limits off: a DTD could read other files
+        # into the mesh or blow up ("billion laughs"). COLLADA needs none.
+        raise ValueError("declares a DTD or entities, which COLLADA files do not need; refused")
     resolver = _recording_resolver(path)
     scene = _load_scene(data, file_type, resolver)
     if file_type == "dae" and not _has_triangles(scene) and b"<instance_material" in data:

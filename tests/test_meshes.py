@@ -221,3 +221,19 @@ def test_a_dae_without_materials_counts_as_colourless() -> None:
     assert root.find(".//c:material", NS) is None and root.find(".//c:effect", NS) is None
     assert not MeshCache(disk=None).asset(block).own_colors
     assert MeshCache(disk=None).asset(FINGER).own_colors
+
+
+def test_hostile_collada_with_entities_is_refused_quickly(tmp_path: Path) -> None:
+    finger = FINGER.read_text()
+    header, _, rest = finger.partition("<COLLADA")
+    # 10**6 "lol"s: harmless if it were ever expanded, so without the refusal the test fails instead of hanging
+    laughs = "".join(f'<!ENTITY l{i} "{f"&l{i - 1};" * 10 if i else "lol"}">' for i in range(7))
+    variants = {
+        "laughs": (f"<!DOCTYPE c [{laughs}]>", "&l6;"),
+        "file": ('<!DOCTYPE c [<!ENTITY x SYSTEM "file:///etc/hostname">]>', "&x;"),
+    }
+    for name, (dtd, reference) in variants.items():
+        hostile = tmp_path / f"{name}.dae"
+        hostile.write_text(header + dtd + "<COLLADA" + rest.replace("<author>", f"<author>{reference}", 1))
+        with pytest.raises(ValueError, match=r"declares a DTD or entities"):
+            MeshCache(disk=None).asset(hostile)
