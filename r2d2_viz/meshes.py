@@ -13,6 +13,7 @@ import functools
 import hashlib
 import io
 import json
+import os
 import re
 import struct
 from collections import Counter
@@ -32,6 +33,7 @@ SPHERE_SUBDIVISIONS = 3
 CONVERTER_VERSION = 3
 """Bump when the conversion below changes what it writes: old cache entries are then never looked up."""
 
+MAX_MESH_BYTES = 1 << 30
 GLB = "model/gltf-binary"
 AS_IS = {".stl": "model/stl", ".ply": "application/x-ply", ".glb": GLB, ".obj": "model/obj"}
 """Formats the viewer reads completely from the file's own bytes (OBJ only without a material library)."""
@@ -74,7 +76,7 @@ class MeshCache:
         key = Path(path).resolve()
         if key not in self._assets:
             try:
-                self._assets[key] = self._load(key)
+                self._assets[key] = self._load(key, Path(path).suffix.lower())  # symlinks: the name's suffix
             except ValueError as exc:
                 self._assets[key] = str(exc)
         found = self._assets[key]
@@ -85,12 +87,15 @@ class MeshCache:
     def read(self, path: Path) -> bytes:
         self.reads[path] += 1
         try:
+            if not path.is_file():  # /dev/zero, a FIFO, a folder: never read
+                raise ValueError("is not a regular file")
+            if path.stat().st_size > MAX_MESH_BYTES:
+                raise ValueError(f"is larger than {MAX_MESH_BYTES >> 20} MiB")
             return path.read_bytes()
         except OSError as exc:
             raise ValueError(f"cannot be read: {exc.strerror or exc}") from None
 
-    def _load(self, path: Path) -> Asset:
-        suffix = path.suffix.lower()
+    def _load(self, path: Path, suffix: str) -> Asset:
         if suffix not in AS_IS and suffix not in CONVERTED:
             kind = suffix or "(no extension)"
             raise ValueError(f"has an unsupported format {kind!r} (STL, OBJ, DAE, GLB, GLTF, PLY)")
@@ -102,7 +107,7 @@ class MeshCache:
             glb = self.disk.get(key, lambda name: _dependency(path, name))
             if glb is not None:
                 return Asset(glb, GLB, own_colors=glb_has_colours(glb))
-        glb, dependencies = convert_to_glb(path, data)
+        glb, dependencies = convert_to_glb(path, data, suffix)
         if self.disk is not None:
             self.disk.put(key, glb, dependencies)
         return Asset(glb, GLB, own_colors=glb_has_colours(glb))
@@ -127,7 +132,7 @@ def _recording_resolver(source: Path) -> Any:
             self.read: dict[str, str] = {}
 
         def get(self, name: str) -> bytes:
-            data: bytes = super().get(name)
+            data = _read_beside(self, name)
             self.read[name] = sha256(data)
             return data
 
@@ -138,18 +143,37 @@ def _dependency(path: Path, name: str) -> bytes | None:
     import trimesh
 
     try:
-        data: bytes = trimesh.resolvers.FilePathResolver(str(path), allow_anywhere=True).get(name)
-    except Exception:  # missing, outside the folder, unreadable: the cache entry is stale
+        data = _read_beside(trimesh.resolvers.FilePathResolver(str(path), allow_anywhere=True), name)
+    except Exception:  # missing, unreadable: the cache entry is stale
         return None
     return data
 
 
-def convert_to_glb(path: Path, data: bytes) -> tuple[bytes, dict[str, str]]:
+MAX_DEPENDENCY_BYTES = 512 * 1024 * 1024
+
+
+def _read_beside(resolver: Any, name: str) -> bytes:
+    """What trimesh's ``FilePathResolver.get`` reads for ``name``, but only regular files of sane size: a texture
+    named ``/dev/zero`` would otherwise be read forever."""
+    name = str(name)
+    for candidate in (name.strip(), name.strip().lstrip("/"), os.path.split(name)[-1]):
+        try:
+            path = Path(resolver.absolute(candidate))
+        except ValueError:
+            continue
+        if path.exists():
+            if not path.is_file() or path.stat().st_size > MAX_DEPENDENCY_BYTES:
+                raise FileNotFoundError(f"{name} is not a regular file of at most {MAX_DEPENDENCY_BYTES} bytes")
+            return path.read_bytes()
+    raise FileNotFoundError(name)
+
+
+def convert_to_glb(path: Path, data: bytes, suffix: str | None = None) -> tuple[bytes, dict[str, str]]:
     """One GLB with the file's colours, materials and textures; and sha256 of each other file it read.
 
     Raises ``ValueError`` when the file holds no triangles or cannot be parsed.
     """
-    file_type = CONVERTED[path.suffix.lower()]
+    file_type = CONVERTED[suffix or path.suffix.lower()]
     if file_type == "dae" and re.search(rb"<!(DOCTYPE|ENTITY)", data[: max(data.find(b"<COLLADA"), 0)]):
         # pycollada parses with entity expansion on and lxml's size limits off: a DTD could read other files
         # into the mesh or blow up ("billion laughs"). COLLADA needs none.

@@ -201,7 +201,7 @@ def test_textures_are_embedded_and_a_changed_texture_invalidates_the_cache_entry
 
     calls: list[Path] = []
 
-    def counting(path: Path, data: bytes) -> tuple[bytes, dict[str, str]]:
+    def counting(path: Path, data: bytes, suffix: str | None = None) -> tuple[bytes, dict[str, str]]:
         calls.append(path)
         return b"glTF", {}
 
@@ -237,3 +237,15 @@ def test_hostile_collada_with_entities_is_refused_quickly(tmp_path: Path) -> Non
         hostile.write_text(header + dtd + "<COLLADA" + rest.replace("<author>", f"<author>{reference}", 1))
         with pytest.raises(ValueError, match=r"declares a DTD or entities"):
             MeshCache(disk=None).asset(hostile)
+
+
+def test_device_files_are_never_read(tmp_path: Path) -> None:
+    zero_stl = tmp_path / "zero.stl"
+    zero_stl.symlink_to("/dev/zero")
+    with pytest.raises(ValueError, match=r"is not a regular file"):
+        MeshCache(disk=None).asset(zero_stl)
+    # an OBJ whose material library names /dev/zero as its texture: converted without it, not read forever
+    shutil.copyfile(LAIKAGO / "trunk.obj", tmp_path / "trunk.obj")
+    mtl = (LAIKAGO / "trunk.mtl").read_text().replace("Kd 1.0", "map_Kd /dev/zero\nKd 1.0", 1)
+    (tmp_path / "trunk.mtl").write_text(mtl)
+    assert MeshCache(disk=None).asset(tmp_path / "trunk.obj").media_type == "model/gltf-binary"
