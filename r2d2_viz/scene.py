@@ -5,7 +5,8 @@
 * ``/tf_arrows/<child>`` — an arrow from each child frame's origin to its parent's (RViz TF "Show Arrows"),
   static in the parent frame, for every joint that does not move its child's origin (all but prismatic);
 * ``/tf_axes/<frame>`` — ``TransformAxes3D`` for every frame (RViz TF "Show Axes"; names off);
-* ``/robot/visual/<link>/<i>``, ``/robot/collision/<link>/<i>`` — the link's shapes in its named frame.
+* ``/robot/visual/<link>/<i>``, ``/robot/collision/<link>/<i>`` — the link's shapes in its named frame
+  (:mod:`r2d2_viz.visuals`: ``Mesh3D`` for boxes, cylinders and spheres, ``Asset3D`` for mesh files).
 """
 
 from __future__ import annotations
@@ -16,14 +17,12 @@ import rerun as rr
 from . import entities
 from .arrays import F64
 from .kinematics import PRISMATIC, KinematicTree
-from .meshes import shape_mesh
-from .model import Rgba, Shape
+from .meshes import MeshCache
 from .notices import Notices
 from .view_fit import AXIS_LENGTH
+from .visuals import log_shape
 
 ARROW_COLOR = (255, 0, 255)
-COLLISION_COLOR = (255, 140, 0, 160)
-DEFAULT_VISUAL_COLOR = (204, 204, 204, 255)
 
 
 def log_scene(
@@ -75,18 +74,16 @@ def log_scene(
             static=True,
         )
 
+    meshes = MeshCache()  # each mesh file read (and converted) once, however many links use it
+
+    def warn(message: str) -> None:
+        notices.report(f"{robot.source}: {message}")
+
     for link in robot.links:
         for kind, shapes in (("visual", link.visuals), ("collision", link.collisions)):
             for i, shape in enumerate(shapes):
-                _log_shape(
-                    rec,
-                    entities.robot_shape(kind, link.name, i),
-                    link.name,
-                    shape,
-                    kind == "visual",
-                    notices,
-                    robot.source,
-                )
+                entity = entities.robot_shape(kind, link.name, i)
+                log_shape(rec, entity, link.name, shape, visual=kind == "visual", cache=meshes, warn=warn)
 
 
 def _log_arrow(rec: rr.RecordingStream, parent: str, child: str, t_parent_child: F64) -> None:
@@ -96,33 +93,5 @@ def _log_arrow(rec: rr.RecordingStream, parent: str, child: str, t_parent_child:
         entities.tf_arrow(child),
         rr.CoordinateFrame(parent),
         rr.Arrows3D(origins=[t_parent_child], vectors=[-np.asarray(t_parent_child)], colors=[ARROW_COLOR]),
-        static=True,
-    )
-
-
-def _rgba8(rgba: Rgba | None, default: tuple[int, ...]) -> tuple[int, ...]:
-    if rgba is None:
-        return default
-    return tuple(round(min(max(c, 0.0), 1.0) * 255) for c in rgba)
-
-
-def _log_shape(
-    rec: rr.RecordingStream, entity: str, link: str, shape: Shape, visual: bool, notices: Notices, source: str
-) -> None:
-    try:
-        mesh = shape_mesh(shape)
-    except ValueError as exc:
-        notices.report(f"{source}: link {link!r}: {exc}; shape skipped")
-        return
-    color = _rgba8(shape.rgba, DEFAULT_VISUAL_COLOR) if visual else COLLISION_COLOR
-    rec.log(
-        entity,
-        rr.CoordinateFrame(link),
-        rr.Mesh3D(
-            vertex_positions=mesh.vertices,
-            vertex_normals=mesh.normals,
-            triangle_indices=mesh.triangles,
-            albedo_factor=color,
-        ),
         static=True,
     )
