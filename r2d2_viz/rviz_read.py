@@ -54,6 +54,12 @@ class Reader:
             raise RvizError(f"{self.source}: {where} / {key}: expected true or false, got {value!r}")
         return value
 
+    def enabled(self, display: Mapping[str, Any], where: str) -> bool:
+        """A display's checkbox: ``Enabled`` (ROS 2 and newer ROS 1 configs), else ``Value`` (older ROS 1)."""
+        if "Enabled" in display:
+            return self.flag(display, "Enabled", True, where)
+        return self.flag(display, "Value", True, where)
+
     def text(self, node: Mapping[str, Any], key: str, default: str, where: str) -> str:
         value = node.get(key, default)
         if value is None:
@@ -106,7 +112,7 @@ class Reader:
                 robot = self.robot(display, where)
             elif kind in TOPIC_DISPLAYS:
                 topic = self.text(display, "Topic", "", where) or self.text(display, "Image Topic", "", where)
-                enabled = self.flag(display, "Enabled", True, where)
+                enabled = self.enabled(display, where)
                 topics.append(TopicDisplay(kind, str(display.get("Name", kind)), topic, enabled))
                 if kind in UNSHOWN_BY_RERUN:
                     self.note(
@@ -135,7 +141,7 @@ class Reader:
                 raise RvizError(f"{self.source}: {where}: a display is not a mapping")
             here = f"{where} / {item.get('Name', item.get('Class', '?'))}"
             if short_class(item.get("Class")) == "Group":
-                enabled = self.flag(item, "Enabled", True, here)
+                enabled = self.enabled(item, here)
                 for inner, inner_where in self.displays(item.get("Displays") or [], here):
                     yield ({**inner, "Enabled": False} if not enabled else inner), inner_where
             else:
@@ -154,7 +160,7 @@ class Reader:
         if reference not in (FIXED, fixed):
             self.note(f"Grid / Reference Frame {reference}: Rerun's grid lies in the view's frame ({fixed})")
         return Grid(
-            enabled=self.flag(d, "Enabled", True, where),
+            enabled=self.enabled(d, where),
             cell_size=self.number(d, "Cell Size", 1.0, where),
             color=self.color(d, "Color", (160, 160, 164), where),
             alpha=min(1.0, max(0.0, self.number(d, "Alpha", 0.5, where))),
@@ -169,7 +175,7 @@ class Reader:
         if isinstance(frames, dict):
             hidden = tuple(sorted(k for k, v in frames.items() if isinstance(v, dict) and v.get("Value") is False))
         return Tf(
-            enabled=self.flag(d, "Enabled", True, where),
+            enabled=self.enabled(d, where),
             show_axes=self.flag(d, "Show Axes", True, where),
             show_arrows=self.flag(d, "Show Arrows", True, where),
             show_names=self.flag(d, "Show Names", False, where),
@@ -186,7 +192,7 @@ class Reader:
         if alpha < 1:
             self.note(f"RobotModel / Alpha {alpha:g}: shown opaque (the URDF colours' alpha applies)")
         return RobotModel(
-            enabled=self.flag(d, "Enabled", True, where),
+            enabled=self.enabled(d, where),
             visual=self.flag(d, "Visual Enabled", True, where),
             collision=self.flag(d, "Collision Enabled", False, where),
             alpha=alpha,

@@ -1,0 +1,173 @@
+"""RViz configs from public robot repositories (tests/data/rviz, with their licences) converted to layouts.
+
+Expected values are read off each file by hand; camera positions use RViz's own formulas (rviz_default_plugins:
+OrbitViewController::calculatePositionFromYawAndPitch; FixedOrientationOrthoViewController), written out here."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from conftest import REPO, SHARED_REFERENCE, cli
+from rrd import blueprint_components
+
+from r2d2_viz.blueprint import generate_blueprint, tutorial_spec
+from r2d2_viz.rviz import RvizError, load_rviz, parse_rviz
+
+DATA = REPO / "tests" / "data" / "rviz"
+
+
+def _orbit(focal, d, yaw, pitch):
+    return (
+        focal[0] + d * math.cos(yaw) * math.cos(pitch),
+        focal[1] + d * math.sin(yaw) * math.cos(pitch),
+        focal[2] + d * math.sin(pitch),
+    )
+
+
+def _blueprint(spec, tmp_path: Path, **kwargs) -> dict:
+    path = tmp_path / "converted.rbl"
+    generate_blueprint(spec, **kwargs).save("r2d2_viz", path)
+    return blueprint_components(path)
+
+
+def _scene(components: dict) -> str:
+    (view,) = [p for p, c in components.items() if c.get("ViewBlueprint:class_identifier") == ["3D"]]
+    return view
+
+
+def _hidden(components: dict, view: str) -> set[str]:
+    prefix = f"{view}/ViewContents/overrides"
+    return {
+        p[len(prefix) : -len("/visualizers")]
+        for p, c in components.items()
+        if p.startswith(prefix) and c.get("EntityBehavior:visible") == [False]
+    }
+
+
+def test_the_built_in_layout_is_the_tutorials_config(tmp_path: Path) -> None:
+    shipped = load_rviz(REPO / "assets" / "r2d2.rviz")
+    reference = load_rviz(SHARED_REFERENCE / "r2d2.rviz")
+    assert (REPO / "assets" / "r2d2.rviz").read_bytes() == (SHARED_REFERENCE / "r2d2.rviz").read_bytes()
+    assert tutorial_spec() == shipped
+    assert _blueprint(reference, tmp_path) == blueprint_components(REPO / "blueprints" / "r2d2.rbl")
+    # what it has no counterpart for: its eight tools and four panels, and the grid's cell count
+    assert sum("tool rviz_default_plugins/" in n for n in reference.notes) == 8
+    assert sum("panel rviz_common/" in n for n in reference.notes) == 4
+    assert any("Plane Cell Count 10" in n for n in reference.notes)
+
+
+def test_turtlebot3_model_ros2_orbit(tmp_path: Path) -> None:
+    spec = load_rviz(DATA / "turtlebot3_model.rviz")
+    assert spec.fixed_frame == "odom" and spec.background == (48, 48, 48)
+    focal = (-0.09679540991783142, -0.015412976033985615, -0.08031613379716873)
+    assert spec.camera is not None and spec.camera.kind == "Orbit" and spec.camera.target == pytest.approx(focal)
+    assert spec.camera.eye == pytest.approx(_orbit(focal, 7.944110870361328, 3.1454057693481445, 1.5697963237762451))
+    assert [(t.kind, t.topic, t.enabled) for t in spec.topics] == [
+        ("LaserScan", "/scan", True),
+        ("Odometry", "/odom", True),
+    ]
+    assert any("LaserScan" in n and "cannot draw" in n for n in spec.notes)
+    components = _blueprint(spec, tmp_path)
+    view = _scene(components)
+    assert components[f"{view}/SpatialInformation"]["SpatialInformation:target_frame"] == ["odom"]
+    eye = components[f"{view}/EyeControls3D"]
+    assert eye["EyeControls3D:position"][0] == pytest.approx(spec.camera.eye, abs=1e-5)
+
+
+def test_turtlebot3_navigation_ros1_top_down(tmp_path: Path) -> None:
+    spec = load_rviz(DATA / "turtlebot3_navigation_ros1.rviz")
+    assert spec.fixed_frame == "map"
+    # TopDownOrtho at X 0, Y 0, Scale 100 px/m, Angle −π/2: straight down from the height that shows 800 px of
+    # it (8 m) in a 45° view, the image's up turned by the angle: (−sin a, cos a, 0) = (1, 0, 0)
+    height = (800 / 100 / 2) / math.tan(math.radians(22.5))
+    assert spec.camera is not None and spec.camera.eye == pytest.approx((0, 0, height))
+    assert spec.camera.target == pytest.approx((0, 0, 0)) and spec.camera.up == pytest.approx((1, 0, 0), abs=1e-7)
+    assert spec.tf is not None and not spec.tf.enabled  # TF "Enabled: false"
+    topics = {t.topic: t for t in spec.topics}
+    assert not topics["/raspicam_node/image"].enabled and topics["/scan"].enabled
+    assert {"/move_base/DWAPlannerROS/global_plan", "/move_base/local_costmap/footprint"} <= set(topics)  # in groups
+    assert any("panel rviz/Time" in n for n in spec.notes) and any("tool rviz/SetGoal" in n for n in spec.notes)
+    components = _blueprint(spec, tmp_path)
+    hidden = _hidden(components, _scene(components))
+    assert {"/tf_axes", "/tf_arrows", "/tf", "/raspicam_node/image", "/robot/collision"} <= hidden
+
+
+def test_nav2_default_view_names_plugins_it_cannot_show() -> None:
+    spec = load_rviz(DATA / "nav2_default_view.rviz")
+    assert spec.fixed_frame == "map"
+    height = (800 / 54 / 2) / math.tan(math.radians(22.5))
+    assert spec.camera is not None and spec.camera.eye == pytest.approx((-5.409999847412109, 0, height))
+    assert any("display nav2_rviz_plugins/ParticleCloud: no counterpart" in n for n in spec.notes)
+    assert any("panel nav2_rviz_plugins/Navigation 2" in n for n in spec.notes)
+    assert any("tool nav2_rviz_plugins/GoalTool" in n for n in spec.notes)
+    assert len(spec.notes) == len(set(spec.notes))  # one line each
+
+
+def test_turtlebot3_navigation2_and_urdf_tutorial_ros1() -> None:
+    nav = load_rviz(DATA / "turtlebot3_navigation2.rviz")
+    assert nav.fixed_frame == "map" and nav.camera is not None
+    tutorial = load_rviz(DATA / "urdf_tutorial_ros1_urdf.rviz")
+    assert tutorial.fixed_frame == "base_link"
+    assert tutorial.tf is not None and not tutorial.tf.enabled  # ROS 1's "Value: false" is the checkbox
+    assert tutorial.camera is not None and tutorial.camera.eye == pytest.approx(_orbit((0, 0, 0), 1.7, 5.5, 0.33))
+    assert any("Alpha 0.8" in n for n in tutorial.notes)
+
+
+@pytest.mark.parametrize(
+    ("text", "problem"),
+    [
+        ("Panels: [\n  - {", "not YAML"),
+        ("- just\n- a list\n", "not an RViz config"),
+        ("Visualization Manager: 3\n", "no 'Visualization Manager'"),
+        ("Visualization Manager:\n  Views:\n    Current:\n      Class: rviz/Orbit\n      Distance: far\n", "Distance"),
+        ("Visualization Manager:\n  Displays:\n    - Class: rviz/Grid\n      Enabled: maybe\n", "Enabled"),
+        ("Visualization Manager:\n  Displays: 7\n", "list of displays"),
+        ("Visualization Manager:\n  Global Options:\n    Background Color: red\n", "Background Color"),
+        ("!!python/object/apply:os.system ['touch PWNED']\n", "not YAML"),
+    ],
+)
+def test_bad_configs_are_one_line(text: str, problem: str, tmp_path: Path) -> None:
+    with pytest.raises(RvizError) as info:
+        parse_rviz(text, source="bad.rviz")
+    message = str(info.value)
+    assert message.startswith("bad.rviz: ") and problem in message and "\n" not in message
+    assert not (tmp_path / "PWNED").exists() and not Path("PWNED").exists()
+
+
+def test_a_huge_config_is_refused_before_it_is_read(tmp_path: Path) -> None:
+    big = tmp_path / "big.rviz"
+    with big.open("wb") as f:
+        f.truncate(5 * 1024 * 1024)
+    with pytest.raises(RvizError, match="too large"):
+        load_rviz(big)
+
+
+def test_the_cli_lays_out_a_run_as_the_config_says(tmp_path: Path) -> None:
+    out = tmp_path / "nav.rrd"
+    result = cli("--rviz", str(DATA / "turtlebot3_navigation_ros1.rviz"), "--save", str(out), "--duration", "0.5")
+    assert result.returncode == 0, result.stderr
+    assert "Fixed Frame [map] does not exist" in result.stderr  # the R2D2 has odom and its links, no map
+    assert result.stderr.count("tool rviz/SetGoal") == 1
+    components = blueprint_components(out)
+    view = _scene(components)
+    assert components[f"{view}/SpatialInformation"]["SpatialInformation:target_frame"] == ["map"]
+    bad = cli("--rviz", str(tmp_path / "missing.rviz"), "--save", str(tmp_path / "x.rrd"))
+    assert bad.returncode == 2 and "missing.rviz: file not found" in bad.stderr and not (tmp_path / "x.rrd").exists()
+
+
+def test_python_m_blueprint_converts_a_config(tmp_path: Path) -> None:
+    out = tmp_path / "model.rbl"
+    result = subprocess.run(
+        [sys.executable, "-m", "r2d2_viz.blueprint", "--rviz", str(DATA / "turtlebot3_model.rviz"), str(out)],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    components = blueprint_components(out)
+    assert components[f"{_scene(components)}/SpatialInformation"]["SpatialInformation:target_frame"] == ["odom"]
