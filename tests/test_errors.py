@@ -1,0 +1,24 @@
+"""One hierarchy: every expected failure is an R2d2VizError, which the CLI turns into one line and exit 2."""
+
+from __future__ import annotations
+
+import pytest
+
+import r2d2_viz.errors as errors
+from r2d2_viz.cli import EXIT_BAD_INPUT, main
+
+KINDS = [c for c in vars(errors).values() if isinstance(c, type) and issubclass(c, Exception)]
+
+
+def test_every_error_is_an_r2d2viz_error() -> None:
+    assert len(KINDS) >= 5 and all(issubclass(kind, errors.R2d2VizError) for kind in KINDS)
+
+
+@pytest.mark.parametrize("kind", KINDS, ids=lambda k: k.__name__)
+def test_the_cli_says_one_line_and_exits_2(kind, monkeypatch, capsys) -> None:
+    def fail(*args, **kwargs):
+        raise kind(f"thing.urdf: the {kind.__name__} problem")
+
+    monkeypatch.setattr("r2d2_viz.runner.run", fail)
+    assert main(["--headless"]) == EXIT_BAD_INPUT
+    assert capsys.readouterr().err == f"error: thing.urdf: the {kind.__name__} problem\n"
