@@ -20,7 +20,6 @@ from urllib.parse import quote
 import rerun as rr
 import rerun.blueprint as rrb
 
-from .blueprint import generate_blueprint
 from .entities import APP_ID
 from .errors import SinkError
 
@@ -70,13 +69,12 @@ def open_recording(
     on_ready: Callable[[str], None] | None = None,
     blueprint: rrb.Blueprint | None = None,
 ) -> Recording:
-    """A recording stream with the configured sinks and the RViz-like default blueprint.
+    """A recording stream with the configured sinks and ``blueprint`` as its default blueprint.
 
     ``save_to`` is the file actually written (the caller renames it into place when done). A ``live``
     run sends small chunks, frame by frame, for hours: its file gets no footer, whose chunk manifest
     Rerun keeps in memory until the end (1.2 GB after 10 minutes at 1 kHz).
     """
-    blueprint = blueprint or generate_blueprint()
     if config.headless:
         return Recording(rr.RecordingStream(APP_ID, default_enabled=False))
     rec = rr.RecordingStream(APP_ID, send_properties=True)

@@ -69,11 +69,11 @@ def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     # The same app with another blueprint: the viewer's own (none), or ours with the head hidden.
     for case, blueprint in (
         ("default_blueprint", "None"),
-        ("head_hidden", "b.generate_blueprint(hidden_links=['head'])"),
+        ("head_hidden", "b.generate_blueprint(spec, layout=layout, hidden_links=['head'])"),
     ):
         code = (
-            "import sys, r2d2_viz.sinks as s, r2d2_viz.blueprint as b; "
-            f"s.generate_blueprint = lambda: {blueprint}; "
+            "import sys, r2d2_viz.runner as r, r2d2_viz.blueprint as b; "
+            f"r.generate_blueprint = lambda spec, layout: {blueprint}; "
             "from r2d2_viz.cli import main; sys.exit(main(sys.argv[1:]))"
         )
         subprocess.run(
