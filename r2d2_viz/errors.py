@@ -25,3 +25,12 @@ class UsageError(R2d2VizError):
 
 class SinkError(R2d2VizError):
     """A sink cannot be opened: no viewer possible, port in use, unwritable output."""
+
+
+class PackageError(UrdfError):
+    """A ROS package named by ``$(find pkg)`` or ``package://pkg`` cannot be found; says where it looked."""
+
+
+class XacroError(UrdfError):
+    """A xacro file cannot be expanded (bad XML, bad expression, refused expression, missing include or
+    package); names the file and the include / macro chain."""

@@ -22,11 +22,13 @@ import numpy as np
 
 from .errors import UsageError
 from .kinematics import compile_tree
-from .model import Robot, load_urdf
+from .model import Robot
 from .motion import make_motion
+from .packages import PackageIndex
 from .sinks import SinkConfig, close_recording, open_recording
 from .sources import Source
 from .stream import RobotStream
+from .xacro_load import load_robot
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""
@@ -47,6 +49,10 @@ LAP_SAMPLES = 1440
 @dataclass(frozen=True)
 class RunConfig:
     urdf: Path
+    mappings: dict[str, str] = field(default_factory=dict)
+    """xacro arguments (``NAME:=VALUE``)."""
+    package_paths: tuple[str, ...] = ()
+    """``--package-path DIR|NAME=DIR`` values."""
     motion: str | None = None
     rate: float = 30.0
     duration: float | None = None
@@ -84,7 +90,8 @@ class _StopRequested(KeyboardInterrupt):  # a signal, not an error
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
     """Run the whole pipeline. Raises R2d2VizError for bad input; never leaves a half-written file."""
     _check_numbers(config)
-    robot = load_urdf(config.urdf)
+    packages = PackageIndex.from_args(config.package_paths, description=config.urdf, environ=os.environ)
+    robot = load_robot(config.urdf, mappings=config.mappings, packages=packages)
     tree = compile_tree(robot)
     source = config.source(robot)
     save = config.sink.save

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import difflib
 import math
-import os
 import re
 import stat
 from collections.abc import Iterable, Iterator
@@ -22,12 +21,14 @@ from urllib.parse import unquote, urlsplit
 from lxml import etree
 
 from r2d2_viz.errors import UrdfError
+from r2d2_viz.packages import PackageIndex
 
 MAX_FILE_BYTES = 64 * 1024 * 1024
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 SHAPES = ("box", "cylinder", "sphere", "mesh")
 _AXIS_TYPES = frozenset({"revolute", "continuous", "prismatic", "planar"})
 _LIMITED_TYPES = frozenset({"revolute", "prismatic"})
+_INFINITY = re.compile(r"[+-]?inf(?:inity)?\Z", re.IGNORECASE)
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
 # XML 1.0 forbids these characters; refusing them up front also stops UTF-16 look-alikes.
 _BAD_CHARS = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff]")
@@ -138,51 +139,10 @@ def _parse_bytes(data: bytes, name: str, url: str) -> etree._Element:
 # --------------------------------------------------------------------------- meshes
 
 
-def _package_candidates(package: str, rest: str, base_dir: Path) -> Iterator[Path]:
-    for ancestor in (base_dir, *base_dir.parents):
-        if ancestor.name == package:
-            yield ancestor / rest
-        yield ancestor / package / rest
-    for entry in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep):
-        if entry:
-            yield Path(entry) / package / rest
-    for entry in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        if entry:
-            yield Path(entry) / "share" / package / rest
-
-
-def _is_file(path: Path) -> bool:
-    try:
-        return path.is_file()
-    except (OSError, ValueError):
-        return False
-
-
-def _resolve_mesh(filename: str, base_dir: Path) -> tuple[Path | None, str]:
-    """Return (existing file, "") or (None, reason for a warning)."""
-    parts = urlsplit(filename)
-    scheme = parts.scheme.lower() if len(parts.scheme) > 1 else ""  # "C:" is a drive, not a scheme
-    if scheme == "package":
-        rest = unquote(parts.path).lstrip("/")
-        for candidate in _package_candidates(unquote(parts.netloc), rest, base_dir):
-            if _is_file(candidate):
-                return candidate, ""
-        return None, f"mesh {_q(filename, 200)} not found (package:// cannot be resolved without ROS)"
-    if scheme == "file":
-        local = Path(unquote(parts.netloc + parts.path))
-    elif scheme:
-        return None, f"mesh {_q(filename, 200)} has unsupported URI scheme {scheme!r}"
-    else:
-        local = Path(filename)
-    candidate = local if local.is_absolute() else base_dir / local
-    if _is_file(candidate):
-        return candidate, ""
-    return None, f"mesh file {_q(filename, 200)} not found"
-
-
-def resolve_mesh_path(filename: str, base_dir: Path) -> Path | None:
-    """Best-effort local file for a URDF mesh ``filename`` (plain path, file:// or package://), else None."""
-    return _resolve_mesh(filename, base_dir)[0]
+def resolve_mesh_path(filename: str, base_dir: Path, packages: PackageIndex | None = None) -> Path | None:
+    """Best-effort local file for a URDF mesh ``filename`` (plain path, file:// or package://), else None.
+    ``packages`` finds ``package://`` packages (by default: above ``base_dir`` and the ROS environment)."""
+    return (packages or PackageIndex.from_environ()).resolve_uri(filename, base_dir=base_dir)
 
 
 # --------------------------------------------------------------------------- structure
@@ -197,9 +157,10 @@ def _first(el: etree._Element, tag: str) -> etree._Element | None:
 
 
 class _Checker:
-    def __init__(self, source: str, base_dir: Path) -> None:
+    def __init__(self, source: str, base_dir: Path, packages: PackageIndex | None = None) -> None:
         self.source = _one_line(source) or "<urdf>"
         self.base_dir = base_dir
+        self.packages = packages or PackageIndex.from_environ()
         self.warnings: list[str] = []
         self.materials: set[str] = set()
         self.meshes: dict[str, tuple[Path | None, str]] = {}
@@ -210,8 +171,11 @@ class _Checker:
     def warn(self, where: str, problem: str) -> None:
         self.warnings.append(_one_line(f"{self.source}: {where}: {problem}"))
 
-    def numbers(self, where: str, el: etree._Element, attr: str, count: int) -> tuple[float, ...] | None:
-        """``count`` finite numbers from attribute ``attr`` of ``el``; None if the attribute is absent."""
+    def numbers(
+        self, where: str, el: etree._Element, attr: str, count: int, *, infinite_ok: bool = False
+    ) -> tuple[float, ...] | None:
+        """``count`` finite numbers from attribute ``attr`` of ``el``; None if the attribute is absent.
+        ``infinite_ok`` also takes ``inf``, ``-inf`` and overflowing numbers (limits meaning "unlimited")."""
         raw = el.get(attr)
         if raw is None:
             return None
@@ -222,8 +186,8 @@ class _Checker:
             self.fail(where, f"{what}: expected {count} {plural}, got {len(tokens)}")
         values: list[float] = []
         for token in tokens:
-            value = float(token) if _NUMBER.match(token) else math.nan
-            if not math.isfinite(value):
+            value = float(token) if _NUMBER.match(token) or (infinite_ok and _INFINITY.match(token)) else math.nan
+            if math.isnan(value) or (math.isinf(value) and not infinite_ok):
                 self.fail(where, f"{what}: {_q(token, 30)} is not a finite number")
             values.append(value)
         return tuple(values)
@@ -282,7 +246,7 @@ class _Checker:
             if not filename:
                 self.fail(where, "<mesh> has no filename")
             if filename not in self.meshes:
-                self.meshes[filename] = _resolve_mesh(filename, self.base_dir)
+                self.meshes[filename] = self.packages.explain(filename, base_dir=self.base_dir)
             found, reason = self.meshes[filename]
             if found is None:
                 self.warn(where, f"{reason}; {kind} skipped")
@@ -345,15 +309,19 @@ class _Checker:
         if limit is None and jtype in _LIMITED_TYPES:
             self.fail(where, f"{jtype} joint has no <limit lower=... upper=...>")
         if limit is not None:
-            bounds = [self.numbers(where, limit, attr, 1) for attr in ("lower", "upper")]
+            # Limits may be infinite or huge (urdfdom reads "inf"; ±1e16 means unlimited): accepted here.
+            bounds = [self.numbers(where, limit, attr, 1, infinite_ok=True) for attr in ("lower", "upper")]
             for attr in ("effort", "velocity"):
-                self.numbers(where, limit, attr, 1)
+                self.numbers(where, limit, attr, 1, infinite_ok=True)
             if jtype in _LIMITED_TYPES:
-                lower, upper = bounds
-                if lower is None or upper is None:
-                    self.fail(where, f"<limit> needs numeric lower and upper for a {jtype} joint")
+                for attr, value in zip(("lower", "upper"), bounds, strict=True):
+                    if value is None:  # urdfdom: "joint limit: no lower, defaults to 0"
+                        self.warn(where, f"<limit> has no {attr}; read as 0, like urdfdom")
+                lower, upper = ((0.0,) if value is None else value for value in bounds)
                 if lower[0] > upper[0]:
                     self.fail(where, f"<limit> lower={lower[0]:g} is greater than upper={upper[0]:g}")
+                if lower[0] == math.inf or upper[0] == -math.inf:
+                    self.fail(where, f"<limit> lower={lower[0]:g} upper={upper[0]:g} leaves no position")
         return ends[0], ends[1]
 
 
@@ -369,17 +337,19 @@ def _names(el_list: Iterable[etree._Element], kind: str, checker: _Checker) -> d
     return seen
 
 
-def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = None) -> list[str]:
+def check_robot(
+    root: etree._Element, *, source: str, base_dir: Path | None = None, packages: PackageIndex | None = None
+) -> list[str]:
     """Validate structure and numbers; raise UrdfError on the first problem; return non-fatal warnings
     (e.g. mesh file missing: "<source>: link 'x': mesh file 'foo.stl' not found; visual skipped") as strings.
 
     Relative mesh paths resolve against ``base_dir``, by default the directory of the file
-    ``read_urdf_xml`` read (else the current directory).
+    ``read_urdf_xml`` read (else the current directory); ``package://`` URIs through ``packages``.
     """
     if base_dir is None:
         url = root.getroottree().docinfo.URL
         base_dir = Path(unquote(urlsplit(url).path) if url.startswith("file:") else url).parent if url else Path()
-    checker = _Checker(source, base_dir)
+    checker = _Checker(source, base_dir, packages)
     if root.tag != "robot":
         checker.fail("root", f"element is <{_q(str(root.tag), 80)[1:-1]}>; expected <robot>")
     robot = f"robot {_q(root.get('name', ''))}" if root.get("name") else "robot"
@@ -417,11 +387,12 @@ def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = No
             target = mimic.get("joint")
             if not target:
                 checker.fail(where, "<mimic> has no joint attribute")
-            if target not in joint_names:
-                checker.fail(where, f"<mimic> joint {_q(target)} does not exist")
             checker.numbers(where, mimic, "multiplier", 1)
             checker.numbers(where, mimic, "offset", 1)
-            mimics[jname] = target
+            if target in joint_names:
+                mimics[jname] = target
+            else:  # urdfdom and robot_state_publisher accept it: the joint moves on its own
+                checker.warn(where, f"<mimic> joint {_q(target)} does not exist; ignored: the joint moves on its own")
 
     roots = [name for name in links if name not in parent_joint]
     if len(roots) > 1:
