@@ -92,6 +92,48 @@ def test_real_description_expands_like_plain_xacro(
     assert (len(robot.links), len(robot.joints)) == (n_links, n_joints)
 
 
+def pal_urdf_utils_stand_in(folder: Path) -> Path:
+    """pal_urdf_utils is licensed CC BY-NC-ND, so it is not copied here: a stand-in with the one property the
+    TIAGo files use from it (deg_to_rad, i.e. pi/180) and no materials (their colours then fall back, with
+    a warning each)."""
+    root = folder / "pal_urdf_utils"
+    (root / "urdf").mkdir(parents=True)
+    (root / "package.xml").write_text('<package format="3"><name>pal_urdf_utils</name></package>')
+    ns = 'xmlns:xacro="http://ros.org/wiki/xacro"'
+    (root / "urdf" / "deg_to_rad.urdf.xacro").write_text(
+        f'<robot {ns}><xacro:property name="deg_to_rad" value="{math.pi / 180!r}"/></robot>'
+    )
+    (root / "urdf" / "materials.urdf.xacro").write_text(f"<robot {ns}/>")
+    return folder
+
+
+def test_tiago_expands_like_plain_xacro_with_its_dependencies_on_package_path(tmp_path: Path) -> None:
+    path = XACRO / "tiago_robot" / "tiago_description" / "robots" / "tiago.urdf.xacro"
+    stand_in = pal_urdf_utils_stand_in(tmp_path / "deps")
+    packages = {
+        "tiago_description": XACRO / "tiago_robot" / "tiago_description",
+        "tiago_controller_configuration": XACRO / "tiago_robot" / "tiago_controller_configuration",
+        "pmb2_description": XACRO / "pmb2_robot" / "pmb2_description",
+        "pal_hey5_description": XACRO / "pal_hey5" / "pal_hey5_description",
+        "pal_urdf_utils": stand_in / "pal_urdf_utils",
+    }
+    reference = plain_xacro(tmp_path, path, {}, packages)
+    index = PackageIndex.from_args([str(stand_in)], description=path, environ={})
+    ours = expand_xacro(path, mappings={}, packages=index)
+    out, err = reference.communicate(timeout=120)
+    assert reference.returncode == 0, err
+    assert canonical(ours) == canonical(out)
+    robot = load_robot(path, packages=index)
+    assert (len(robot.links), len(robot.joints)) == (89, 88)
+    # the CLI: without the dependency on --package-path, one line saying where it looked
+    result = cli("--urdf", str(path), "--headless", "--duration", "0.1", env={"ROS_PACKAGE_PATH": ""})
+    assert result.returncode == 2
+    assert result.stderr.startswith("error: base.urdf.xacro: package 'pal_urdf_utils' not found; looked in")
+    assert result.stderr.rstrip().endswith("(included from base_sensors.urdf.xacro < tiago.urdf.xacro)")
+    result = cli("--urdf", str(path), "--package-path", str(stand_in), "--headless", "--duration", "0.1")
+    assert result.returncode == 0, result.stderr
+
+
 def test_ur5e_joint_origins_come_from_its_yaml() -> None:
     # config/ur5e/default_kinematics.yaml (Universal Robots' calibration): shoulder z 0.1625, forearm x -0.425,
     # wrist_1 x -0.3922 z 0.1333, read by the xacro through xacro.load_yaml.
