@@ -95,7 +95,14 @@ def load_robot(
                              f"but {path.name} is not one")  # fmt: skip
         return load_urdf(path, packages=packages)  # its own one-line errors for unreadable files
     description = load_description(path, mappings=mappings, packages=packages)
-    robot = parse_urdf(description.text, source=description.source, base_dir=description.base_dir, packages=packages)
+    try:
+        robot = parse_urdf(
+            description.text, source=description.source, base_dir=description.base_dir, packages=packages
+        )
+    except UrdfError as exc:
+        if str(exc).endswith("has no <link> elements"):  # e.g. a file of macros, meant to be included
+            raise UrdfError(f"{exc} after xacro (does it only define macros that another file calls?)") from None
+        raise
     return dataclasses.replace(robot, warnings=description.warnings + robot.warnings)
 
 

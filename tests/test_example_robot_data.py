@@ -113,3 +113,16 @@ def test_link_poses_match_yourdfpy(name: str) -> None:
         urdf.update_cfg(dict(zip(tree.actuated, row, strict=True)))
         theirs = np.stack([urdf.get_transform(frame_to=link, frame_from=tree.links[0]) for link in tree.links])
         np.testing.assert_allclose(ours[k], theirs, atol=1e-9)
+
+
+def test_a_xacro_file_of_macros_only_is_refused_with_a_hint(tmp_path: Path) -> None:
+    # The example: hector_description/robots/quadrotor_base.urdf.xacro only defines a macro.
+    path = ROBOTS / "hector_description" / "robots" / "quadrotor_base.urdf.xacro"
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        code = main(["--urdf", str(path), "--save", str(tmp_path / "q.rrd"), "--duration", "1"])
+    assert code == 2
+    assert err.getvalue() == (
+        "error: quadrotor_base.urdf.xacro: robot: has no <link> elements after xacro "
+        "(does it only define macros that another file calls?)\n"
+    )
