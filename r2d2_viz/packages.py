@@ -137,6 +137,7 @@ class PackageIndex:
         self.ament_prefix_path = tuple(Path(p) for p in ament_prefix_path)
         self._scans: dict[Path, dict[str, Path]] = {}
         self._above: dict[Path, tuple[list[Path], list[Path], list[Path]]] = {}
+        self._found: dict[tuple[str, Path | None], Path | None] = {}
 
     @classmethod
     def from_environ(cls, environ: Mapping[str, str] | None = None, *, description: Path | None = None) -> PackageIndex:
@@ -180,7 +181,13 @@ class PackageIndex:
         return found
 
     def lookup(self, name: str, *, near: Path | None = None) -> Path | None:
-        """:meth:`find`, returning None when the package is nowhere."""
+        """:meth:`find`, returning None when the package is nowhere (answers are remembered)."""
+        key = (name, None if near is None else Path(near))
+        if key not in self._found:
+            self._found[key] = self._lookup(name, near)
+        return self._found[key]
+
+    def _lookup(self, name: str, near: Path | None) -> Path | None:
         if name in self.pins:
             return self.pins[name]
         for start in self._starts(near):

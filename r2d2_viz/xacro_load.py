@@ -256,8 +256,6 @@ def _expand_here(path: Path, mappings: Mapping[str, str], packages: PackageIndex
             doc = xacro.process_file(str(path), mappings=dict(mappings), verbosity=0)
         except xml.parsers.expat.ExpatError as exc:
             raise XacroError(_located(path, f"not well-formed XML: {exc}")) from None
-        except RecursionError:
-            raise XacroError(_located(path, "macros or includes nest too deeply (recursion)")) from None
         except Exception as exc:
             raise XacroError(_located(path, _reason(exc))) from None
         text = str(doc.documentElement.toxml())
@@ -273,6 +271,10 @@ def _reason(exc: BaseException) -> str:
         inner = inner.exc  # type: ignore[attr-defined]
     if isinstance(inner, (PackageError, XacroError)):
         return str(inner)
+    if isinstance(inner, MemoryError):
+        return f"xacro ran out of memory (limit {MEMORY_BYTES >> 20} MiB)"
+    if isinstance(inner, RecursionError):
+        return "macros or includes nest too deeply (recursion)"
     if isinstance(inner, RefusedExpressionError):
         return f"expression refused for safety: {inner}"
     from xacro.substitution_args import ArgException

@@ -366,6 +366,11 @@ def test_runaway_recursion_and_output_are_bounded(tmp_path: Path) -> None:
     assert "expands to more than 67108864 bytes; refused" in refusal(path)
 
 
+def test_runaway_memory_is_bounded(tmp_path: Path) -> None:
+    message = refusal(write(tmp_path, '<link name="${len([0] * (1024**3))}"/>'))
+    assert message == "robot.urdf.xacro: xacro ran out of memory (limit 2048 MiB)"
+
+
 def test_a_slow_expression_is_stopped(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(xacro_load, "TIMEOUT_S", 2.0)
     message = refusal(write(tmp_path, '<link name="${9**9**9}"/>'))
