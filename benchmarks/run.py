@@ -39,23 +39,23 @@ PY = sys.executable
 APP = [PY, "-m", "r2d2_viz"]
 IMPORT_FLOOR = [PY, "-c", "import rerun, yourdfpy, trimesh, numpy"]
 RATE = 30.0
-ROBOT_BLOCK_FRAMES = 150
+ROBOT_BLOCK_SAMPLES = 150
 ROBOT_BLOCKS = 5
-"""Per-frame robot figures: the median over this many chunks of ROBOT_BLOCK_FRAMES frames (a live block at
+"""Per-sample robot figures: the median over this many chunks of ROBOT_BLOCK_SAMPLES samples (a live block at
 30 Hz: five seconds), in each repeat."""
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
 
 
 @dataclass(frozen=True)
 class Sizes:
-    batch_seconds: float  # goal 1: 3600 s = 108,000 frames
+    batch_seconds: float  # goal 1: 3600 s = 108,000 samples
     repeats: int
-    rrlog_frames: int  # rr.log baseline, extrapolated per frame
-    kin_frames: int
+    rrlog_samples: int  # rr.log baseline, extrapolated per sample
+    kin_samples: int
     kin_repeats: int
-    memory_seconds: float  # goal 3: 86,400 s = 2.6 M frames
-    live_seconds: float  # goal 4: count frames sent after this many seconds at 30 Hz
-    cpu_window: tuple[float, float]  # seconds after the first frame
+    memory_seconds: float  # goal 3: 86,400 s = 2.6 M samples
+    live_seconds: float  # goal 4: count samples sent after this many seconds at 30 Hz
+    cpu_window: tuple[float, float]  # seconds after the first sample
     cpu_repeats: int  # 30 Hz CPU: runs of the app and of the Rerun SDK floor, alternating
     fast_rate: float
     fast_seconds: float
@@ -111,23 +111,23 @@ def _proc_cpu_seconds(pid: int) -> float | None:
 # --- rr.log baseline (runs in a subprocess: `run.py --rrlog-baseline N OUT`) ---------------------------
 
 
-def rrlog_baseline(n_frames: int, out: Path) -> None:
-    """Log the default recording's per-frame data with ``rr.log``, one call per entity per frame.
+def rrlog_baseline(n_samples: int, out: Path) -> None:
+    """Log the default recording's per-sample data with ``rr.log``, one call per entity per sample.
 
     Same entities, components and values as the app (transforms with frame names, TF arrows, joint
     values). Kinematics are computed beforehand and not timed; only the logging loop and the final
-    flush are. Prints seconds per frame."""
+    flush are. Prints seconds per sample."""
     import rerun as rr
 
+    from r2d2_viz.entities import TIMELINE, path
     from r2d2_viz.kinematics import compile_tree, joint_transforms, moving_values
     from r2d2_viz.model import default_urdf_path, load_urdf
-    from r2d2_viz.motion import make_motion
-    from r2d2_viz.stream import ODOM, TIMELINE, path
+    from r2d2_viz.motion import ODOM, make_motion
 
     robot = load_urdf(default_urdf_path())
     tree = compile_tree(robot)
-    motion = make_motion(robot)
-    chunk = next(motion.chunks(n_frames, n_frames))
+    motion = make_motion(robot, n_samples=n_samples)
+    chunk = next(motion.chunks(n_samples))
     q = chunk.positions[:, [motion.joints.index(a) for a in tree.actuated]]
     values = moving_values(tree, q)
     translation, quat = joint_transforms(tree, q)
@@ -137,11 +137,11 @@ def rrlog_baseline(n_frames: int, out: Path) -> None:
         path("joints", "limited", j.name, "value") if j.name in limits else path("joints", "continuous", j.name)
         for j in joints
     ]
-    assert chunk.odom_translation is not None and chunk.odom_quat_xyzw is not None
+    odom = chunk.frames[0]  # odom → root
     rec = rr.RecordingStream("r2d2_viz_rrlog_baseline")
     rec.save(out)
     t0 = time.perf_counter()
-    for k in range(n_frames):
+    for k in range(n_samples):
         rec.set_time(TIMELINE, duration=k / RATE)
         for m, j in enumerate(joints):
             rec.log(
@@ -157,7 +157,7 @@ def rrlog_baseline(n_frames: int, out: Path) -> None:
                 rec.log(
                     path("tf_arrows", j.child), rr.Arrows3D(origins=[translation[k, m]], vectors=[-translation[k, m]])
                 )
-        t, qo = chunk.odom_translation[k], chunk.odom_quat_xyzw[k]
+        t, qo = odom.translation[k], odom.quat_xyzw[k]
         rec.log(
             path("tf", robot.root),
             rr.Transform3D(translation=t, quaternion=rr.Quaternion(xyzw=qo), parent_frame=ODOM, child_frame=robot.root),
@@ -166,7 +166,7 @@ def rrlog_baseline(n_frames: int, out: Path) -> None:
         for m in range(len(joints)):
             rec.log(value_paths[m], rr.Scalars(values[k, m]))
     rec.flush()
-    print((time.perf_counter() - t0) / n_frames)
+    print((time.perf_counter() - t0) / n_samples)
 
 
 # --- the goals ---------------------------------------------------------------------------------------
@@ -187,50 +187,50 @@ class Report:
 
 
 def bench_batch(s: Sizes, tmp: Path, r: Report) -> float:
-    """Goal 1: batch run vs its import floor (alternating) and vs rr.log frame by frame."""
+    """Goal 1: batch run vs its import floor (alternating) and vs rr.log sample by sample."""
     out = tmp / "batch.rrd"
     floor: list[Proc] = []
     batch: list[Proc] = []
     for _ in range(s.repeats):
         floor.append(run_cmd(IMPORT_FLOOR, cwd=tmp))
         batch.append(run_cmd([*APP, "--save", str(out), "--duration", str(s.batch_seconds)], cwd=tmp))
-    frames = round(s.batch_seconds * RATE)
+    samples = round(s.batch_seconds * RATE)
     f_wall, b_wall = median([p.wall for p in floor]), median([p.wall for p in batch])
     f_cpu, b_cpu = median([p.cpu for p in floor]), median([p.cpu for p in batch])
     work = max(b_wall - f_wall, 1e-9)
 
     baseline = subprocess.run(
-        [PY, __file__, "--rrlog-baseline", str(s.rrlog_frames), str(tmp / "rrlog.rrd")],
+        [PY, __file__, "--rrlog-baseline", str(s.rrlog_samples), str(tmp / "rrlog.rrd")],
         cwd=tmp,
         capture_output=True,
         text=True,
         check=True,
     )
-    rrlog_per_frame = float(baseline.stdout.split()[-1])
-    rrlog_total = rrlog_per_frame * frames
+    rrlog_per_sample = float(baseline.stdout.split()[-1])
+    rrlog_total = rrlog_per_sample * samples
     ratio_floor = b_wall / f_wall
     speedup = rrlog_total / work
-    r.section(f"1. Batch: --save --duration {s.batch_seconds:g} ({frames:,} frames), medians of {s.repeats}")
+    r.section(f"1. Batch: --save --duration {s.batch_seconds:g} ({samples:,} samples), medians of {s.repeats}")
     r.add("import floor (rerun, yourdfpy, trimesh, numpy): wall / CPU", f"{f_wall:.2f} s / {f_cpu:.2f} s")
     r.add("r2d2-viz batch run: wall / CPU", f"{b_wall:.2f} s / {b_cpu:.2f} s")
     r.add("batch wall / import floor wall", f"{ratio_floor:.2f}×", "≤ 1.5×", ratio_floor <= 1.5)
-    r.add("  work beyond the floor (batch − floor)", f"{work:.2f} s = {frames / work:,.0f} frames/s")
+    r.add("  work beyond the floor (batch − floor)", f"{work:.2f} s = {samples / work:,.0f} samples/s")
     r.add(
-        f"rr.log frame by frame (measured on {s.rrlog_frames:,} frames, extrapolated)",
-        f"{rrlog_per_frame * 1e6:.0f} µs/frame → {rrlog_total:.1f} s",
+        f"rr.log sample by sample (measured on {s.rrlog_samples:,} samples, extrapolated)",
+        f"{rrlog_per_sample * 1e6:.0f} µs/sample → {rrlog_total:.1f} s",
     )
     r.add("rr.log time / batch work beyond the floor", f"{speedup:,.0f}×", "≥ 100×", speedup >= 100)
     r.add("rr.log time / whole batch command", f"{rrlog_total / b_wall:,.0f}×")
     r.figures["batch"] = {
-        "frames": frames,
+        "samples": samples,
         "floor_wall_s": [p.wall for p in floor],
         "batch_wall_s": [p.wall for p in batch],
         "floor_cpu_s": [p.cpu for p in floor],
         "batch_cpu_s": [p.cpu for p in batch],
         "batch_max_rss_mb": [p.max_rss_mb for p in batch],
         "ratio_batch_to_floor": ratio_floor,
-        "rrlog_s_per_frame": rrlog_per_frame,
-        "rrlog_frames_measured": s.rrlog_frames,
+        "rrlog_s_per_sample": rrlog_per_sample,
+        "rrlog_samples_measured": s.rrlog_samples,
         "speedup_vs_rrlog": speedup,
     }
     return median([p.max_rss_mb for p in batch])
@@ -247,8 +247,8 @@ def bench_kinematics(s: Sizes, r: Report) -> None:
 
     robot = load_urdf(default_urdf_path())
     tree = compile_tree(robot)
-    motion = make_motion(robot)
-    chunk = next(motion.chunks(s.kin_frames, s.kin_frames))
+    motion = make_motion(robot, n_samples=s.kin_samples)
+    chunk = next(motion.chunks(s.kin_samples))
     q = np.ascontiguousarray(chunk.positions[:, [motion.joints.index(a) for a in tree.actuated]])
     urdf = UrdfTree.from_file_path(default_urdf_path())
     rr_joints = [urdf.get_joint_by_name(name) for name in tree.moving]
@@ -257,11 +257,6 @@ def bench_kinematics(s: Sizes, r: Report) -> None:
 
     def ours() -> None:
         joint_transforms(tree, q)
-
-    def rerun_core() -> None:
-        for joint, values in zip(rr_joints, lists, strict=True):
-            assert joint is not None
-            joint._inner.compute_transform_columns(values, clamp=False)  # the Rust core, no column building
 
     def rerun_public() -> None:
         for joint, values in zip(rr_joints, lists, strict=True):
@@ -272,37 +267,41 @@ def bench_kinematics(s: Sizes, r: Report) -> None:
     t_ours, q_ours = joint_transforms(tree, q)
     for m, (joint, values) in enumerate(zip(rr_joints, lists, strict=True)):
         assert joint is not None
-        res = joint._inner.compute_transform_columns(values[:50], clamp=False)
-        assert np.allclose(res["translations"], t_ours[:50, m], atol=1e-6)
-        sign = np.sign(np.sum(np.asarray(res["quaternions_xyzw"]) * q_ours[:50, m], axis=-1, keepdims=True))
-        assert np.allclose(np.asarray(res["quaternions_xyzw"]) * sign, q_ours[:50, m], atol=1e-6)
+        res = {
+            str(c.component_descriptor()).split(":")[-1]: c.as_arrow_array()
+            for c in joint.compute_transform_columns(values[:50], clamp=False)
+        }
+        t_rr = np.asarray(res["translation"].flatten().flatten()).reshape(-1, 3)
+        q_rr = np.asarray(res["quaternion"].flatten().flatten()).reshape(-1, 4)
+        assert np.allclose(t_rr, t_ours[:50, m], atol=1e-6)
+        sign = np.sign(np.sum(q_rr * q_ours[:50, m], axis=-1, keepdims=True))
+        assert np.allclose(q_rr * sign, q_ours[:50, m], atol=1e-6)
 
-    times: dict[str, list[float]] = {"ours": [], "rerun_core": [], "rerun_public": []}
+    times: dict[str, list[float]] = {"ours": [], "rerun_public": []}
     for _ in range(s.kin_repeats):  # alternate, so a busy moment hits all three alike
-        for name, fn in (("ours", ours), ("rerun_core", rerun_core), ("rerun_public", rerun_public)):
+        for name, fn in (("ours", ours), ("rerun_public", rerun_public)):
             t0 = time.perf_counter()
             fn()
             times[name].append(time.perf_counter() - t0)
-    rate = {k: s.kin_frames / median(v) for k, v in times.items()}
-    ratio = rate["ours"] / rate["rerun_core"]
-    r.section(f"2. Kinematics: R2D2, {s.kin_frames:,} frames of the tutorial motion, medians of {s.kin_repeats}")
-    r.add("r2d2_viz joint_transforms (numpy, all moving joints)", f"{rate['ours']:,.0f} frames/s")
-    r.add("Rerun UrdfJoint.compute_transform_columns, Rust core", f"{rate['rerun_core']:,.0f} frames/s")
-    r.add("Rerun UrdfJoint.compute_transform_columns, public API", f"{rate['rerun_public']:,.0f} frames/s")
-    r.add("ours / Rerun core", f"{ratio:.1f}×", "≥ 3×", ratio >= 3)
-    r.figures["kinematics"] = {"frames": s.kin_frames, "seconds": times, "frames_per_s": rate, "ratio": ratio}
+    rate = {k: s.kin_samples / median(v) for k, v in times.items()}
+    ratio = rate["ours"] / rate["rerun_public"]
+    r.section(f"2. Kinematics: R2D2, {s.kin_samples:,} samples of the tutorial motion, medians of {s.kin_repeats}")
+    r.add("r2d2_viz joint_transforms (numpy, all moving joints)", f"{rate['ours']:,.0f} samples/s")
+    r.add("Rerun UrdfJoint.compute_transform_columns (its public API)", f"{rate['rerun_public']:,.0f} samples/s")
+    r.add("ours / Rerun", f"{ratio:.1f}×", "≥ 3×", ratio >= 3)
+    r.figures["kinematics"] = {"samples": s.kin_samples, "seconds": times, "samples_per_s": rate, "ratio": ratio}
 
 
 def bench_memory(s: Sizes, tmp: Path, r: Report, batch_rss_mb: float) -> None:
     """Goal 3: peak RSS of a 24 h batch run."""
     p = run_cmd([*APP, "--save", str(tmp / "day.rrd"), "--duration", str(s.memory_seconds)], cwd=tmp)
-    frames = round(s.memory_seconds * RATE)
+    samples = round(s.memory_seconds * RATE)
     size_mb = (tmp / "day.rrd").stat().st_size / 1e6
     (tmp / "day.rrd").unlink()
-    r.section(f"3. Memory: --save --duration {s.memory_seconds:g} ({frames:,} frames)")
+    r.section(f"3. Memory: --save --duration {s.memory_seconds:g} ({samples:,} samples)")
     r.add("peak RSS", f"{p.max_rss_mb:.0f} MB (1 h run: {batch_rss_mb:.0f} MB)", "< 400 MB", p.max_rss_mb < 400)
     r.add("wall / file size", f"{p.wall:.1f} s / {size_mb:.0f} MB")
-    r.figures["memory"] = {"frames": frames, "max_rss_mb": p.max_rss_mb, "wall_s": p.wall, "file_mb": size_mb}
+    r.figures["memory"] = {"samples": samples, "max_rss_mb": p.max_rss_mb, "wall_s": p.wall, "file_mb": size_mb}
 
 
 def _live_run(
@@ -323,7 +322,7 @@ def _live_run(
     cpu_fraction = None
     try:
         if cpu_window is not None:
-            while not log.exists():  # opened just before the first frame: start-up is over
+            while not log.exists():  # opened just before the first sample: start-up is over
                 if proc.poll() is not None:
                     break
                 time.sleep(0.01)
@@ -341,7 +340,7 @@ def _live_run(
             proc.send_signal(signal.SIGINT)
             proc.wait()
     rows = [(int(a), float(b)) for a, b in (line.split() for line in log.read_text().splitlines())]
-    in_file = 0 if sdk_floor else _count_rows(out, "/joints/limited")  # one row per frame
+    in_file = 0 if sdk_floor else _count_rows(out, "/joints/limited")  # one row per sample
     out.unlink()
     return rows, cpu_fraction, in_file
 
@@ -352,19 +351,18 @@ def _median_or_none(xs: Sequence[float | None]) -> float | None:
 
 
 def sdk_floor(rate: float, seconds: float, out: Path) -> None:
-    """The least a live frame costs through Rerun's SDK: the app's sink (``sinks.open_recording``, live), the
-    app's absolute schedule, one prebuilt 4-row ``Transform3D`` chunk per frame (the R2D2's ``/tf``: three
-    joints and odom → root, frame names included) sent with the binding the app uses — no kinematics, plots,
+    """The least a live sample costs through Rerun's SDK: the app's sink (``sinks.open_recording``, live), the
+    app's absolute schedule, one prebuilt 4-row ``Transform3D`` chunk per sample (the R2D2's ``/tf``: three
+    joints and odom → root, frame names included) sent with rr.send_columns, as the app sends — no kinematics, plots,
     arrows or limit lines. Writes the same pacing log as the app (``R2D2_VIZ_PACING_LOG``)."""
     import numpy as np
     import pyarrow as pa
     import rerun as rr
-    from rerun_bindings import send_arrow_chunk
 
+    from r2d2_viz.columns import send
     from r2d2_viz.sinks import SinkConfig, close_recording, open_recording
 
     recording = open_recording(SinkConfig(save=out), save_to=out, live=True)
-    native = recording.rec.to_native()
     rows, block = 4, max(1, round(rate))
     columns = rr.Transform3D.columns(
         translation=np.zeros((rows * block, 3)),
@@ -373,21 +371,16 @@ def sdk_floor(rate: float, seconds: float, out: Path) -> None:
         child_frame=["body", "head", "rod", "base"] * block,
     )
     encoded = [(c.component_descriptor(), c.as_arrow_array()) for c in columns]
-    n_frames = max(1, round(seconds * rate))
+    n_samples = max(1, round(seconds * rate))
     with open(os.environ[PACING_LOG_ENV], "w") as log:
         start = time.monotonic()
-        for k in range(n_frames):
+        for k in range(n_samples):
             delay = start + k / rate - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
             i = k % block
             nanos = np.full(rows, round(k / rate * 1e9), dtype="timedelta64[ns]")
-            send_arrow_chunk(
-                "/tf",
-                timelines={"time": pa.array(nanos)},
-                components={d: a.slice(i * rows, rows) for d, a in encoded},
-                recording=native,
-            )
+            send(recording.rec, "/tf", "time", pa.array(nanos), encoded, i * rows, rows)  # rr.send_columns
             log.write(f"{k} {time.monotonic() - (start + k / rate):.6f}\n")
     close_recording(recording)
 
@@ -409,16 +402,16 @@ def bench_live(s: Sizes, tmp: Path, r: Report) -> None:
         floor_runs.append(_live_run(tmp, RATE, s.cpu_window[1] + 2, s.cpu_window, sdk_floor=True)[1])
         if k + 1 < s.cpu_repeats:
             cpu_runs.append(_live_run(tmp, RATE, s.cpu_window[1] + 2, s.cpu_window)[1])
-    # frame k is due at k / rate after the schedule's start; its send returned `lateness` later
+    # sample k is due at k / rate after the schedule's start; its send returned `lateness` later
     sent_by = sum(1 for k, late in rows if k / RATE + late <= horizon)
-    due_by = math.floor(horizon * RATE) + 1  # frames 0 … 30·T are due at T (inclusive)
+    due_by = math.floor(horizon * RATE) + 1  # samples 0 … 30·T are due at T (inclusive)
     late30 = np.array([late for _, late in rows]) * 1e3
     fast, _, fast_in_file = _live_run(tmp, s.fast_rate, s.fast_seconds, None)
     late = np.array([late for _, late in fast]) * 1e3
     p50, p99, worst = (float(np.percentile(late, p)) for p in (50, 99, 100))
     r.section("4. Live: r2d2-viz --save X --realtime (paced to the wall clock), pacing log")
     r.add(
-        f"frames sent {horizon:g} s after the first, at 30 Hz",
+        f"samples sent {horizon:g} s after the first, at 30 Hz",
         f"{sent_by} (due: {due_by}; in file: {in_file} of {len(rows)})",
         f"{round(horizon * RATE)} ± 1",
         abs(sent_by - round(horizon * RATE)) <= 1,
@@ -428,7 +421,7 @@ def bench_live(s: Sizes, tmp: Path, r: Report) -> None:
         f"{np.percentile(late30, 50):.2f} / {np.percentile(late30, 99):.2f} / {late30.max():.2f} ms",
     )
     r.add(
-        f"lateness at {s.fast_rate:g} Hz ({len(fast):,} frames): p50 / p99 / max",
+        f"lateness at {s.fast_rate:g} Hz ({len(fast):,} samples): p50 / p99 / max",
         f"{p50:.2f} / {p99:.2f} / {worst:.2f} ms",
         "p99 ≤ 2 ms",
         p99 <= 2.0,
@@ -437,7 +430,7 @@ def bench_live(s: Sizes, tmp: Path, r: Report) -> None:
     floor = _median_or_none(floor_runs)
     if cpu is not None:
         r.add(
-            f"CPU at 30 Hz, {s.cpu_window[0]:g}–{s.cpu_window[1]:g} s after the first frame, median of "
+            f"CPU at 30 Hz, {s.cpu_window[0]:g}–{s.cpu_window[1]:g} s after the first sample, median of "
             f"{len(cpu_runs)} runs",
             f"{cpu * 100:.2f} % of one core (runs: {', '.join(f'{c * 100:.2f}' for c in cpu_runs if c is not None)})",
             "≤ 3 %",
@@ -445,27 +438,27 @@ def bench_live(s: Sizes, tmp: Path, r: Report) -> None:
         )
     if floor is not None:
         r.add(
-            "  Rerun's SDK alone, same pacing and sink: one 4-row Transform3D chunk a frame, median of "
+            "  Rerun's SDK alone, same pacing and sink: one 4-row Transform3D chunk a sample, median of "
             f"{len(floor_runs)}",
             f"{floor * 100:.2f} % (runs: {', '.join(f'{c * 100:.2f}' for c in floor_runs if c is not None)})",
         )
         if cpu is not None:
             r.add(
                 "  the app beyond that floor",
-                f"{(cpu - floor) * 100:.2f} % = {(cpu - floor) / RATE * 1e6:.0f} µs a frame",
+                f"{(cpu - floor) * 100:.2f} % = {(cpu - floor) / RATE * 1e6:.0f} µs a sample",
             )
     r.figures["live"] = {
         "seconds": horizon,
-        "frames_sent_by_horizon": sent_by,
-        "frames_in_file": in_file,
+        "samples_sent_by_horizon": sent_by,
+        "samples_in_file": in_file,
         "lateness_30hz_ms_p50_p99_max": [
             float(np.percentile(late30, 50)),
             float(np.percentile(late30, 99)),
             float(late30.max()),
         ],
         "fast_rate": s.fast_rate,
-        "fast_frames": len(fast),
-        "fast_frames_in_file": fast_in_file,
+        "fast_samples": len(fast),
+        "fast_samples_in_file": fast_in_file,
         "lateness_fast_ms_p50_p99_max": [p50, p99, worst],
         "cpu_fraction_30hz": cpu,
         "cpu_fraction_30hz_runs": cpu_runs,
@@ -475,7 +468,7 @@ def bench_live(s: Sizes, tmp: Path, r: Report) -> None:
 
 
 def bench_robots(s: Sizes, tmp: Path, r: Report) -> None:
-    """Goal 5: generated chains and trees; load, first frame, per-frame cost vs number of links."""
+    """Goal 5: generated chains and trees; load, first sample, per-sample cost vs number of links."""
     import rerun as rr
 
     from r2d2_viz.kinematics import compile_tree, joint_transforms
@@ -491,7 +484,7 @@ def bench_robots(s: Sizes, tmp: Path, r: Report) -> None:
     moving_of: dict[tuple[str, int], int] = {}
     for shape, n in cases:
         (tmp / f"{shape}_{n}.urdf").write_text(random_urdf(n, seed=n, chain=shape == "chain", joint_types=types))
-        runs_of[shape, n] = {"load": [], "static": [], "first": [], "frame": [], "fk": []}
+        runs_of[shape, n] = {"load": [], "static": [], "first": [], "sample": [], "fk": []}
     for _ in range(s.robot_repeats):  # every size once per repeat: a slow spell of the machine hits them all
         for shape, n in cases:
             urdf = tmp / f"{shape}_{n}.urdf"
@@ -501,55 +494,57 @@ def bench_robots(s: Sizes, tmp: Path, r: Report) -> None:
             t1 = time.perf_counter()
             rec = rr.RecordingStream("bench")
             rec.save(tmp / "robot.rrd")
-            stream = RobotStream(rec, tree, make_motion(tree.robot), RATE, warn=lambda _: None)
+            motion = make_motion(tree.robot, rate=RATE)
+            stream = RobotStream(rec, tree, frames=motion.frames, clock=motion.clock, warn=lambda _: None)
             stream.log_static()
             t2 = time.perf_counter()
-            chunks = stream.motion.chunks(None, 1)
-            stream.log_chunk(next(chunks))
+            chunks = motion.chunks(1)
+            stream.send(stream.prepare(next(chunks)))
             t3 = time.perf_counter()
             moving = len(tree.moving)
-            block = ROBOT_BLOCK_FRAMES  # the same chunk length for every size, as live runs have
-            per_frame, per_frame_fk = [], []
-            for chunk in stream.motion.chunks(block * ROBOT_BLOCKS, block):  # a fresh source from frame 0
+            block = ROBOT_BLOCK_SAMPLES  # the same chunk length for every size, as live runs have
+            per_sample, per_sample_fk = [], []
+            fresh = make_motion(tree.robot, rate=RATE, n_samples=block * ROBOT_BLOCKS)  # from sample 0
+            for chunk in fresh.chunks(block):
                 t4 = time.perf_counter()
-                stream.log_chunk(chunk)
+                stream.send(stream.prepare(chunk))
                 t5 = time.perf_counter()
                 joint_transforms(tree, chunk.positions)
                 t6 = time.perf_counter()
-                per_frame.append((t5 - t4) / block)
-                per_frame_fk.append((t6 - t5) / block)
+                per_sample.append((t5 - t4) / block)
+                per_sample_fk.append((t6 - t5) / block)
             rec.flush()
             rec.disconnect()
             # Free this case now, outside the timed regions: otherwise the next case's `tree = …` would
             # pay for dropping this one's (a bias that grows with the previous size).
-            del tree, stream, rec, chunks, chunk
+            del tree, stream, rec, chunks, chunk, motion, fresh
             gc.collect()
             runs["load"].append(t1 - t0)
             runs["static"].append(t2 - t1)
             runs["first"].append(t3 - t2)
-            runs["frame"].append(median(per_frame))
-            runs["fk"].append(median(per_frame_fk))
+            runs["sample"].append(median(per_sample))
+            runs["fk"].append(median(per_sample_fk))
             moving_of[shape, n] = moving
     for shape, n in cases:
         table.setdefault(shape, {})[n] = {k: median(v) for k, v in runs_of[shape, n].items()}
         table[shape][n] |= {"moving": moving_of[shape, n]}
     r.section(f"5. Generated robots ({'/'.join(types)} joints, 15 % mimic), medians of {s.robot_repeats}")
     r.add(
-        f"links: shape (per frame: median of {ROBOT_BLOCKS} chunks of {ROBOT_BLOCK_FRAMES} frames)",
-        "load | static | first frame | per frame (log) | per frame (FK)",
+        f"links: shape (per sample: median of {ROBOT_BLOCKS} chunks of {ROBOT_BLOCK_SAMPLES} samples)",
+        "load | static | first sample | per sample (log) | per sample (FK)",
     )
     for shape, by_n in table.items():
         for n, f in by_n.items():
             r.add(
                 f"{n:>5} links: {shape} ({f['moving']:.0f} moving joints)",
                 f"{f['load'] * 1e3:.1f} ms | {f['static'] * 1e3:.1f} ms | {f['first'] * 1e3:.2f} ms | "
-                f"{f['frame'] * 1e6:.1f} µs | {f['fk'] * 1e6:.2f} µs",
+                f"{f['sample'] * 1e6:.1f} µs | {f['fk'] * 1e6:.2f} µs",
             )
     lo, hi = s.robot_sizes[-2] if len(s.robot_sizes) > 2 else s.robot_sizes[0], s.robot_sizes[-1]
     worst = 0.0
     for shape, by_n in table.items():
         exps = []
-        for key in ("load", "static", "first", "frame", "fk"):
+        for key in ("load", "static", "first", "sample", "fk"):
             exp = math.log(by_n[hi][key] / by_n[lo][key]) / math.log(hi / lo)
             exps.append(f"{key} {exp:.2f}")
             worst = max(worst, exp)
@@ -559,7 +554,7 @@ def bench_robots(s: Sizes, tmp: Path, r: Report) -> None:
 
 
 def bench_size(s: Sizes, tmp: Path, r: Report) -> None:
-    """Goal 6: bytes per frame of the default recording, and what is per frame."""
+    """Goal 6: bytes per sample of the default recording, and what is per sample."""
     from rerun.chunk import RrdReader
 
     files = {}
@@ -568,9 +563,9 @@ def bench_size(s: Sizes, tmp: Path, r: Report) -> None:
         args = [] if seconds == 48 else ["--duration", str(seconds)]
         run_cmd([*APP, "--save", str(out), *args], cwd=tmp)
         files[seconds] = out.stat().st_size
-    frames = round(s.size_seconds * RATE)
-    per_frame = (files[2 * s.size_seconds] - files[s.size_seconds]) / frames
-    static_bytes = files[s.size_seconds] - per_frame * frames
+    samples = round(s.size_seconds * RATE)
+    per_sample = (files[2 * s.size_seconds] - files[s.size_seconds]) / samples
+    static_bytes = files[s.size_seconds] - per_sample * samples
     temporal: dict[str, dict[str, int]] = {}
     rows: dict[str, int] = {}
     static_entities = set()
@@ -583,32 +578,32 @@ def bench_size(s: Sizes, tmp: Path, r: Report) -> None:
         per = temporal.setdefault(chunk.entity_path, {})
         for name in batch.schema.names:
             per[name] = per.get(name, 0) + batch.column(name).nbytes
-    per_frame_entities = sorted(e for e, n in rows.items() if n >= frames)
-    other = sorted(e for e, n in rows.items() if n < frames)
+    per_sample_entities = sorted(e for e, n in rows.items() if n >= samples)
+    other = sorted(e for e, n in rows.items() if n < samples)
     by_component: dict[str, float] = {}
-    for e in per_frame_entities:
+    for e in per_sample_entities:
         for name, nbytes in temporal[e].items():
             key = name.split(":")[-1] if ":" in name else name
-            by_component[key] = by_component.get(key, 0) + nbytes / frames  # /tf has several rows a frame
-    r.section(f"6. Size: the default recording (one {s.size_seconds:g} s lap, {frames:,} frames)")
+            by_component[key] = by_component.get(key, 0) + nbytes / samples  # /tf has several rows a sample
+    r.section(f"6. Size: the default recording (one {s.size_seconds:g} s lap, {samples:,} samples)")
     r.add("file", f"{files[s.size_seconds]:,} B ({2 * s.size_seconds:g} s: {files[2 * s.size_seconds]:,} B)")
-    r.add("bytes per frame (file growth per extra frame)", f"{per_frame:,.0f} B")
+    r.add("bytes per sample (file growth per extra sample)", f"{per_sample:,.0f} B")
     r.add("static part (meshes, fixed transforms, axes, styles, blueprint)", f"{static_bytes:,.0f} B")
-    r.add(f"entities written every frame ({len(per_frame_entities)})", ", ".join(per_frame_entities))
+    r.add(f"entities written every sample ({len(per_sample_entities)})", ", ".join(per_sample_entities))
     r.add(
-        "  uncompressed Arrow bytes per frame, by column",
+        "  uncompressed Arrow bytes per sample, by column",
         ", ".join(f"{k} {v:.0f}" for k, v in sorted(by_component.items(), key=lambda kv: -kv[1])),
     )
     r.add("entities with sparse temporal rows", ", ".join(other) or "none")
     r.figures["size"] = {
-        "frames": frames,
+        "samples": samples,
         "file_bytes": files,
-        "bytes_per_frame": per_frame,
+        "bytes_per_sample": per_sample,
         "static_bytes": static_bytes,
-        "per_frame_entities": per_frame_entities,
+        "per_sample_entities": per_sample_entities,
         "sparse_temporal_entities": other,
         "static_entities": len(static_entities),
-        "arrow_bytes_per_frame_by_column": by_component,
+        "arrow_bytes_per_sample_by_column": by_component,
     }
 
 
@@ -662,7 +657,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--smoke", action="store_true", help="tiny sizes (CI): checks the script runs, no thresholds")
     parser.add_argument("--json", type=Path, default=None, metavar="PATH", help="also write the figures as JSON")
     parser.add_argument("--only", default=None, help="comma-separated sections: batch,kin,memory,live,robots,size")
-    parser.add_argument("--rrlog-baseline", nargs=2, metavar=("FRAMES", "OUT"), help=argparse.SUPPRESS)
+    parser.add_argument("--rrlog-baseline", nargs=2, metavar=("SAMPLES", "OUT"), help=argparse.SUPPRESS)
     parser.add_argument("--sdk-floor", nargs=3, metavar=("RATE", "SECONDS", "OUT"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.sdk_floor:
@@ -678,10 +673,10 @@ def main(argv: list[str] | None = None) -> int:
     report.notes += [
         "Ratios compare numbers measured side by side in this run (import floor and batch runs alternate); "
         "values are medians over the repeats; the machine may be shared, so absolute times vary between runs.",
-        "The rr.log baseline logs the same entities and values one frame at a time (its kinematics precomputed, "
-        "untimed) on a shorter run and is extrapolated per frame.",
+        "The rr.log baseline logs the same entities and values one sample at a time (its kinematics precomputed, "
+        "untimed) on a shorter run and is extrapolated per sample.",
         "Live figures come from the real app (--save X --realtime) with R2D2_VIZ_PACING_LOG: lateness is the time "
-        "the frame's send returned minus its due time on the absolute schedule start + k / rate.",
+        "the sample's send returned minus its due time on the absolute schedule start + k / rate.",
     ]
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="r2d2-viz-bench-") as d:

@@ -54,7 +54,7 @@ def soak(seconds: float, rate: float, interval: float) -> dict[str, float]:
     return {
         "seconds": seconds,
         "rate_hz": rate,
-        "frames": round(seconds * rate),
+        "samples": round(seconds * rate),
         "rss_settled_mb": base,
         "rss_end_mb": last,
         "rss_peak_mb": max(v for _, v in samples),
@@ -66,12 +66,12 @@ def soak(seconds: float, rate: float, interval: float) -> dict[str, float]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seconds", type=float, default=600.0, help="length of the run (default 600)")
-    parser.add_argument("--rate", type=float, default=1000.0, help="frames per second (default 1000)")
+    parser.add_argument("--rate", type=float, default=1000.0, help="samples per second (default 1000)")
     parser.add_argument("--interval", type=float, default=2.0, help="seconds between memory samples")
     args = parser.parse_args(argv)
     r = soak(args.seconds, args.rate, args.interval)
-    frames, rate, seconds = r["frames"], r["rate_hz"], r["seconds"]
-    print(f"soak: {frames:,} frames live at {rate:g} Hz for {seconds:g} s, saved ({r['file_mb']:.0f} MB)")
+    samples, rate, seconds = r["samples"], r["rate_hz"], r["seconds"]
+    print(f"soak: {samples:,} samples live at {rate:g} Hz for {seconds:g} s, saved ({r['file_mb']:.0f} MB)")
     print(
         f"RSS: {r['rss_settled_mb']:.0f} MB once settled, {r['rss_end_mb']:.0f} MB at the end "
         f"(peak {r['rss_peak_mb']:.0f} MB)"

@@ -19,9 +19,8 @@ from .kinematics import PRISMATIC, KinematicTree
 from .meshes import shape_mesh
 from .model import Rgba, Shape
 from .notices import Notices
+from .view_fit import AXIS_LENGTH
 
-AXIS_LENGTH = 0.1
-"""RViz's TF display draws axes 0.1 m long at marker scale 1."""
 ARROW_COLOR = (255, 0, 255)
 COLLISION_COLOR = (255, 140, 0, 160)
 DEFAULT_VISUAL_COLOR = (204, 204, 204, 255)
@@ -34,6 +33,7 @@ def log_scene(
     *,
     fixed_frame: str,
     root_is_static: bool,
+    axis_length: float = AXIS_LENGTH,
 ) -> None:
     """Model warnings, fixed transforms and static arrows, TF axes and the robot's shapes, all static."""
     robot = tree.robot
@@ -70,7 +70,7 @@ def log_scene(
         rec.log(
             entities.tf_axes(frame),
             rr.CoordinateFrame(frame),
-            rr.TransformAxes3D(AXIS_LENGTH, show_frame=False),
+            rr.TransformAxes3D(axis_length, show_frame=False),
             static=True,
         )
 

@@ -83,14 +83,7 @@ def open_recording(
     if config.spawn:
         if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
             raise SinkError("--spawn: no display to open the viewer on; use --save FILE.rrd or --serve instead")
-        executable = viewer_executable()
-        if executable is None:
-            raise SinkError("--spawn: the 'rerun' viewer binary was not found; use --save FILE.rrd or --serve instead")
-        try:
-            rr.spawn(port=config.port, connect=False, executable_path=executable, recording=rec)
-        except Exception as exc:
-            raise SinkError(f"--spawn: the viewer did not start ({exc}); use --save FILE.rrd or --serve") from None
-        sinks.append(rr.GrpcSink(f"rerun+http://127.0.0.1:{config.port}/proxy"))
+        sinks.append(rr.GrpcSink(_spawn_viewer(config.port)))
     if config.connect is not None:
         sinks.append(rr.GrpcSink(config.connect))
     if config.serve:
@@ -107,6 +100,43 @@ def open_recording(
             f"or run: rerun {public}"
         )
     return Recording(rec, server)
+
+
+def _spawn_viewer(port: int) -> str:
+    """The native viewer, listening on 127.0.0.1 only, detached so it outlives the app (like an RViz window);
+    a viewer already listening on that port is reused, as ``rr.spawn`` does. Returns its gRPC URL.
+
+    (``rr.spawn`` starts the viewer without ``--bind``, so it listens on every address.)"""
+    url = f"rerun+http://127.0.0.1:{port}/proxy"
+    if _listening("127.0.0.1", port):
+        return url
+    executable = viewer_executable()
+    if executable is None:
+        raise SinkError("--spawn: the 'rerun' viewer binary was not found; use --save FILE.rrd or --serve instead")
+    command = [executable, "--bind", "127.0.0.1", f"--port={port}", "--expect-data-soon"]
+    try:
+        viewer = subprocess.Popen(
+            command,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,  # detached: Ctrl-C in the terminal ends the app, not the window
+            env={**os.environ, "RERUN_APP_ONLY": "true"},
+        )
+    except OSError as exc:
+        raise SinkError(f"--spawn: the viewer did not start ({exc.strerror}); use --save FILE.rrd or --serve") from None
+    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
+    while time.monotonic() < deadline and viewer.poll() is None:
+        if _listening("127.0.0.1", port):
+            return url
+        time.sleep(0.05)
+    _stop(viewer)
+    raise SinkError(f"--spawn: the viewer did not start on 127.0.0.1:{port}; use --save FILE.rrd or --serve instead")
+
+
+def _listening(host: str, port: int) -> bool:
+    with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as probe:
+        return probe.connect_ex((host, port)) == 0
 
 
 def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
@@ -133,10 +163,9 @@ def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
     local = "127.0.0.1" if config.bind in ("0.0.0.0", "::") else config.bind
     deadline = time.monotonic() + SERVER_START_TIMEOUT_S
     while time.monotonic() < deadline and server.poll() is None:
-        with socket.socket(socket.AF_INET6 if ":" in local else socket.AF_INET) as probe:
-            if probe.connect_ex((local, config.port)) == 0:
-                host = f"[{local}]" if ":" in local else local
-                return server, f"rerun+http://{host}:{config.port}/proxy"
+        if _listening(local, config.port):
+            host = f"[{local}]" if ":" in local else local
+            return server, f"rerun+http://{host}:{config.port}/proxy"
         time.sleep(0.05)
     _stop(server)
     raise SinkError(f"--serve: the Rerun server did not start on {config.bind}:{config.port}")

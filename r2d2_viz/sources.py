@@ -140,3 +140,47 @@ class ArraySource:
             part = slice(start, start + max_samples)
             tracks = tuple(FrameTrack(t.parent, t.child, t.translation[part], t.quat_xyzw[part]) for t in self.tracks)
             yield SampleChunk(self.times_ns[part], self.joints, self.positions[part], tracks)
+
+
+@dataclass(frozen=True, eq=False)
+class TfRecords:
+    """Transforms as recorded (a bag's ``/tf`` or ``/tf_static``): one row per transform, each naming its frames."""
+
+    times_ns: I64  # (n,) on the source's clock
+    parents: tuple[str, ...]
+    children: tuple[str, ...]
+    translation: F64  # (n, 3) T_parent_child
+    quat_xyzw: F64  # (n, 4)
+    static: bool = False
+    """From ``/tf_static``: each edge holds for the whole recording."""
+
+    def __len__(self) -> int:
+        return len(self.times_ns)
+
+    def edges(self) -> set[tuple[str, str]]:
+        return set(zip(self.parents, self.children, strict=True))
+
+
+def tf_root(records: Sequence[TfRecords]) -> str | None:
+    """The root of the recorded TF tree (a frame that is some edge's parent and no edge's child), as RViz users
+    pick their fixed frame (``map``, ``odom``); with several roots, the one with the most frames below it."""
+    children: dict[str, set[str]] = {}
+    has_parent: set[str] = set()
+    for r in records:
+        for parent, child in r.edges():
+            children.setdefault(parent, set()).add(child)
+            has_parent.add(child)
+    roots = [frame for frame in children if frame not in has_parent]
+    if not roots:
+        return None
+
+    def below(frame: str) -> int:
+        seen, stack = {frame}, [frame]
+        while stack:
+            for child in children.get(stack.pop(), ()):
+                if child not in seen:
+                    seen.add(child)
+                    stack.append(child)
+        return len(seen)
+
+    return max(sorted(roots), key=below)

@@ -31,6 +31,7 @@ from .plots import JointPlots
 from .scene import log_scene
 from .sources import Clock, JointState, SampleChunk
 from .tf_rows import TfRows
+from .view_fit import AXIS_LENGTH
 
 PLOT_PERIOD_NS = 500_000_000
 """Live runs send plot values twice a second (each with its own timestamp), transforms every sample."""
@@ -69,7 +70,8 @@ class RobotStream:
     """Logs one robot driven by one source to a recording (see the module docstring for the order of calls).
 
     ``joints`` and ``frames`` are the source's (:class:`r2d2_viz.sources.Source`); ``clock`` says whether
-    sample times are durations since the start or timestamps."""
+    sample times are durations since the start or timestamps. ``root_placed``: something else (a bag's /tf)
+    gives the root its parent frame, so the stream does not pin it to the fixed frame's origin."""
 
     def __init__(
         self,
@@ -81,6 +83,8 @@ class RobotStream:
         fixed_frame: str = ODOM,
         timeline: str = entities.TIMELINE,
         warn: Warn = to_stderr,
+        root_placed: bool = False,
+        axis_length: float = AXIS_LENGTH,
     ) -> None:
         self.rec, self.tree, self.clock, self.timeline = rec, tree, clock, timeline
         self.fixed_frame = fixed_frame
@@ -88,7 +92,8 @@ class RobotStream:
         self.state = JointState(tree.actuated)
         self.tf = TfRows(tree, tracks=tuple(frames), fixed_frame=fixed_frame)
         self.plots = JointPlots(tree, timeline=timeline, clock=clock)
-        self._root_is_static = not any(child == tree.robot.root for _, child in frames)
+        self._root_is_static = not root_placed and not any(child == tree.robot.root for _, child in frames)
+        self.axis_length = axis_length
         self._pending: PreparedSamples | None = None
         self._plot_from = self._sent_to = 0
         self._next_limits_ns: int | None = None
@@ -98,7 +103,14 @@ class RobotStream:
     # --- 1. static ---------------------------------------------------------------------------------
 
     def log_static(self) -> None:
-        log_scene(self.rec, self.tree, self.notices, fixed_frame=self.fixed_frame, root_is_static=self._root_is_static)
+        log_scene(
+            self.rec,
+            self.tree,
+            self.notices,
+            fixed_frame=self.fixed_frame,
+            root_is_static=self._root_is_static,
+            axis_length=self.axis_length,
+        )
         self.tf.log_static(self.rec, entities.TF)
         self.plots.log_styles(self.rec)
 

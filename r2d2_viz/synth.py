@@ -10,7 +10,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-ALL_JOINT_TYPES = ("fixed", "revolute", "continuous", "prismatic", "floating", "planar")
+from .urdf_check import JOINT_TYPES as ALL_JOINT_TYPES
 
 
 def random_urdf(

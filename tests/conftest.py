@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-import shutil
+import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -45,8 +45,9 @@ def lap_recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, subpr
 
 
 def rerun_viewer() -> str | None:
-    beside = Path(sys.executable).parent / "rerun"
-    return str(beside) if beside.exists() else shutil.which("rerun")
+    from r2d2_viz.sinks import viewer_executable
+
+    return viewer_executable()
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -58,3 +59,15 @@ def pytest_configure(config: pytest.Config) -> None:
             "r2d2_viz was imported from the source tree; install it (pip install '.[test]') and run "
             "`pytest` (not `python -m pytest`, which puts the checkout first on sys.path)"
         )
+
+
+def listening_addresses(port: int) -> set[str]:
+    """Addresses a local TCP port listens on, read from /proc/net/tcp{,6}."""
+    out = set()
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        for line in Path(table).read_text().splitlines()[1:]:
+            local, state = line.split()[1], line.split()[3]
+            address, hex_port = local.split(":")
+            if state == "0A" and int(hex_port, 16) == port:  # 0A: LISTEN
+                out.add(socket.inet_ntoa(bytes.fromhex(address)[::-1]) if len(address) == 8 else address)
+    return out

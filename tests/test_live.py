@@ -14,7 +14,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
-from conftest import rerun_viewer
+from conftest import listening_addresses, rerun_viewer
 from rrd import read_recording, tf_by_child
 
 pytestmark = pytest.mark.slow
@@ -113,29 +113,17 @@ def test_an_interrupted_batch_save_removes_its_partial_file_and_keeps_the_old_on
     assert not list(tmp_path.glob("*.partial"))
 
 
-def _listening(port: int) -> set[str]:
-    """Addresses a local TCP port listens on, read from /proc/net/tcp{,6}."""
-    out = set()
-    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
-        for line in Path(table).read_text().splitlines()[1:]:
-            local, state = line.split()[1], line.split()[3]
-            address, hex_port = local.split(":")
-            if state == "0A" and int(hex_port, 16) == port:  # 0A: LISTEN
-                out.add(socket.inet_ntoa(bytes.fromhex(address)[::-1]) if len(address) == 8 else address)
-    return out
-
-
 def test_serve_listens_on_loopback_only_and_a_signal_finalises_its_save(tmp_path: Path) -> None:
     port, web_port, out = _free_port(), _free_port(), tmp_path / "served.rrd"
     args = [*_command(), "--serve", "--port", str(port), "--web-port", str(web_port), "--save", str(out)]
     with _process(args) as proc:
         _wait_for_port(port)
         _wait_for_port(web_port)
-        assert _listening(port) == {"127.0.0.1"} and _listening(web_port) == {"127.0.0.1"}
+        assert listening_addresses(port) == {"127.0.0.1"} and listening_addresses(web_port) == {"127.0.0.1"}
         time.sleep(1.5)
         os.killpg(proc.pid, signal.SIGINT)
         _, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 0, stderr
     assert f"rerun rerun+http://localhost:{port}/proxy" in stderr  # tells the user where to look
     assert len(tf_by_child(read_recording(out))["axis"].times) >= 15
-    assert not _listening(port) and not _listening(web_port)  # the server went with the app
+    assert not listening_addresses(port) and not listening_addresses(web_port)  # the server went with the app

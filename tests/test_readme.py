@@ -22,3 +22,11 @@ def test_two_commands_install_and_run() -> None:
 def test_ci_runs_the_readme_test_command_verbatim() -> None:
     ci = (REPO / ".ci" / "run").read_text().splitlines()
     assert _commands()[1] in ci
+
+
+def test_the_test_command_lints_before_testing() -> None:
+    tests = _commands()[1]
+    steps = [step.strip() for step in tests.split("&&")]
+    lint = [".venv/bin/ruff check .", ".venv/bin/ruff format --check .", ".venv/bin/mypy"]
+    assert all(step in steps for step in lint)
+    assert max(steps.index(step) for step in lint) < steps.index(".venv/bin/pytest")

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import listening_addresses
 
 from . import viewers
 
@@ -247,6 +248,7 @@ def test_spawn_opens_the_native_viewer_and_streams_live(x_display, artifacts_dir
         assert result.returncode == 0, log.read_text()
         assert "90 samples" in log.read_text()
         assert viewer_pids, "the viewer should outlive the app, like an RViz window"
+        assert listening_addresses(port) == {"127.0.0.1"}, "the spawned viewer listens on loopback only"
         client = ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
         state = client.get_state()
         assert state.active_recording and any(t.name == "time" for r in state.recordings for t in r.timelines)

@@ -34,7 +34,6 @@ import shutil
 import signal
 import socket
 import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -87,11 +86,10 @@ BBox = tuple[int, int, int, int]
 
 
 def rerun_cli() -> str:
-    """Path of the ``rerun`` CLI next to the running interpreter (the venv's), else on PATH."""
-    candidate = Path(sys.executable).with_name("rerun")
-    if candidate.is_file() and os.access(candidate, os.X_OK):
-        return str(candidate)
-    found = shutil.which("rerun")
+    """The ``rerun`` CLI the app itself uses (:func:`r2d2_viz.sinks.viewer_executable`)."""
+    from r2d2_viz.sinks import viewer_executable
+
+    found = viewer_executable()
     if found is None:
         raise FileNotFoundError("rerun CLI not found next to the interpreter nor on PATH")
     return found
