@@ -3,20 +3,15 @@ plain xacro does, hostile files run nothing, errors are one line naming the file
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import cli
-from lxml import etree
+from xacro_cases import canonical, plain_xacro, refusal, write
 
-from r2d2_viz import xacro_load
-from r2d2_viz.errors import UrdfError, UsageError, XacroError
+from r2d2_viz.errors import UsageError
 from r2d2_viz.packages import PackageIndex
 from r2d2_viz.xacro_load import expand_xacro, is_xacro, load_description, load_robot
 
@@ -43,35 +38,6 @@ PACKAGES = {
     "kuka_kr6_support": "kuka_experimental/kuka_kr6_support",
     "kuka_resources": "kuka_experimental/kuka_resources",
 }
-FAKE_AMENT = """import json, os
-def get_package_share_directory(name):
-    return json.loads(os.environ["R2D2_TEST_PACKAGES"])[name]
-"""
-
-
-def canonical(xml: str | bytes) -> bytes:
-    parser = etree.XMLParser(remove_blank_text=True, remove_comments=True, resolve_entities=False)
-    data = xml.encode() if isinstance(xml, str) else xml
-    return etree.tostring(etree.fromstring(data, parser), method="c14n")
-
-
-def plain_xacro(tmp_path: Path, path: Path, args: dict[str, str], packages: dict[str, Path]) -> subprocess.Popen[str]:
-    """Run the unmodified ``xacro`` command (the reference), with a stand-in ament index for $(find)."""
-    exe = Path(sys.executable).parent / "xacro"
-    if not exe.exists():
-        pytest.skip("the xacro command is not installed beside python")
-    (tmp_path / "ament_index_python").mkdir(exist_ok=True)
-    (tmp_path / "ament_index_python" / "__init__.py").write_text("")
-    (tmp_path / "ament_index_python" / "packages.py").write_text(FAKE_AMENT)
-    env = {
-        **os.environ,
-        "PYTHONPATH": str(tmp_path),
-        "R2D2_TEST_PACKAGES": json.dumps({k: str(v) for k, v in packages.items()}),
-    }
-    command = [str(exe), str(path), *(f"{k}:={v}" for k, v in args.items())]
-    return subprocess.Popen(command, env=env, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-
-
 # --------------------------------------------------------------------------- real descriptions
 
 
@@ -211,22 +177,6 @@ def test_detection_by_extension_or_namespace(tmp_path: Path) -> None:
 # --------------------------------------------------------------------------- errors
 
 
-def write(tmp_path: Path, body: str, name: str = "robot.urdf.xacro") -> Path:
-    path = tmp_path / name
-    head = '<?xml version="1.0"?>\n<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="r">'
-    path.write_text(f"{head}\n{body}\n</robot>\n")
-    return path
-
-
-def refusal(path: Path, **kwargs: object) -> str:
-    with pytest.raises(XacroError) as info:
-        load_description(path, **kwargs)  # type: ignore[arg-type]
-    message = str(info.value)
-    assert isinstance(info.value, UrdfError)
-    assert "\n" not in message and len(message) < 1200
-    return message
-
-
 def test_error_names_the_file_the_macro_and_the_include_chain(tmp_path: Path) -> None:
     (tmp_path / "parts.xacro").write_text(
         '<robot xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
@@ -268,124 +218,6 @@ def test_missing_include_and_bad_xml(tmp_path: Path) -> None:
     )
     (tmp_path / "broken.xacro").write_text("<robot><link></robot>")
     assert refusal(tmp_path / "broken.xacro").startswith("broken.xacro: not well-formed XML: mismatched tag: line 1")
-
-
-# --------------------------------------------------------------------------- hostile files
-
-# Each payload creates MARKER when it runs. The first three run shell commands with plain xacro 2.1
-# (test_payloads_are_real_escapes_with_plain_xacro shows it); the others are variations.
-ESCAPES = {
-    # a running generator's frame leads to xacro's module globals, then os.system
-    "generator_frames": '<link name="${[L := [], g := (q.gi_frame.f_back.f_back.f_globals for q in L), '
-    "L.append(g), python.list(g)][-1][0]['os'].system('touch MARKER')}\"/>",
-    # python.vars + python.type and dunder names built from strings: object's subclasses, os._wrap_close,
-    # its __init__'s globals through the __globals__ descriptor's __get__ slot wrapper
-    "vars_and_built_dunders": '<link name="${[O := python.type(0).mro()[-1], '
-    "W := [c for c in python.vars(python.type(O))['_'+'_subclasses__'](O) "
-    "if python.vars(c).get('_'+'_module__') == 'os' and 'close' in python.vars(c)][0], "
-    "f := python.vars(W)['_'+'_init__'], d := python.vars(python.type(f))['_'+'_globals__'], "
-    "G := python.vars(python.type(d))['_'+'_get__'](d, f), G['system']('touch MARKER')][-1]}\"/>",
-    # $(eval) runs with Python's builtins in plain xacro; a property hides the ')' from xacro's lexer
-    "eval_exec": '<xacro:property name="code" value="exec(\'import os; os.system(&quot;touch MARKER&quot;)\', {})"/>'
-    '<link name="$(eval ${code})"/>',
-}
-VARIANTS = {
-    "dunder_attribute": "<link name=\"${''.__class__.__mro__[1]}\"/>",
-    "eval_import": "<xacro:property name=\"code\" value=\"__import__('os').system('touch MARKER')\"/>"
-    '<link name="$(eval ${code})"/>',
-    "eval_open": '<xacro:property name="code" value="open(\'MARKER\', \'w\')"/><link name="$(eval ${code})"/>',
-    "getattr": "<link name=\"${getattr(python, 'vars')}\"/>",
-    # a format template from a property (not an expression constant) reads dunder attributes
-    "property_format": '<xacro:property name="fmt" value="{0.__class__.__mro__}"/><link name="${fmt.format(1)}"/>',
-    "lambda_default": '<link name="${(lambda v=python.vars: v)()(python)}"/>',
-    "lambda_frame": '<link name="${[(lambda: q.gi_frame) for q in [(x for x in [0])]][0]().f_globals}"/>',
-    "type_call": '<link name="${python.type(1)}"/>',
-    "vars_direct": '<link name="${python.vars(python)}"/>',
-    "eval_frames": '<xacro:property name="code" value="[(x for x in [0])][0].gi_frame.f_globals"/>'
-    '<link name="$(eval ${code})"/>',
-}
-
-
-@pytest.mark.parametrize("name", sorted(ESCAPES))
-def test_payloads_are_real_escapes_with_plain_xacro(tmp_path: Path, name: str) -> None:
-    path = write(tmp_path, ESCAPES[name].replace("MARKER", str(tmp_path / "PWNED")))
-    plain = plain_xacro(tmp_path, path, {}, {})
-    plain.communicate(timeout=60)
-    assert (tmp_path / "PWNED").exists()  # the control: this payload does run a command with plain xacro
-
-
-@pytest.mark.parametrize("name", sorted({**ESCAPES, **VARIANTS}))
-def test_hostile_expressions_run_nothing(tmp_path: Path, name: str) -> None:
-    payload = {**ESCAPES, **VARIANTS}[name]
-    path = write(tmp_path, payload.replace("MARKER", str(tmp_path / "PWNED")))
-    message = refusal(path)
-    assert not (tmp_path / "PWNED").exists()
-    assert message.startswith("robot.urdf.xacro: ")
-    if name not in ("eval_import",):  # xacro itself refuses '__' in $(eval) first
-        assert "refused for safety" in message or "is not defined" in message, message
-
-
-def test_refusal_message_says_what_was_refused(tmp_path: Path) -> None:
-    message = refusal(write(tmp_path, VARIANTS["vars_direct"]))
-    assert message == "robot.urdf.xacro: expression refused for safety: attribute 'vars' is not allowed"
-    message = refusal(write(tmp_path, ESCAPES["eval_exec"].replace("MARKER", "x")))
-    assert message == "robot.urdf.xacro: expression refused for safety: name 'exec' is not allowed"
-
-
-def test_ordinary_expressions_still_work(tmp_path: Path) -> None:
-    (tmp_path / "conf.yaml").write_text("arm: {length: 0.5, names: [a, b]}\nangle: !degrees 90\n")
-    path = write(
-        tmp_path,
-        '<xacro:property name="conf" value="${xacro.load_yaml(\'conf.yaml\')}"/>'
-        '<xacro:arg name="side" default="left"/>'
-        "<link name=\"${'%s_%s' % ('$(arg side)', conf.arm.names[1])}\"/>"
-        '<link name="l_${conf.arm.length * 2}_${round(conf.angle, 4)}_${python.sorted([3, 1])[0]}"/>'
-        '<xacro:property name="e" value="arg(\'side\') + \'_\' + str(int(pi))"/><link name="$(eval ${e})"/>'
-        '<link name="${math.radians(180) == pi and (lambda x: x + 1)(1)}"/>'
-        '<xacro:property name="type" value="revolute"/><link name="${type}"/>',
-    )
-    urdf = expand_xacro(path, mappings={"side": "right"}, packages=PackageIndex())
-    names = [el.get("name") for el in etree.fromstring(urdf.encode())]
-    assert names == ["right_b", "l_1.0_1.5708_1", "right_3", "2", "revolute"]
-
-
-def test_include_of_a_device_or_an_entity_bomb_is_refused(tmp_path: Path) -> None:
-    message = refusal(write(tmp_path, '<xacro:include filename="/dev/zero"/>'))
-    assert message.startswith("zero: is not a regular file; refused")
-    (tmp_path / "bomb.xacro").write_text(
-        '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>'
-        "<robot>&b;</robot>"
-    )
-    assert "declares entities" in refusal(write(tmp_path, '<xacro:include filename="bomb.xacro"/>'))
-
-
-def test_runaway_recursion_and_output_are_bounded(tmp_path: Path) -> None:
-    path = write(tmp_path, '<xacro:macro name="m" params=""><xacro:m/></xacro:macro><xacro:m/>')
-    assert "nest too deeply" in refusal(path)
-    path = write(tmp_path, "<link name=\"${'x' * (70 * 1024 * 1024)}\"/>")
-    assert "expands to more than 67108864 bytes; refused" in refusal(path)
-
-
-def test_runaway_memory_is_bounded(tmp_path: Path) -> None:
-    message = refusal(write(tmp_path, '<link name="${len([0] * (1024**3))}"/>'))
-    assert message == "robot.urdf.xacro: xacro ran out of memory (limit 2048 MiB)"
-
-
-def test_a_slow_expression_is_stopped(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(xacro_load, "TIMEOUT_S", 2.0)
-    message = refusal(write(tmp_path, '<link name="${9**9**9}"/>'))
-    assert message == "robot.urdf.xacro: xacro expansion took more than 2 s; stopped"
-
-
-def test_hooks_are_restored_after_expansion() -> None:
-    import xacro
-    from xacro import substitution_args
-
-    before = (xacro.safe_eval, xacro.parse, xacro._global_symbols, substitution_args._eval)
-    with xacro_load._hardened(PackageIndex()):
-        assert xacro.safe_eval is not before[0]
-        assert "vars" not in xacro._global_symbols["python"]
-    assert (xacro.safe_eval, xacro.parse, xacro._global_symbols, substitution_args._eval) == before
 
 
 def test_data_readme_lists_every_repository() -> None:
