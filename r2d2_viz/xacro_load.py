@@ -21,6 +21,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
 
+from lxml import etree
+
 from .errors import UrdfError, UsageError, XacroError
 from .packages import PackageIndex
 from .urdf_xml import MAX_FILE_BYTES
@@ -72,7 +74,7 @@ def load_robot(
 
     path = Path(path)
     packages = packages or PackageIndex.from_environ(description=path)
-    if not is_xacro(path, _head(path)):
+    if not is_xacro(path, _peek(path)):
         if mappings:
             raise UsageError(f"{', '.join(f'{k}:={v}' for k, v in mappings.items())}: arguments for a xacro file, "
                              f"but {path.name} is not one")  # fmt: skip
@@ -89,10 +91,11 @@ def load_robot(
     return dataclasses.replace(robot, warnings=description.warnings + robot.warnings)
 
 
-def _head(path: Path) -> bytes:
+def _peek(path: Path) -> bytes:
+    """The file's bytes up to the size limit; nothing if it cannot be read (:func:`load_urdf` then says why)."""
     try:
         with path.open("rb") as fh:
-            return fh.read(65536) if path.is_file() else b""
+            return fh.read(MAX_FILE_BYTES + 1) if path.is_file() else b""
     except OSError:
         return b""
 
@@ -103,8 +106,35 @@ def expand_xacro(path: str | Path, *, mappings: Mapping[str, str], packages: Pac
 
 
 def is_xacro(path: Path, data: bytes) -> bool:
-    """By extension, or a xacro namespace declaration (``xmlns:xacro="http://www.ros.org/wiki/xacro"``)."""
-    return path.suffix.lower() == ".xacro" or _XACRO_NS.search(data[:65536]) is not None
+    """By extension, or a xacro namespace declaration (``xmlns:xacro="http://www.ros.org/wiki/xacro"``) in a
+    file that uses xacro: many URDFs made by xacro keep the declaration and nothing else (they load as they
+    are, without a xacro run)."""
+    if path.suffix.lower() == ".xacro":
+        return True
+    found = _XACRO_NS.search(data[:65536])
+    return found is not None and _uses_xacro(data)
+
+
+def _uses_xacro(data: bytes) -> bool:
+    """A xacro element, or ``${`` / ``$(`` in an attribute or text (comments aside). Unparsable: False (the
+    URDF reader then says what is wrong)."""
+    parser = etree.XMLParser(
+        resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False, remove_comments=True, remove_pis=True
+    )
+    try:
+        root = etree.fromstring(data, parser)
+    except (etree.XMLSyntaxError, ValueError):
+        return False
+    xacro_uris = {uri for uri in root.nsmap.values() if uri and "xacro" in uri}
+    for el in root.iter():
+        if not isinstance(el.tag, str):
+            continue
+        if el.tag.startswith("{") and el.tag[1:].split("}")[0] in xacro_uris:
+            return True
+        texts = [el.text or "", el.tail or "", *el.attrib.values()]
+        if any("${" in t or "$(" in t for t in texts):
+            return True
+    return False
 
 
 def read_bounded(path: Path) -> bytes:

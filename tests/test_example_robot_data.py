@@ -38,12 +38,7 @@ _COUNT = Counter(path.name for path in _ALL)
 URDFS = {(p.name if _COUNT[p.name] == 1 else f"{p.parts[-3]}/{p.name}"): p for p in _ALL}
 """By file name; the two anymal.urdf (ANYmal B and C) by folder too."""
 BUDGET_S = 20
-# ur3.urdf is xacro's output for a file of macros only (it keeps the xacro namespace, so it goes through
-# xacro again): an empty <robot>.
-REFUSED = {
-    "ur3.urdf": "error: ur3.urdf: robot: has no <link> elements after xacro "
-    "(does it only define macros that another file calls?)\n"
-}
+REFUSED = {"ur3.urdf": "error: ur3.urdf: robot: has no <link> elements\n"}
 # What urdfdom accepts with a warning (issue 10), and the warning r2d2-viz gives.
 LENIENT = {
     "centauro.urdf": "<limit> has no lower; read as 0, like urdfdom",
