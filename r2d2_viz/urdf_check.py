@@ -181,7 +181,7 @@ class _Checker:
         if jtype is None:
             self.fail(where, f"missing type attribute; {expected}")
         if jtype not in JOINT_TYPES:
-            self.fail(where, f"unknown joint type {_q(jtype)}; {expected}")
+            self.fail(where, f"unknown joint type {_q(jtype)}; {expected} (urdfdom: has no known type)")
         ends: list[str] = []
         for role in ("parent", "child"):
             el = _first(joint, role)
@@ -203,7 +203,7 @@ class _Checker:
                 self.fail(where, f"<axis> xyz={_q(axis_el.get('xyz', ''))}: must not be a zero vector")
         limit = _first(joint, "limit")
         if limit is None and jtype in _LIMITED_TYPES:
-            self.fail(where, f"{jtype} joint has no <limit lower=... upper=...>")
+            self.fail(where, f"{jtype} joint has no <limit lower=... upper=...> (urdfdom: does not specify limits)")
         if limit is not None:
             # Limits may be infinite or huge (urdfdom reads "inf"; ±1e16 means unlimited): accepted here.
             bounds = [self.numbers(where, limit, attr, 1, infinite_ok=True) for attr in ("lower", "upper")]
@@ -215,6 +215,7 @@ class _Checker:
                         self.warn(where, f"<limit> has no {attr}; read as 0, like urdfdom")
                 lower, upper = ((0.0,) if value is None else value for value in bounds)
                 if lower[0] > upper[0]:
+                    # urdfdom does not check it, but no position satisfies such a limit: refused.
                     self.fail(where, f"<limit> lower={lower[0]:g} is greater than upper={upper[0]:g}")
                 if lower[0] == math.inf or upper[0] == -math.inf:
                     self.fail(where, f"<limit> lower={lower[0]:g} upper={upper[0]:g} leaves no position")
@@ -252,7 +253,7 @@ def check_robot(
     link_els = list(_children(root, "link"))
     joint_els = list(_children(root, "joint"))
     if not link_els:
-        checker.fail(robot, "has no <link> elements")
+        checker.fail(robot, "has no <link> elements")  # urdfdom: "No link elements found in urdf file"
     links = _names(link_els, "link", checker)
     joint_names = _names(joint_els, "joint", checker)
 
@@ -282,7 +283,7 @@ def check_robot(
         if mimic is not None:
             target = mimic.get("joint")
             if not target:
-                checker.fail(where, "<mimic> has no joint attribute")
+                checker.fail(where, "<mimic> has no joint attribute (urdfdom: no mimic joint specified)")
             checker.numbers(where, mimic, "multiplier", 1)
             checker.numbers(where, mimic, "offset", 1)
             if target in joint_names:
@@ -293,7 +294,11 @@ def check_robot(
     roots = [name for name in links if name not in parent_joint]
     if len(roots) > 1:
         shown = ", ".join(_q(r, 40) for r in roots[:5]) + (", …" if len(roots) > 5 else "")
-        checker.fail(robot, f"more than one root link ({len(roots)}: {shown}); every other link needs a parent joint")
+        checker.fail(
+            robot,
+            f"more than one root link ({len(roots)}: {shown}); every other link needs a parent joint "
+            "(urdfdom: two root links found)",
+        )
     reached: set[str] = set(roots)
     stack = list(roots)
     while stack:
