@@ -126,3 +126,21 @@ def test_hooks_are_restored_after_expansion() -> None:
         assert xacro.safe_eval is not before[0]
         assert "vars" not in xacro._global_symbols["python"]
     assert (xacro.safe_eval, xacro.parse, xacro._global_symbols, substitution_args._eval) == before
+
+
+def test_find_env_and_optenv_work(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # What a xacro file can still read (README): packages' paths and environment variables.
+    monkeypatch.setenv("R2D2_TEST_SIDE", "left")
+    pkg = tmp_path / "somewhere"
+    pkg.mkdir()
+    path = write(
+        tmp_path,
+        '<link name="$(env R2D2_TEST_SIDE)_$(optenv R2D2_TEST_UNSET fallback)"/>'
+        '<link name="$(find my_pkg)"/>'
+        "<xacro:property name=\"e\" value=\"find('my_pkg') + '/' + env('R2D2_TEST_SIDE')\"/>"
+        '<link name="$(eval ${e})"/>',
+    )
+    index = PackageIndex.from_args([f"my_pkg={pkg}"], description=path, environ={})
+    urdf = expand_xacro(path, mappings={}, packages=index)
+    names = [el.get("name") for el in etree.fromstring(urdf.encode())]
+    assert names == ["left_fallback", str(pkg), f"{pkg}/left"]
