@@ -14,12 +14,12 @@ from .replay import Replay
 CHUNK_SAMPLES = 10_000
 
 
-def write_bag(path: Path, plan: Replay, urdf: Path) -> int:
-    """Write the run as a bag at ``path``; returns the number of samples."""
+def write_bag(path: Path, plan: Replay, description: str) -> int:
+    """Write the run as a bag at ``path`` with ``description`` (URDF text) on /robot_description; returns the
+    number of samples."""
     tree, source = plan.tree, plan.source
     if tree is None or source is None:
         raise UsageError(f"--save {path}: a bag needs a robot and joint states to write")
-    description = plan.description if plan.description is not None else urdf.read_text(encoding="utf-8")
     translation, quat = tree.static_translation_quat()
     static = [
         StaticTransform(tree.robot.joint(name).parent, tree.robot.joint(name).child, translation[i], quat[i])

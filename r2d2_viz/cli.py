@@ -38,7 +38,17 @@ def build_parser() -> argparse.ArgumentParser:
         description="The ROS 2 'URDF with robot_state_publisher' tutorial robot, moving in the Rerun viewer.",
         epilog="Without a sink flag, --spawn is used. Open a saved recording with: rerun out.rrd",
     )
-    parser.add_argument("--urdf", type=Path, default=None, help="robot description (default: the tutorial's R2D2)")
+    parser.add_argument(
+        "--urdf", type=Path, default=None, help="robot description, URDF or xacro (default: the tutorial's R2D2)"
+    )
+    parser.add_argument("xacro_args", nargs="*", metavar="NAME:=VALUE", help="xacro arguments")
+    parser.add_argument(
+        "--package-path",
+        action="append",
+        default=[],
+        metavar="DIR|NAME=DIR",
+        help="where ROS packages are (repeatable): a package, a folder of packages, or NAME=DIR for one package",
+    )
     parser.add_argument(
         "--motion",
         default=None,
@@ -142,8 +152,16 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         port=args.port,
         web_port=args.web_port,
     )
+    mappings: dict[str, str] = {}
+    for item in args.xacro_args:
+        name, sep, value = item.partition(":=")
+        if not sep or not name.isidentifier():
+            raise UsageError(f"{item!r}: expected a xacro argument NAME:=VALUE")
+        mappings[name] = value
     config = RunConfig(
         urdf=args.urdf,
+        mappings=mappings,
+        package_paths=tuple(args.package_path),
         motion=args.motion,
         rate=args.rate,
         duration=args.duration,

@@ -29,3 +29,12 @@ class SinkError(R2d2VizError):
 
 class BagError(R2d2VizError):
     """A ROS 2 bag cannot be read or holds the wrong thing: ``run.mcap: /joint_states is std_msgs/msg/String``."""
+
+
+class PackageError(UrdfError):
+    """A ROS package named by ``$(find pkg)`` or ``package://pkg`` cannot be found; says where it looked."""
+
+
+class XacroError(UrdfError):
+    """A xacro file cannot be expanded (bad XML, bad expression, refused expression, missing include or
+    package); names the file and the include / macro chain."""

@@ -28,7 +28,8 @@ import yourdfpy
 from lxml import etree
 
 from .errors import UrdfError
-from .urdf_check import JOINT_TYPES, check_robot, parse_urdf_xml, read_urdf_xml, resolve_mesh_path
+from .packages import PackageIndex
+from .urdf_check import JOINT_TYPES, check_robot, parse_urdf_xml, read_urdf_xml
 
 JointType = str
 """One of :data:`r2d2_viz.urdf_check.JOINT_TYPES` (checked before a model is built)."""
@@ -180,27 +181,35 @@ class Robot:
 # --- loading ------------------------------------------------------------------------------------
 
 
-def load_urdf(path: str | Path) -> Robot:
-    """Read, validate and convert a URDF file. Raises :class:`UrdfError` with a one-line message."""
+def load_urdf(path: str | Path, *, packages: PackageIndex | None = None) -> Robot:
+    """Read, validate and convert a URDF file. Raises :class:`UrdfError` with a one-line message.
+    ``package://`` meshes are found through ``packages`` (default: above the file, then the ROS environment)."""
     path = Path(path)
     with _cyclic_gc_paused():
         root = read_urdf_xml(path)
-        return _validated(root, source=path.name, base_dir=path.parent)
+        return _validated(root, source=path.name, base_dir=path.parent, packages=packages)
 
 
-def parse_urdf(text: str | bytes, *, source: str = "robot_description", base_dir: str | Path | None = None) -> Robot:
+def parse_urdf(
+    text: str | bytes,
+    *,
+    source: str = "robot_description",
+    base_dir: str | Path | None = None,
+    packages: PackageIndex | None = None,
+) -> Robot:
     """Validate and convert a robot description given as text (e.g. a bag's ``/robot_description``), through
     the same checks and one-line errors as :func:`load_urdf`; ``source`` names it in messages, relative mesh
     paths resolve against ``base_dir`` (the current directory by default)."""
     base = Path(base_dir) if base_dir is not None else Path.cwd()
     with _cyclic_gc_paused():
         root = parse_urdf_xml(text, source=source, base_dir=base)
-        return _validated(root, source=source, base_dir=base)
+        return _validated(root, source=source, base_dir=base, packages=packages)
 
 
-def _validated(root: etree._Element, *, source: str, base_dir: Path) -> Robot:
-    notes = check_robot(root, source=source, base_dir=base_dir)
-    robot = build_robot(root, source=source, base_dir=base_dir)
+def _validated(root: etree._Element, *, source: str, base_dir: Path, packages: PackageIndex | None) -> Robot:
+    packages = packages or PackageIndex.from_environ()
+    notes = check_robot(root, source=source, base_dir=base_dir, packages=packages)
+    robot = build_robot(root, source=source, base_dir=base_dir, packages=packages)
     return Robot(robot.name, robot.source, robot.root, robot.links, robot.joints, tuple(notes))
 
 
@@ -219,7 +228,7 @@ def _cyclic_gc_paused() -> Iterator[None]:
             gc.enable()
 
 
-def build_robot(root: etree._Element, *, source: str, base_dir: Path) -> Robot:
+def build_robot(root: etree._Element, *, source: str, base_dir: Path, packages: PackageIndex | None = None) -> Robot:
     """Convert a validated ``<robot>`` element into a :class:`Robot`.
 
     Shapes whose mesh file cannot be found are left out (:func:`check_robot` warns about them).
@@ -240,15 +249,21 @@ def build_robot(root: etree._Element, *, source: str, base_dir: Path) -> Robot:
         raise UrdfError(f"{source}: cannot parse: {exc}") from None
 
     named_colors = _named_colors(urdf)
+    index = packages or PackageIndex.from_environ()
     links = {
         link.name: Link(
             name=link.name,
-            visuals=tuple(s for v in link.visuals if (s := _shape(v, v.material, named_colors, base_dir)) is not None),
-            collisions=tuple(s for c in link.collisions if (s := _shape(c, None, named_colors, base_dir)) is not None),
+            visuals=tuple(
+                s for v in link.visuals if (s := _shape(v, v.material, named_colors, base_dir, index)) is not None
+            ),
+            collisions=tuple(
+                s for c in link.collisions if (s := _shape(c, None, named_colors, base_dir, index)) is not None
+            ),
         )
         for link in urdf.links
     }
-    joints = [_joint(j) for j in urdf.joints]
+    joint_names = {j.name for j in urdf.joints}
+    joints = [_joint(j, joint_names) for j in urdf.joints]
     root_name, ordered = _topological(links, joints, source)
     return Robot(
         name=urdf.name,
@@ -285,8 +300,9 @@ def _shape(
     material: yourdfpy.Material | None,
     named_colors: dict[str, Rgba],
     base_dir: Path,
+    packages: PackageIndex,
 ) -> Shape | None:
-    geometry = _geometry(element.geometry, base_dir)
+    geometry = _geometry(element.geometry, base_dir, packages)
     if isinstance(geometry, MeshFile) and geometry.path is None:
         return None
     rgba: Rgba | None = None
@@ -304,7 +320,7 @@ def _shape(
     )
 
 
-def _geometry(geometry: yourdfpy.Geometry, base_dir: Path) -> Geometry:
+def _geometry(geometry: yourdfpy.Geometry, base_dir: Path, packages: PackageIndex) -> Geometry:
     if geometry.box is not None:
         x, y, z = (float(v) for v in geometry.box.size)
         return Box((x, y, z))
@@ -315,23 +331,24 @@ def _geometry(geometry: yourdfpy.Geometry, base_dir: Path) -> Geometry:
     mesh = geometry.mesh
     scale = np.broadcast_to(np.asarray(1.0 if mesh.scale is None else mesh.scale, dtype=np.float64), (3,))
     sx, sy, sz = (float(v) for v in scale)
-    return MeshFile(mesh.filename, resolve_mesh_path(mesh.filename, base_dir), (sx, sy, sz))
+    return MeshFile(mesh.filename, packages.resolve_uri(mesh.filename, base_dir=base_dir), (sx, sy, sz))
 
 
-def _joint(joint: yourdfpy.Joint) -> Joint:
+def _joint(joint: yourdfpy.Joint, joint_names: set[str]) -> Joint:
     axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), dtype=np.float64)
     norm = float(np.linalg.norm(axis))
     ax, ay, az = (float(v) for v in (axis / norm if norm > 0 else np.array([1.0, 0.0, 0.0])))
     limit = None
-    if joint.limit is not None and joint.limit.lower is not None and joint.limit.upper is not None:
+    bounded = joint.type in ("revolute", "prismatic")  # a missing lower/upper reads as 0 there, like urdfdom
+    if joint.limit is not None and (bounded or (joint.limit.lower is not None and joint.limit.upper is not None)):
         limit = Limit(
-            lower=float(joint.limit.lower),
-            upper=float(joint.limit.upper),
+            lower=float(joint.limit.lower or 0.0),
+            upper=float(joint.limit.upper or 0.0),
             effort=None if joint.limit.effort is None else float(joint.limit.effort),
             velocity=None if joint.limit.velocity is None else float(joint.limit.velocity),
         )
     mimic = None
-    if joint.mimic is not None:
+    if joint.mimic is not None and joint.mimic.joint in joint_names:  # else moves on its own (check_robot warns)
         mimic = Mimic(joint.mimic.joint, float(joint.mimic.multiplier), float(joint.mimic.offset))
     return Joint(
         name=joint.name,

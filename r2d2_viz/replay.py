@@ -15,8 +15,9 @@ from .bag import Bag
 from .bag_source import BagSource, TimeSource, read_robot_description
 from .bag_tf import read_tf
 from .kinematics import KinematicTree, compile_tree
-from .model import Robot, load_urdf, parse_urdf
+from .model import Robot, parse_urdf
 from .motion import ODOM
+from .packages import PackageIndex
 from .sources import JointState, Source, TfRecords, tf_root
 from .tf_check import disagreement, urdf_edges
 
@@ -56,6 +57,7 @@ def open_replay(
     load_robot: Callable[[], Robot] | None = None,
     time: TimeSource = "receive",
     fixed_frame: str | None = None,
+    packages: PackageIndex | None = None,
 ) -> Replay:
     """Read what the replay needs up front (robot, transforms); joint states stay in the bag, read in chunks."""
     robot = load_robot() if load_robot is not None else None
@@ -64,7 +66,8 @@ def open_replay(
     if robot is None:
         text = read_robot_description(bag)
         if text is not None:
-            robot = parse_urdf(text, source=f"{bag.path.name}:/robot_description", base_dir=bag.path.parent)
+            name = f"{bag.path.name}:/robot_description"
+            robot = parse_urdf(text, source=name, base_dir=bag.path.parent, packages=packages)
     records = read_tf(bag, time=time)
     static_tf = next((r for r in records if r.static), None)
     moving_tf = next((r for r in records if not r.static), None)
@@ -110,7 +113,3 @@ def _until(r: TfRecords, last_ns: int) -> TfRecords:
         r.quat_xyzw[keep],
         r.static,
     )
-
-
-def robot_loader(urdf: Path | None) -> Callable[[], Robot] | None:
-    return None if urdf is None else (lambda: load_urdf(urdf))

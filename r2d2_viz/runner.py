@@ -23,16 +23,18 @@ from .bag_source import TimeSource
 from .blueprint import generate_blueprint
 from .errors import UsageError
 from .kinematics import compile_tree
-from .model import Robot, default_urdf_path, load_urdf
+from .model import Robot, default_urdf_path
 from .motion import ODOM, make_motion
 from .notices import Notices
-from .replay import Replay, open_replay, robot_loader
+from .packages import PackageIndex
+from .replay import Replay, open_replay
 from .signals import signals_set, sigterm_raises
 from .sinks import SinkConfig, close_recording, open_recording
 from .sources import Source
 from .stream import RobotStream
 from .tf_recorded import RecordedTf, TfFeed
 from .view_plan import plan_view
+from .xacro_load import is_xacro, load_description, load_robot, read_bounded
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""
@@ -54,6 +56,10 @@ LAP_SAMPLES = 1440
 class RunConfig:
     urdf: Path | None = None
     """URDF or xacro; None: the tutorial's R2D2 — or, replaying a bag, its /robot_description."""
+    mappings: dict[str, str] = field(default_factory=dict)
+    """xacro arguments (``NAME:=VALUE``)."""
+    package_paths: tuple[str, ...] = ()
+    """``--package-path DIR|NAME=DIR`` values."""
     motion: str | None = None
     rate: float = 30.0
     duration: float | None = None
@@ -103,22 +109,45 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
             from .bag_out import write_bag
 
             with sigterm_raises():
-                samples = write_bag(save, plan, config.urdf or default_urdf_path())
+                samples = write_bag(save, plan, plan.description or _description_text(config))
             return RunResult(samples=samples, interrupted=False, saved=save)
         return _record(config, plan, on_ready)
 
 
+def _packages(config: RunConfig) -> PackageIndex:
+    description = config.urdf or (None if config.bag is not None else default_urdf_path())
+    return PackageIndex.from_args(config.package_paths, description=description, environ=os.environ)
+
+
+def _description_text(config: RunConfig) -> str:
+    """The URDF a bag's /robot_description carries: the file, or what its xacro expands to."""
+    path = config.urdf or default_urdf_path()
+    data = read_bounded(path)
+    if is_xacro(path, data):
+        return load_description(path, mappings=config.mappings, packages=_packages(config)).text.decode("utf-8")
+    return data.decode("utf-8")
+
+
 def _plan(config: RunConfig, inputs: ExitStack) -> Replay:
     """The robot, its source, recorded transforms and the fixed frame of this run."""
+    packages = _packages(config)
+
+    def robot() -> Robot:
+        return load_robot(config.urdf or default_urdf_path(), mappings=config.mappings, packages=packages)
+
     if config.bag is not None:
         bag = inputs.enter_context(open_bag(config.bag))
         replay = open_replay(
-            bag, load_robot=robot_loader(config.urdf), time=config.time, fixed_frame=config.fixed_frame
+            bag,
+            load_robot=robot if config.urdf is not None else None,
+            time=config.time,
+            fixed_frame=config.fixed_frame,
+            packages=packages,
         )
         replay.mcap_files = [f for f in bag.files if f.suffix == ".mcap"]
         return replay
-    robot = load_urdf(config.urdf or default_urdf_path())
-    return Replay(compile_tree(robot), config.source(robot), None, None, config.fixed_frame or ODOM)
+    loaded = robot()
+    return Replay(compile_tree(loaded), config.source(loaded), None, None, config.fixed_frame or ODOM)
 
 
 def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | None) -> RunResult:

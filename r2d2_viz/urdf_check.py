@@ -1,19 +1,17 @@
-"""Hardened URDF reading and validation, without ROS and without trusting the input.
+"""URDF validation, without ROS and without trusting the input.
 
-``read_urdf_xml`` turns a file into a ``<robot>`` element, refusing anything that is not a
-small, well-formed, UTF-8 XML document free of entity declarations (no "billion laughs", no
-XXE: nothing referenced by the document is ever read).  ``check_robot`` then validates the
-URDF structure and numbers the way urdfdom would, but with one-line messages of the form
-``<file name>: <element>: <problem>``.  Unknown elements and attributes are ignored.
+:func:`read_urdf_xml` (from :mod:`r2d2_viz.urdf_xml`) turns a file into a ``<robot>`` element, refusing
+anything that is not a small, well-formed, UTF-8 XML document free of entity declarations.
+:func:`check_robot` then validates the URDF structure and numbers the way urdfdom would — accepting, with a
+warning, what urdfdom accepts — with one-line messages of the form ``<file name>: <element>: <problem>``.
+Unknown elements and attributes are ignored.
 """
 
 from __future__ import annotations
 
 import difflib
 import math
-import os
 import re
-import stat
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import NoReturn
@@ -21,168 +19,26 @@ from urllib.parse import unquote, urlsplit
 
 from lxml import etree
 
-from r2d2_viz.errors import UrdfError
+from r2d2_viz.packages import PackageIndex
+from r2d2_viz.urdf_xml import MAX_FILE_BYTES, _fail, _one_line, _q, parse_urdf_xml, read_urdf_xml
 
-MAX_FILE_BYTES = 64 * 1024 * 1024
+__all__ = ["JOINT_TYPES", "MAX_FILE_BYTES", "check_robot", "parse_urdf_xml", "read_urdf_xml", "resolve_mesh_path"]
+
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 SHAPES = ("box", "cylinder", "sphere", "mesh")
 _AXIS_TYPES = frozenset({"revolute", "continuous", "prismatic", "planar"})
 _LIMITED_TYPES = frozenset({"revolute", "prismatic"})
+_INFINITY = re.compile(r"[+-]?inf(?:inity)?\Z", re.IGNORECASE)
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
-# XML 1.0 forbids these characters; refusing them up front also stops UTF-16 look-alikes.
-_BAD_CHARS = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff]")
-_POSITION_SUFFIX = re.compile(r",\s*line \d+, column \d+\s*\Z")
-
-
-def _q(value: str, limit: int = 60) -> str:
-    """Quote a value from the file for a message: never multi-line, never huge."""
-    if len(value) > limit:
-        value = value[: limit // 2] + "…" + value[-(limit // 2) :]
-    return repr(value)
-
-
-def _one_line(text: str) -> str:
-    return " ".join(part.strip() for part in text.splitlines() if part.strip())
-
-
-def _fail(source: str, *parts: str) -> NoReturn:
-    raise UrdfError(_one_line(": ".join((source, *parts))))
-
-
-# --------------------------------------------------------------------------- safe XML
-
-
-def read_urdf_xml(path: Path) -> etree._Element:
-    """Read and strictly parse a URDF file; return the <robot> root element (comments stripped)
-    or raise UrdfError.
-
-    Comments and processing instructions are removed; the file's path is recorded as the
-    document URL so that ``check_robot`` resolves relative mesh paths against its directory.
-    """
-    path = Path(path)
-    name = _one_line(path.name or str(path)) or repr(str(path))
-    try:
-        st = path.stat()
-    except FileNotFoundError:
-        _fail(name, f"file not found ({_q(str(path), 200)})")
-    except OSError as exc:
-        _fail(name, f"cannot access file: {exc.strerror or exc}")
-    if stat.S_ISDIR(st.st_mode):
-        _fail(name, "is a directory, not a URDF file")
-    if not stat.S_ISREG(st.st_mode):
-        _fail(name, "is not a regular file")
-    if st.st_size > MAX_FILE_BYTES:
-        _fail(name, f"file is too large ({st.st_size} bytes; the limit is {MAX_FILE_BYTES} bytes)")
-    try:
-        with path.open("rb") as fh:
-            data = fh.read(MAX_FILE_BYTES + 1)
-    except OSError as exc:
-        _fail(name, f"cannot read file: {exc.strerror or exc}")
-    if len(data) > MAX_FILE_BYTES:
-        _fail(name, f"file is too large (more than {MAX_FILE_BYTES} bytes)")
-    return _parse_bytes(data, name, str(path.absolute()))
-
-
-def parse_urdf_xml(text: str | bytes, *, source: str, base_dir: Path) -> etree._Element:
-    """:func:`read_urdf_xml` for a description given as text; ``source`` names it in messages and
-    ``base_dir`` is where its relative mesh paths resolve."""
-    data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
-    name = _one_line(source) or "robot_description"
-    if len(data) > MAX_FILE_BYTES:
-        _fail(name, f"description is too large ({len(data)} bytes; the limit is {MAX_FILE_BYTES} bytes)")
-    return _parse_bytes(data, name, str(Path(base_dir).absolute() / "robot_description.urdf"))
-
-
-def _parse_bytes(data: bytes, name: str, url: str) -> etree._Element:
-    if not data.strip():
-        _fail(name, "file is empty")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        _fail(name, f"line {line}: not valid UTF-8 (byte 0x{data[exc.start]:02x} at offset {exc.start})")
-    bad = _BAD_CHARS.search(text)
-    if bad:
-        line = text.count("\n", 0, bad.start()) + 1
-        _fail(name, f"line {line}: character U+{ord(bad.group()):04X} is not allowed in XML")
-    # Refuse entity declarations before the parser sees them: nothing gets expanded or fetched.
-    if "<!DOCTYPE" in text and "<!ENTITY" in text:
-        _fail(name, "DOCTYPE declares entities (<!ENTITY ...>); refused for safety: URDF needs no entities")
-    parser = etree.XMLParser(
-        encoding="utf-8",  # what was checked above, whatever the XML declaration claims
-        resolve_entities=False,
-        no_network=True,
-        load_dtd=False,
-        dtd_validation=False,
-        attribute_defaults=False,
-        huge_tree=False,
-        recover=False,
-        remove_comments=True,
-        remove_pis=True,
-    )
-    try:
-        root = etree.fromstring(data, parser, base_url=url)
-    except etree.XMLSyntaxError as exc:
-        msg = _POSITION_SUFFIX.sub("", _one_line(str(exc.msg or exc)))
-        line = exc.position[0] if exc.position else 0
-        _fail(name, f"line {line}: not well-formed XML: {msg}")
-    if root is None:
-        _fail(name, "not well-formed XML: no root element")
-    for node in root.iter(etree.Entity):
-        _fail(name, f"entity reference {_q(str(node.text))} is not allowed (entities are refused for safety)")
-    if root.tag != "robot":
-        _fail(name, f"root element is <{_q(str(root.tag), 80)[1:-1]}>; expected <robot>")
-    return root
 
 
 # --------------------------------------------------------------------------- meshes
 
 
-def _package_candidates(package: str, rest: str, base_dir: Path) -> Iterator[Path]:
-    for ancestor in (base_dir, *base_dir.parents):
-        if ancestor.name == package:
-            yield ancestor / rest
-        yield ancestor / package / rest
-    for entry in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep):
-        if entry:
-            yield Path(entry) / package / rest
-    for entry in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        if entry:
-            yield Path(entry) / "share" / package / rest
-
-
-def _is_file(path: Path) -> bool:
-    try:
-        return path.is_file()
-    except (OSError, ValueError):
-        return False
-
-
-def _resolve_mesh(filename: str, base_dir: Path) -> tuple[Path | None, str]:
-    """Return (existing file, "") or (None, reason for a warning)."""
-    parts = urlsplit(filename)
-    scheme = parts.scheme.lower() if len(parts.scheme) > 1 else ""  # "C:" is a drive, not a scheme
-    if scheme == "package":
-        rest = unquote(parts.path).lstrip("/")
-        for candidate in _package_candidates(unquote(parts.netloc), rest, base_dir):
-            if _is_file(candidate):
-                return candidate, ""
-        return None, f"mesh {_q(filename, 200)} not found (package:// cannot be resolved without ROS)"
-    if scheme == "file":
-        local = Path(unquote(parts.netloc + parts.path))
-    elif scheme:
-        return None, f"mesh {_q(filename, 200)} has unsupported URI scheme {scheme!r}"
-    else:
-        local = Path(filename)
-    candidate = local if local.is_absolute() else base_dir / local
-    if _is_file(candidate):
-        return candidate, ""
-    return None, f"mesh file {_q(filename, 200)} not found"
-
-
-def resolve_mesh_path(filename: str, base_dir: Path) -> Path | None:
-    """Best-effort local file for a URDF mesh ``filename`` (plain path, file:// or package://), else None."""
-    return _resolve_mesh(filename, base_dir)[0]
+def resolve_mesh_path(filename: str, base_dir: Path, packages: PackageIndex | None = None) -> Path | None:
+    """Best-effort local file for a URDF mesh ``filename`` (plain path, file:// or package://), else None.
+    ``packages`` finds ``package://`` packages (by default: above ``base_dir`` and the ROS environment)."""
+    return (packages or PackageIndex.from_environ()).resolve_uri(filename, base_dir=base_dir)
 
 
 # --------------------------------------------------------------------------- structure
@@ -197,9 +53,10 @@ def _first(el: etree._Element, tag: str) -> etree._Element | None:
 
 
 class _Checker:
-    def __init__(self, source: str, base_dir: Path) -> None:
+    def __init__(self, source: str, base_dir: Path, packages: PackageIndex | None = None) -> None:
         self.source = _one_line(source) or "<urdf>"
         self.base_dir = base_dir
+        self.packages = packages or PackageIndex.from_environ()
         self.warnings: list[str] = []
         self.materials: set[str] = set()
         self.meshes: dict[str, tuple[Path | None, str]] = {}
@@ -210,8 +67,11 @@ class _Checker:
     def warn(self, where: str, problem: str) -> None:
         self.warnings.append(_one_line(f"{self.source}: {where}: {problem}"))
 
-    def numbers(self, where: str, el: etree._Element, attr: str, count: int) -> tuple[float, ...] | None:
-        """``count`` finite numbers from attribute ``attr`` of ``el``; None if the attribute is absent."""
+    def numbers(
+        self, where: str, el: etree._Element, attr: str, count: int, *, infinite_ok: bool = False
+    ) -> tuple[float, ...] | None:
+        """``count`` finite numbers from attribute ``attr`` of ``el``; None if the attribute is absent.
+        ``infinite_ok`` also takes ``inf``, ``-inf`` and overflowing numbers (limits meaning "unlimited")."""
         raw = el.get(attr)
         if raw is None:
             return None
@@ -222,8 +82,8 @@ class _Checker:
             self.fail(where, f"{what}: expected {count} {plural}, got {len(tokens)}")
         values: list[float] = []
         for token in tokens:
-            value = float(token) if _NUMBER.match(token) else math.nan
-            if not math.isfinite(value):
+            value = float(token) if _NUMBER.match(token) or (infinite_ok and _INFINITY.match(token)) else math.nan
+            if math.isnan(value) or (math.isinf(value) and not infinite_ok):
                 self.fail(where, f"{what}: {_q(token, 30)} is not a finite number")
             values.append(value)
         return tuple(values)
@@ -282,7 +142,7 @@ class _Checker:
             if not filename:
                 self.fail(where, "<mesh> has no filename")
             if filename not in self.meshes:
-                self.meshes[filename] = _resolve_mesh(filename, self.base_dir)
+                self.meshes[filename] = self.packages.explain(filename, base_dir=self.base_dir)
             found, reason = self.meshes[filename]
             if found is None:
                 self.warn(where, f"{reason}; {kind} skipped")
@@ -321,7 +181,7 @@ class _Checker:
         if jtype is None:
             self.fail(where, f"missing type attribute; {expected}")
         if jtype not in JOINT_TYPES:
-            self.fail(where, f"unknown joint type {_q(jtype)}; {expected}")
+            self.fail(where, f"unknown joint type {_q(jtype)}; {expected} (urdfdom: has no known type)")
         ends: list[str] = []
         for role in ("parent", "child"):
             el = _first(joint, role)
@@ -343,17 +203,22 @@ class _Checker:
                 self.fail(where, f"<axis> xyz={_q(axis_el.get('xyz', ''))}: must not be a zero vector")
         limit = _first(joint, "limit")
         if limit is None and jtype in _LIMITED_TYPES:
-            self.fail(where, f"{jtype} joint has no <limit lower=... upper=...>")
+            self.fail(where, f"{jtype} joint has no <limit lower=... upper=...> (urdfdom: does not specify limits)")
         if limit is not None:
-            bounds = [self.numbers(where, limit, attr, 1) for attr in ("lower", "upper")]
+            # Limits may be infinite or huge (urdfdom reads "inf"; ±1e16 means unlimited): accepted here.
+            bounds = [self.numbers(where, limit, attr, 1, infinite_ok=True) for attr in ("lower", "upper")]
             for attr in ("effort", "velocity"):
-                self.numbers(where, limit, attr, 1)
+                self.numbers(where, limit, attr, 1, infinite_ok=True)
             if jtype in _LIMITED_TYPES:
-                lower, upper = bounds
-                if lower is None or upper is None:
-                    self.fail(where, f"<limit> needs numeric lower and upper for a {jtype} joint")
+                for attr, value in zip(("lower", "upper"), bounds, strict=True):
+                    if value is None:  # urdfdom: "joint limit: no lower, defaults to 0"
+                        self.warn(where, f"<limit> has no {attr}; read as 0, like urdfdom")
+                lower, upper = ((0.0,) if value is None else value for value in bounds)
                 if lower[0] > upper[0]:
+                    # urdfdom does not check it, but no position satisfies such a limit: refused.
                     self.fail(where, f"<limit> lower={lower[0]:g} is greater than upper={upper[0]:g}")
+                if lower[0] == math.inf or upper[0] == -math.inf:
+                    self.fail(where, f"<limit> lower={lower[0]:g} upper={upper[0]:g} leaves no position")
         return ends[0], ends[1]
 
 
@@ -369,24 +234,26 @@ def _names(el_list: Iterable[etree._Element], kind: str, checker: _Checker) -> d
     return seen
 
 
-def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = None) -> list[str]:
+def check_robot(
+    root: etree._Element, *, source: str, base_dir: Path | None = None, packages: PackageIndex | None = None
+) -> list[str]:
     """Validate structure and numbers; raise UrdfError on the first problem; return non-fatal warnings
     (e.g. mesh file missing: "<source>: link 'x': mesh file 'foo.stl' not found; visual skipped") as strings.
 
     Relative mesh paths resolve against ``base_dir``, by default the directory of the file
-    ``read_urdf_xml`` read (else the current directory).
+    ``read_urdf_xml`` read (else the current directory); ``package://`` URIs through ``packages``.
     """
     if base_dir is None:
         url = root.getroottree().docinfo.URL
         base_dir = Path(unquote(urlsplit(url).path) if url.startswith("file:") else url).parent if url else Path()
-    checker = _Checker(source, base_dir)
+    checker = _Checker(source, base_dir, packages)
     if root.tag != "robot":
         checker.fail("root", f"element is <{_q(str(root.tag), 80)[1:-1]}>; expected <robot>")
     robot = f"robot {_q(root.get('name', ''))}" if root.get("name") else "robot"
     link_els = list(_children(root, "link"))
     joint_els = list(_children(root, "joint"))
     if not link_els:
-        checker.fail(robot, "has no <link> elements")
+        checker.fail(robot, "has no <link> elements")  # urdfdom: "No link elements found in urdf file"
     links = _names(link_els, "link", checker)
     joint_names = _names(joint_els, "joint", checker)
 
@@ -416,17 +283,22 @@ def check_robot(root: etree._Element, *, source: str, base_dir: Path | None = No
         if mimic is not None:
             target = mimic.get("joint")
             if not target:
-                checker.fail(where, "<mimic> has no joint attribute")
-            if target not in joint_names:
-                checker.fail(where, f"<mimic> joint {_q(target)} does not exist")
+                checker.fail(where, "<mimic> has no joint attribute (urdfdom: no mimic joint specified)")
             checker.numbers(where, mimic, "multiplier", 1)
             checker.numbers(where, mimic, "offset", 1)
-            mimics[jname] = target
+            if target in joint_names:
+                mimics[jname] = target
+            else:  # urdfdom and robot_state_publisher accept it: the joint moves on its own
+                checker.warn(where, f"<mimic> joint {_q(target)} does not exist; ignored: the joint moves on its own")
 
     roots = [name for name in links if name not in parent_joint]
     if len(roots) > 1:
         shown = ", ".join(_q(r, 40) for r in roots[:5]) + (", …" if len(roots) > 5 else "")
-        checker.fail(robot, f"more than one root link ({len(roots)}: {shown}); every other link needs a parent joint")
+        checker.fail(
+            robot,
+            f"more than one root link ({len(roots)}: {shown}); every other link needs a parent joint "
+            "(urdfdom: two root links found)",
+        )
     reached: set[str] = set(roots)
     stack = list(roots)
     while stack:

@@ -102,7 +102,7 @@ def test_still_is_all_zeros_and_tutorial_needs_its_joints(r2d2, tmp_path: Path) 
     assert default_motion(r2d2) == "tutorial"
 
 
-@pytest.mark.parametrize("bound", ["1e16", "1e300"])
+@pytest.mark.parametrize("bound", ["1e16", "1e300", "inf"])
 def test_limits_that_mean_unlimited_sweep_like_a_continuous_joint(tmp_path: Path, bound: str) -> None:
     # example-robot-data's iris.urdf gives its rotors ±1e16: a sweep over that range would never end
     urdf = tmp_path / "wide.urdf"

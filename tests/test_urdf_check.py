@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from pathlib import Path
@@ -41,7 +42,8 @@ BAD_MANIFEST: dict[str, str] = {
     "missing_joint_type.urdf": "joint 'j': missing type attribute; expected one of revolute,",
     "revolute_without_limit.urdf": "joint 'j': revolute joint has no <limit",
     "prismatic_without_limit.urdf": "joint 'j': prismatic joint has no <limit",
-    "limit_without_lower.urdf": "joint 'j': <limit> needs numeric lower and upper",
+    "limit_lower_inf.urdf": "joint 'j': <limit> lower=inf upper=inf leaves no position",
+    "limit_lower_word.urdf": "joint 'j': <limit> lower='infinite': 'infinite' is not a finite number",
     "limit_lower_above_upper.urdf": "joint 'j': <limit> lower=1 is greater than upper=-1",
     "limit_effort_word.urdf": "joint 'j': <limit> effort='lots': 'lots' is not a finite number",
     "limit_upper_nan.urdf": "joint 'j': <limit> upper='NaN'",
@@ -54,7 +56,6 @@ BAD_MANIFEST: dict[str, str] = {
     "axis_word.urdf": "joint 'j': <axis> xyz='0 0 up'",
     "axis_zero.urdf": "joint 'j': <axis> xyz='0 0 0': must not be a zero vector",
     "axis_zero_continuous.urdf": "joint 'j': <axis> xyz='0 0.0 -0': must not be a zero vector",
-    "mimic_unknown_joint.urdf": "joint 'j': <mimic> joint 'ghost' does not exist",
     "mimic_without_joint.urdf": "joint 'j': <mimic> has no joint attribute",
     "mimic_multiplier_word.urdf": "joint 'j2': <mimic> multiplier='double'",
     "mimic_offset_inf.urdf": "joint 'j2': <mimic> offset='-inf'",
@@ -102,9 +103,17 @@ GOOD_MANIFEST: dict[str, list[str]] = {
     "utf8_bom_doctype.urdf": [],
     "mesh_missing.urdf": ["link 'base': visual #1: mesh file 'meshes/missing.stl' not found; visual skipped"],
     "mesh_package.urdf": [
-        "link 'head': visual #1: mesh 'package://r2d2_description/meshes/dome.dae' not found "
-        "(package:// cannot be resolved without ROS); visual skipped"
+        "link 'head': visual #1: mesh 'package://r2d2_description/meshes/dome.dae': package 'r2d2_description' "
+        "not found (looked in the folders above "
     ],
+    "mesh_package_empty.urdf": [],
+    # urdfdom: "joint limit: no lower, defaults to 0" (logDebug); robot_state_publisher accepts it.
+    "limit_without_lower.urdf": ["joint 'j': <limit> has no lower; read as 0, like urdfdom"],
+    # urdfdom does not look the mimicked joint up; robot_state_publisher then moves the joint on its own.
+    "mimic_unknown_joint.urdf": [
+        "joint 'j': <mimic> joint 'ghost' does not exist; ignored: the joint moves on its own"
+    ],
+    "limits_unlimited.urdf": [],
     "material_undefined.urdf": ["link 'base': visual #1: material 'chrome' is not defined; default colour used"],
 }
 
@@ -394,3 +403,42 @@ def test_explicit_base_dir_overrides_document_url(tmp_path: Path) -> None:
     assert check_robot(root, source="s.urdf", base_dir=GOOD) == []
     (warning,) = check_robot(root, source="s.urdf", base_dir=tmp_path)
     assert warning.startswith("s.urdf: link 'm': ") and "mesh file 'meshes/cube.stl' not found" in warning
+
+
+# --------------------------------------------------------------------------- urdfdom's leniency, in the model
+
+
+def test_missing_lower_reads_as_zero_like_urdfdom() -> None:
+    from r2d2_viz.model import load_urdf
+
+    robot = load_urdf(GOOD / "limit_without_lower.urdf")  # <limit upper="1" .../>
+    limit = robot.joint("j").limit
+    assert limit is not None and (limit.lower, limit.upper) == (0.0, 1.0)
+
+
+def test_mimic_of_a_missing_joint_is_dropped_and_the_joint_moves_on_its_own() -> None:
+    from r2d2_viz.model import load_urdf
+
+    robot = load_urdf(GOOD / "mimic_unknown_joint.urdf")
+    assert robot.joint("j").mimic is None
+    assert [j.name for j in robot.actuated_joints] == ["j"]
+
+
+def test_unlimited_limits_are_kept_as_written() -> None:
+    from r2d2_viz.model import load_urdf
+
+    robot = load_urdf(GOOD / "limits_unlimited.urdf")
+    bounds = {j.name: (j.limit.lower, j.limit.upper) for j in robot.joints if j.limit is not None}
+    assert bounds == {
+        "rotor_joint": (-1e16, 1e16),
+        "slider_joint": (-math.inf, math.inf),
+        "hinge_joint": (-1e300, math.inf),  # 1e999 overflows to inf, as strtod reads it
+    }
+
+
+def test_package_uri_with_empty_package_part_resolves() -> None:
+    from r2d2_viz.model import MeshFile, load_urdf
+
+    robot = load_urdf(GOOD / "mesh_package_empty.urdf")
+    (shape,) = robot.links[0].visuals
+    assert isinstance(shape.geometry, MeshFile) and shape.geometry.path == GOOD / "meshes" / "cube.stl"
