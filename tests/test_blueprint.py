@@ -66,3 +66,24 @@ def test_every_recording_embeds_it(lap_recording) -> None:
 def test_generate_blueprint_is_pure() -> None:
     a, b = generate_blueprint(), generate_blueprint()
     assert [p.id for p in a.root_container.contents] == [p.id for p in b.root_container.contents]  # type: ignore[union-attr]
+
+
+def test_the_layout_follows_the_robot(tmp_path) -> None:
+    from r2d2_viz.blueprint import Layout
+
+    def components(layout: Layout) -> dict:
+        path = tmp_path / "b.rbl"
+        generate_blueprint(layout=layout).save("r2d2_viz", path)
+        return blueprint_components(path)
+
+    names = lambda c: {v.get("ViewBlueprint:display_name", [None])[0] for v in c.values()}  # noqa: E731
+    arm = components(Layout(limited=5, continuous=0, fixed_frame="map"))
+    assert "Continuous joints" not in names(arm) and "Joint states" in names(arm)  # no empty panels
+    assert arm[f"{_view(arm, '3D')}/SpatialInformation"]["SpatialInformation:target_frame"] == ["map"]
+    humanoid = components(Layout(limited=30, continuous=0))
+    plot = _view(humanoid, "TimeSeries", "Joint states")
+    assert humanoid[f"{plot}/PlotLegend"]["PlotLegend:visible"] == [False]  # 30 names would cover the plot
+    query = humanoid[f"{plot}/ViewContents"]["ViewContents:query"]
+    assert "- /joints/limited/limits" in query  # and the 60 limit lines are left out
+    small = components(Layout(limited=5, continuous=0))
+    assert f"{_view(small, 'TimeSeries', 'Joint states')}/PlotLegend" not in small
