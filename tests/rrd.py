@@ -79,7 +79,7 @@ def tf_by_child(recording: dict[str, Rows], entity: str = "/tf") -> dict[str, Ro
     return dict(out)
 
 
-def _pose(translation: list[float] | None, xyzw: list[float] | None) -> np.ndarray:
+def pose(translation: list[float] | None, xyzw: list[float] | None) -> np.ndarray:
     from reference import quat_xyzw_to_matrix
 
     T = np.eye(4)
@@ -90,18 +90,24 @@ def _pose(translation: list[float] | None, xyzw: list[float] | None) -> np.ndarr
     return T
 
 
-def frame_edges_at(recording: dict[str, Rows], time_ns: int) -> dict[str, tuple[str, np.ndarray]]:
-    """Child frame → (parent frame, T_parent_child) as a viewer resolves them at ``time_ns``: every static
-    ``Transform3D`` naming its frames, then for each child the latest temporal row at or before that time."""
+def static_edges(recording: dict[str, Rows]) -> dict[str, tuple[str, np.ndarray]]:
+    """Child frame → (parent frame, T_parent_child) of every static ``Transform3D`` naming its frames."""
     edges: dict[str, tuple[str, np.ndarray]] = {}
     for rows in recording.values():
         child = rows.static.get("Transform3D:child_frame")
         if child:
-            T = _pose(
+            T = pose(
                 rows.static["Transform3D:translation"][-1][0],
                 (rows.static.get("Transform3D:quaternion") or [[None]])[-1][0],
             )
             edges[child[-1][0]] = (rows.static["Transform3D:parent_frame"][-1][0], T)
+    return edges
+
+
+def frame_edges_at(recording: dict[str, Rows], time_ns: int) -> dict[str, tuple[str, np.ndarray]]:
+    """Child frame → (parent frame, T_parent_child) as a viewer resolves them at ``time_ns``: every static
+    ``Transform3D`` naming its frames, then for each child the latest temporal row at or before that time."""
+    edges = static_edges(recording)
     for rows in recording.values():
         children = rows.temporal.get("Transform3D:child_frame")
         if not children:
@@ -112,7 +118,7 @@ def frame_edges_at(recording: dict[str, Rows], time_ns: int) -> dict[str, tuple[
                 latest[children[i][0]] = i
         for child, i in latest.items():
             t, q = (rows.temporal.get(f"Transform3D:{c}", [None] * (i + 1))[i] for c in ("translation", "quaternion"))
-            edges[child] = (rows.temporal["Transform3D:parent_frame"][i][0], _pose(t and t[0], q and q[0]))
+            edges[child] = (rows.temporal["Transform3D:parent_frame"][i][0], pose(t and t[0], q and q[0]))
     return edges
 
 

@@ -13,20 +13,11 @@ import numpy as np
 import pytest
 import yourdfpy
 from conftest import cli
-from reference import quat_xyzw_to_matrix, state_publisher
-from rrd import Rows, read_recording, tf_by_child
+from reference import state_publisher
+from rrd import Rows, pose, read_recording, static_edges, tf_by_child
 
 LINKS = ("axis", "leg1", "leg2", "body", "head", "rod", "box")
 N_FRAMES = 1440  # one lap: 360° / (¼° per frame)
-
-
-def _pose(translation: list[float] | None, xyzw: list[float] | None) -> np.ndarray:
-    T = np.eye(4)
-    if xyzw is not None:
-        T[:3, :3] = quat_xyzw_to_matrix(xyzw)
-    if translation is not None:
-        T[:3, 3] = translation
-    return T
 
 
 @pytest.fixture(scope="module")
@@ -45,19 +36,6 @@ def round_trip(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Rows]:
     return read_recording(tmp / "lap.rrd")
 
 
-def _edges_static(recording: dict[str, Rows]) -> dict[str, tuple[str, np.ndarray]]:
-    edges = {}
-    for rows in recording.values():
-        child = rows.static.get("Transform3D:child_frame")
-        if child:
-            T = _pose(
-                rows.static["Transform3D:translation"][-1][0],
-                (rows.static.get("Transform3D:quaternion") or [[None]])[-1][0],
-            )
-            edges[child[-1][0]] = (rows.static["Transform3D:parent_frame"][-1][0], T)
-    return edges
-
-
 def test_one_lap_is_1440_frames_on_the_time_timeline(recording: dict[str, Rows]) -> None:
     times = tf_by_child(recording)["axis"].times
     assert len(times) == N_FRAMES
@@ -66,7 +44,7 @@ def test_one_lap_is_1440_frames_on_the_time_timeline(recording: dict[str, Rows])
 
 
 def test_fixed_joints_are_static_and_moving_ones_are_not(recording: dict[str, Rows]) -> None:
-    static = _edges_static(recording)
+    static = static_edges(recording)
     for child, parent in (("leg1", "axis"), ("leg2", "axis"), ("box", "rod")):
         assert static[child][0] == parent
     temporal_children = {
@@ -81,7 +59,7 @@ def test_every_link_pose_matches_state_publisher_and_robot_state_publisher(
     made: str, tutorial_urdf: Path, request: pytest.FixtureRequest
 ) -> None:
     recording: dict[str, Rows] = request.getfixturevalue(made)
-    static = _edges_static(recording)
+    static = static_edges(recording)
     moving = tf_by_child(recording)
     for child, rows in moving.items():
         assert len(rows.times) == N_FRAMES, child
@@ -94,7 +72,7 @@ def test_every_link_pose_matches_state_publisher_and_robot_state_publisher(
         for child, rows in moving.items():
             edges[child] = (
                 rows.temporal["Transform3D:parent_frame"][k][0],
-                _pose(rows.temporal["Transform3D:translation"][k][0], rows.temporal["Transform3D:quaternion"][k][0]),
+                pose(rows.temporal["Transform3D:translation"][k][0], rows.temporal["Transform3D:quaternion"][k][0]),
             )
 
         def in_odom(frame: str, edges: dict[str, tuple[str, np.ndarray]] = edges) -> np.ndarray:
@@ -106,7 +84,7 @@ def test_every_link_pose_matches_state_publisher_and_robot_state_publisher(
             return T
 
         ref = reference[k]
-        T_odom_axis = _pose(list(ref["odom_translation"]), list(ref["odom_rotation_xyzw"]))  # type: ignore[arg-type]
+        T_odom_axis = pose(list(ref["odom_translation"]), list(ref["odom_rotation_xyzw"]))  # type: ignore[arg-type]
         urdf.update_cfg(ref["joint_state"])
         for link in LINKS:
             expected = T_odom_axis @ urdf.get_transform(frame_to=link, frame_from="axis")

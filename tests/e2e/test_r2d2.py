@@ -148,8 +148,18 @@ def test_web_viewer(case: str, recordings: dict[str, Path], chromium_browser, ar
     _assert_case(case, shot.path)
 
 
-def _native_shot(display: str, rrd: Path, png: Path, log: Path, *, blueprint: Path | None = None) -> object:
-    with viewers.native_viewer(display, WINDOW, log) as client:
+def native_shot(
+    display: str,
+    rrd: Path,
+    png: Path,
+    log: Path,
+    *,
+    blueprint: Path | None = None,
+    at: float = FRAME_S,
+    window: tuple[int, int] = WINDOW,
+) -> object:
+    """Open ``rrd`` in the native viewer, put the time cursor at ``at`` seconds, screenshot; the transform graph."""
+    with viewers.native_viewer(display, window, log) as client:
         if blueprint is not None:  # like `rerun out.rrd layout.rbl`: the blueprint, then the recording
             client.open(str(blueprint), navigate=False)  # type: ignore[attr-defined]
         client.open(str(rrd))  # type: ignore[attr-defined]
@@ -159,7 +169,7 @@ def _native_shot(display: str, rrd: Path, png: Path, log: Path, *, blueprint: Pa
             if state.active_recording and any(t.name == "time" for r in state.recordings for t in r.timelines):
                 break
             time.sleep(0.5)
-        client.set_time("time", duration=FRAME_S, play_state="paused")  # type: ignore[attr-defined]
+        client.set_time("time", duration=at, play_state="paused")  # type: ignore[attr-defined]
         time.sleep(8.0)  # let the start-up notifications (software rasterizer, …) fade from the plots
         client.save_screenshot(str(png))  # type: ignore[attr-defined]
         return client.get_transform_graph()  # type: ignore[attr-defined]
@@ -169,7 +179,7 @@ def test_native_viewer_with_the_saved_blueprint(recordings: dict[str, Path], x_d
     """``rerun out.rrd blueprints/r2d2.rbl``: the saved layout applies even to a recording without one."""
     rbl = Path(__file__).resolve().parents[2] / "blueprints" / "r2d2.rbl"
     png = artifacts_dir / "native_default_blueprint_with_rbl.png"
-    _native_shot(x_display.display, recordings["default_blueprint"], png, artifacts_dir / "rbl.log", blueprint=rbl)
+    native_shot(x_display.display, recordings["default_blueprint"], png, artifacts_dir / "rbl.log", blueprint=rbl)
     img = viewers.load_png(png)
     assert layout_problems(img) == [], f"{png}: {layout_problems(img)}"
     assert not any("white" in p for p in robot_problems(img)), f"{png}: {robot_problems(img)}"
@@ -178,7 +188,7 @@ def test_native_viewer_with_the_saved_blueprint(recordings: dict[str, Path], x_d
 @pytest.mark.parametrize("case", CASES)
 def test_native_viewer(case: str, recordings: dict[str, Path], x_display, artifacts_dir: Path) -> None:
     png = artifacts_dir / f"native_{case}.png"
-    graph = _native_shot(x_display.display, recordings[case], png, artifacts_dir / f"native_{case}.log")
+    graph = native_shot(x_display.display, recordings[case], png, artifacts_dir / f"native_{case}.log")
     _assert_case(case, png)
     if case == "r2d2":  # the viewer itself resolved the URDF links and odom as named frames
         named = {f["id"] for f in graph["frames"] if f["kind"] == "named"}  # type: ignore[index]

@@ -7,13 +7,13 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from . import viewers
+from .test_r2d2 import native_shot
 
 pytestmark = [pytest.mark.e2e, pytest.mark.slow]
 
@@ -25,21 +25,6 @@ def _talos() -> Path:
 
     robots = metadata.distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots")
     return Path(str(robots)) / "talos_data" / "robots" / "talos_full_v2.urdf"
-
-
-def _shot(display: str, rrd: Path, png: Path, log: Path) -> np.ndarray:
-    with viewers.native_viewer(display, (1600, 1000), log) as client:
-        client.open(str(rrd))  # type: ignore[attr-defined]
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            state = client.get_state()  # type: ignore[attr-defined]
-            if state.active_recording and any(t.name == "time" for r in state.recordings for t in r.timelines):
-                break
-            time.sleep(0.5)
-        client.set_time("time", duration=6.0, play_state="paused")  # type: ignore[attr-defined]
-        time.sleep(8.0)
-        client.save_screenshot(str(png))  # type: ignore[attr-defined]
-    return viewers.load_png(png)
 
 
 def test_a_humanoid_fills_the_view(x_display, artifacts_dir: Path) -> None:
@@ -56,7 +41,9 @@ def test_a_humanoid_fills_the_view(x_display, artifacts_dir: Path) -> None:
             capture_output=True,
             timeout=120,
         )
-        shots[name] = _shot(x_display.display, rrd, artifacts_dir / f"{name}.png", artifacts_dir / f"{name}.log")
+        png = artifacts_dir / f"{name}.png"
+        native_shot(x_display.display, rrd, png, artifacts_dir / f"{name}.log", at=6.0, window=(1600, 1000))
+        shots[name] = viewers.load_png(png)
     region = viewers.region_slices(shots["talos"].shape, VIEW3D)
     robot = np.abs(shots["talos"][region].astype(int) - shots["bare"][region].astype(int)).max(-1) > 30
     assert robot.mean() >= 0.03, f"the humanoid covers {robot.mean():.1%} of the 3D view"
