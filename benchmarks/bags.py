@@ -221,7 +221,7 @@ def chain_urdf(path: Path, joints: int) -> Path:
     return path
 
 
-FLOOR = "import rerun, yourdfpy, trimesh, numpy, rosbags.rosbag2"
+FLOOR = "import rerun, numpy, rosbags.rosbag2"
 """What ``r2d2-viz --bag`` imports before it reads anything."""
 
 

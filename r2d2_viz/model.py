@@ -1,7 +1,8 @@
 """URDF → an immutable robot model.
 
-The file is read and validated by :mod:`r2d2_viz.urdf_check` (safe XML, one-line errors), parsed
-element by element by yourdfpy, and turned into frozen dataclasses that the rest of the app uses.
+The file is read and validated by :mod:`r2d2_viz.urdf_check` (safe XML, one-line errors), then read element by
+element into frozen dataclasses that the rest of the app uses (no second parser: yourdfpy, which the tests
+compare against, costs a second of imports).
 Nothing here is specific to the R2D2: any URDF with box, cylinder, sphere (and mesh) geometry loads.
 
 Poses are 4×4 homogeneous matrices named after the frames they map between:
@@ -12,8 +13,6 @@ Poses are 4×4 homogeneous matrices named after the frames they map between:
 from __future__ import annotations
 
 import gc
-import io
-import warnings
 from collections import deque
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -24,10 +23,8 @@ from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
-import yourdfpy
 from lxml import etree
 
-from .errors import UrdfError
 from .packages import PackageIndex
 from .urdf_check import JOINT_TYPES, check_robot, parse_urdf_xml, read_urdf_xml
 
@@ -229,44 +226,29 @@ def _cyclic_gc_paused() -> Iterator[None]:
 
 
 def build_robot(root: etree._Element, *, source: str, base_dir: Path, packages: PackageIndex | None = None) -> Robot:
-    """Convert a validated ``<robot>`` element into a :class:`Robot`.
+    """Convert a validated ``<robot>`` element into a :class:`Robot`, element by element (urdfdom's reading:
+    origins ``xyz`` then ``rpy`` as fixed-axis roll, pitch, yaw; axes default to x; materials by name).
 
     Shapes whose mesh file cannot be found are left out (:func:`check_robot` warns about them).
     """
-    if root.get("name") is None:  # optional for urdf_check, required by yourdfpy
-        root.set("name", Path(source).stem)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            urdf = yourdfpy.URDF.load(
-                io.BytesIO(etree.tostring(root)),  # validated, entity-free XML, parsed again by yourdfpy
-                build_scene_graph=False,
-                build_collision_scene_graph=False,
-                load_meshes=False,
-                load_collision_meshes=False,
-            ).robot
-    except (ValueError, KeyError, IndexError, TypeError, AttributeError) as exc:  # validator should catch first
-        raise UrdfError(f"{source}: cannot parse: {exc}") from None
-
-    named_colors = _named_colors(urdf)
+    named_colors = _named_colors(root)
     index = packages or PackageIndex.from_environ()
-    links = {
-        link.name: Link(
-            name=link.name,
-            visuals=tuple(
-                s for v in link.visuals if (s := _shape(v, v.material, named_colors, base_dir, index)) is not None
-            ),
-            collisions=tuple(
-                s for c in link.collisions if (s := _shape(c, None, named_colors, base_dir, index)) is not None
-            ),
+    links: dict[str, Link] = {}
+    for link in root.iterchildren("link"):
+        visuals = (_shape(v, v.find("material"), named_colors, base_dir, index) for v in link.iterchildren("visual"))
+        collisions = (_shape(c, None, named_colors, base_dir, index) for c in link.iterchildren("collision"))
+        name = str(link.get("name"))
+        links[name] = Link(
+            name=name,
+            visuals=tuple(s for s in visuals if s is not None),
+            collisions=tuple(s for s in collisions if s is not None),
         )
-        for link in urdf.links
-    }
-    joint_names = {j.name for j in urdf.joints}
-    joints = [_joint(j, joint_names) for j in urdf.joints]
+    joint_elements = list(root.iterchildren("joint"))
+    joint_names = {str(j.get("name")) for j in joint_elements}
+    joints = [_joint(j, joint_names) for j in joint_elements]
     root_name, ordered = _topological(links, joints, source)
     return Robot(
-        name=urdf.name,
+        name=root.get("name") or Path(source).stem,
         source=source,
         root=root_name,
         links=tuple(links[name] for name in [root_name, *(j.child for j in ordered)]),
@@ -274,88 +256,114 @@ def build_robot(root: etree._Element, *, source: str, base_dir: Path, packages: 
     )
 
 
-def _named_colors(urdf: yourdfpy.Robot) -> dict[str, Rgba]:
-    """Materials by name, like urdfdom: top-level ones, then the first inline definition of each."""
-    colors: dict[str, Rgba] = {}
-
-    def register(material: yourdfpy.Material | None) -> None:
-        if material is not None and material.name and material.color is not None:
-            colors.setdefault(material.name, _rgba(material.color.rgba))
-
-    for material in urdf.materials:
-        register(material)
-    for link in urdf.links:
-        for visual in link.visuals:
-            register(visual.material)
-    return colors
+def _floats(text: str | None, default: str) -> npt.NDArray[np.float64]:
+    return np.array([float(v) for v in (text or default).replace(",", " ").split()], dtype=np.float64)
 
 
-def _rgba(values: npt.ArrayLike) -> Rgba:
-    r, g, b, a = (float(x) for x in np.asarray(values, dtype=np.float64).reshape(4))
+def _origin(element: etree._Element | None) -> Mat4:
+    """``<origin xyz rpy>`` as ``T_parent_child``: R = Rz(yaw) · Ry(pitch) · Rx(roll), as urdfdom reads it."""
+    if element is None:
+        return _frozen(None)
+    T = np.eye(4)
+    T[:3, 3] = _floats(element.get("xyz"), "0 0 0")
+    roll, pitch, yaw = _floats(element.get("rpy"), "0 0 0")
+    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    T[:3, :3] = [
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ]
+    return _frozen(T)
+
+
+def _color(material: etree._Element | None) -> Rgba | None:
+    color = material.find("color") if material is not None else None
+    if color is None:
+        return None
+    r, g, b, a = (float(x) for x in _floats(color.get("rgba"), "1 1 1 1"))
     return (r, g, b, a)
 
 
+def _named_colors(root: etree._Element) -> dict[str, Rgba]:
+    """Materials by name, like urdfdom: top-level ones, then the first inline definition of each."""
+    colors: dict[str, Rgba] = {}
+    inline = (v.find("material") for link in root.iterchildren("link") for v in link.iterchildren("visual"))
+    for material in (*root.iterchildren("material"), *inline):
+        rgba = _color(material)
+        if material is not None and material.get("name") and rgba is not None:
+            colors.setdefault(str(material.get("name")), rgba)
+    return colors
+
+
 def _shape(
-    element: yourdfpy.Visual | yourdfpy.Collision,
-    material: yourdfpy.Material | None,
+    element: etree._Element,
+    material: etree._Element | None,
     named_colors: dict[str, Rgba],
     base_dir: Path,
     packages: PackageIndex,
 ) -> Shape | None:
-    geometry = _geometry(element.geometry, base_dir, packages)
+    geometry = _geometry(element.find("geometry"), base_dir, packages)
     if isinstance(geometry, MeshFile) and geometry.path is None:
         return None
-    rgba: Rgba | None = None
-    if material is not None:
-        if material.color is not None:
-            rgba = _rgba(material.color.rgba)
-        elif material.name:
-            rgba = named_colors.get(material.name)
-    return Shape(
-        geometry=geometry,
-        T_link_shape=_frozen(element.origin),
-        rgba=rgba,
-        material=material.name if material is not None else None,
-        name=element.name,
+    rgba = _color(material)
+    name = material.get("name") if material is not None else None
+    if rgba is None and name:
+        rgba = named_colors.get(name)
+    return Shape(geometry=geometry, T_link_shape=_origin(element.find("origin")), rgba=rgba, material=name,
+                 name=element.get("name"))  # fmt: skip
+
+
+def _geometry(geometry: etree._Element | None, base_dir: Path, packages: PackageIndex) -> Geometry:
+    shape = next(
+        c for c in (geometry if geometry is not None else ()) if c.tag in ("box", "cylinder", "sphere", "mesh")
     )
-
-
-def _geometry(geometry: yourdfpy.Geometry, base_dir: Path, packages: PackageIndex) -> Geometry:
-    if geometry.box is not None:
-        x, y, z = (float(v) for v in geometry.box.size)
+    if shape.tag == "box":
+        x, y, z = (float(v) for v in _floats(shape.get("size"), ""))
         return Box((x, y, z))
-    if geometry.cylinder is not None:
-        return Cylinder(float(geometry.cylinder.radius), float(geometry.cylinder.length))
-    if geometry.sphere is not None:
-        return Sphere(float(geometry.sphere.radius))
-    mesh = geometry.mesh
-    scale = np.broadcast_to(np.asarray(1.0 if mesh.scale is None else mesh.scale, dtype=np.float64), (3,))
-    sx, sy, sz = (float(v) for v in scale)
-    return MeshFile(mesh.filename, packages.resolve_uri(mesh.filename, base_dir=base_dir), (sx, sy, sz))
+    if shape.tag == "cylinder":
+        return Cylinder(float(shape.get("radius", "")), float(shape.get("length", "")))
+    if shape.tag == "sphere":
+        return Sphere(float(shape.get("radius", "")))
+    filename = str(shape.get("filename"))
+    sx, sy, sz = (float(v) for v in np.broadcast_to(_floats(shape.get("scale"), "1"), (3,)))
+    return MeshFile(filename, packages.resolve_uri(filename, base_dir=base_dir), (sx, sy, sz))
 
 
-def _joint(joint: yourdfpy.Joint, joint_names: set[str]) -> Joint:
-    axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), dtype=np.float64)
+def _number(element: etree._Element, name: str) -> float | None:
+    value = element.get(name)
+    return None if value is None else float(value)
+
+
+def _joint(element: etree._Element, joint_names: set[str]) -> Joint:
+    kind = str(element.get("type"))
+    axis_element = element.find("axis")
+    axis = _floats(axis_element.get("xyz") if axis_element is not None else None, "1 0 0")
     norm = float(np.linalg.norm(axis))
     ax, ay, az = (float(v) for v in (axis / norm if norm > 0 else np.array([1.0, 0.0, 0.0])))
     limit = None
-    bounded = joint.type in ("revolute", "prismatic")  # a missing lower/upper reads as 0 there, like urdfdom
-    if joint.limit is not None and (bounded or (joint.limit.lower is not None and joint.limit.upper is not None)):
-        limit = Limit(
-            lower=float(joint.limit.lower or 0.0),
-            upper=float(joint.limit.upper or 0.0),
-            effort=None if joint.limit.effort is None else float(joint.limit.effort),
-            velocity=None if joint.limit.velocity is None else float(joint.limit.velocity),
-        )
+    limit_element = element.find("limit")
+    if limit_element is not None:
+        lower, upper = _number(limit_element, "lower"), _number(limit_element, "upper")
+        if kind in ("revolute", "prismatic") or (lower is not None and upper is not None):
+            limit = Limit(  # a missing lower/upper reads as 0 on revolute and prismatic joints, like urdfdom
+                lower=lower or 0.0,
+                upper=upper or 0.0,
+                effort=_number(limit_element, "effort"),
+                velocity=_number(limit_element, "velocity"),
+            )
     mimic = None
-    if joint.mimic is not None and joint.mimic.joint in joint_names:  # else moves on its own (check_robot warns)
-        mimic = Mimic(joint.mimic.joint, float(joint.mimic.multiplier), float(joint.mimic.offset))
+    mimic_element = element.find("mimic")
+    if mimic_element is not None and mimic_element.get("joint") in joint_names:  # else it moves on its own
+        multiplier, offset = _number(mimic_element, "multiplier"), _number(mimic_element, "offset")
+        mimic = Mimic(str(mimic_element.get("joint")), 1.0 if multiplier is None else multiplier, offset or 0.0)
+    parent, child = element.find("parent"), element.find("child")
+    assert parent is not None and child is not None  # check_robot refused joints without them
     return Joint(
-        name=joint.name,
-        type=joint.type,
-        parent=joint.parent,
-        child=joint.child,
-        T_parent_joint=_frozen(joint.origin),
+        name=str(element.get("name")),
+        type=kind,
+        parent=str(parent.get("link")),
+        child=str(child.get("link")),
+        T_parent_joint=_origin(element.find("origin")),
         axis=(ax, ay, az),
         limit=limit,
         mimic=mimic,

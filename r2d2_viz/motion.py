@@ -21,7 +21,7 @@ from .arrays import F64, I64
 from .errors import UsageError
 from .sources import Clock, FrameTrack, SampleChunk
 
-if TYPE_CHECKING:  # the model imports yourdfpy; the CLI imports this module for --help
+if TYPE_CHECKING:  # the model imports lxml; the CLI imports this module for --help
     from .model import Joint, Robot
 
 MotionName = Literal["tutorial", "sweep", "still"]
