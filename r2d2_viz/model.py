@@ -37,9 +37,17 @@ Mat4 = npt.NDArray[np.float64]
 Rgba = tuple[float, float, float, float]
 
 
+def asset_path(name: str) -> Path:
+    """A file shipped as package data (``r2d2_viz/assets/NAME``), or from the checkout's ``assets/`` when the
+    package runs from a source tree (``python -m r2d2_viz`` in a clone)."""
+    installed = Path(str(resources.files("r2d2_viz") / "assets" / name))
+    checkout = Path(__file__).resolve().parent.parent / "assets" / name
+    return installed if installed.is_file() or not checkout.is_file() else checkout
+
+
 def default_urdf_path() -> Path:
-    """The tutorial's R2D2, shipped as package data (``r2d2_viz/assets/r2d2.urdf``)."""
-    return Path(str(resources.files("r2d2_viz") / "assets" / "r2d2.urdf"))
+    """The tutorial's R2D2 (``assets/r2d2.urdf``)."""
+    return asset_path("r2d2.urdf")
 
 
 def _frozen(matrix: npt.ArrayLike | None) -> Mat4:

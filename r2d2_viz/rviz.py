@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -118,7 +117,9 @@ class ViewSpec:
 
 def default_rviz_path() -> Path:
     """The tutorial's r2d2.rviz, shipped as package data beside the URDF."""
-    return Path(str(resources.files("r2d2_viz") / "assets" / "r2d2.rviz"))
+    from .model import asset_path
+
+    return asset_path("r2d2.rviz")
 
 
 def load_rviz(path: str | Path) -> ViewSpec:
