@@ -139,11 +139,20 @@ def _recording_resolver(source: Path) -> Any:
     return RecordingResolver()
 
 
-def _dependency(path: Path, name: str) -> bytes | None:
-    import trimesh
+class _Beside:
+    """trimesh's ``FilePathResolver(path, allow_anywhere=True)`` lookup, without importing trimesh: checking a
+    warm cache entry's textures must not cost trimesh's and SciPy's imports (~1 s)."""
 
+    def __init__(self, source: Path) -> None:
+        self.parent = Path(os.path.abspath(source)).parent.resolve()
+
+    def absolute(self, name: str) -> Path:
+        return (self.parent / name.strip()).resolve()
+
+
+def _dependency(path: Path, name: str) -> bytes | None:
     try:
-        data = _read_beside(trimesh.resolvers.FilePathResolver(str(path), allow_anywhere=True), name)
+        data = _read_beside(_Beside(path), name)
     except Exception:  # missing, unreadable: the cache entry is stale
         return None
     return data
