@@ -13,7 +13,7 @@ from .blueprint import Layout, tutorial_spec
 from .motion import GeneratedMotion, TutorialMotion
 from .replay import Replay
 from .rviz import Camera, ViewSpec, load_rviz, missing_fixed_frame, orbit_eye
-from .sources import JointState
+from .sources import JointState, SampleChunk
 from .view_fit import AXIS_LENGTH, fit_view
 
 PREVIEW_SAMPLES = 3000
@@ -87,8 +87,6 @@ def _preview(plan: Replay) -> np.ndarray:
     if isinstance(source, GeneratedMotion):
         k = np.unique(np.linspace(0, PREVIEW_SAMPLES, 256).astype(np.int64))
         positions, _ = source.at(k)
-        from .sources import SampleChunk
-
         return state.update(SampleChunk(k, source.joints, positions))
     if source is not None:
         chunk = next(iter(source.chunks(2000)), None)
