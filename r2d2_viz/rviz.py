@@ -2,14 +2,26 @@
 
 Read with ``yaml.safe_load`` (no tags, no objects; size-limited). Every display, tool and panel class with no
 counterpart is named once in :attr:`ViewSpec.notes`. Camera formulas are RViz's own (rviz_default_plugins'
-view controllers): Orbit and XYOrbit put the eye at ``focal + distance · (cos yaw cos pitch, sin yaw cos pitch,
-sin pitch)``; FPS looks along ``(cos pitch cos yaw, cos pitch sin yaw, −sin pitch)`` from its Position;
-TopDownOrtho looks straight down at (X, Y), its image turned by Angle, ``Scale`` pixels a metre. Pure: no rerun.
+view controllers, ROS 2; rviz's ``default_plugin/view_controllers``, ROS 1 — the same maths):
+
+- Orbit (``OrbitViewController::updateCamera``): the eye at ``focal + distance · (cos yaw cos pitch,
+  sin yaw cos pitch, sin pitch)`` looking at the focal point, up +Z; with Invert Z Axis, yaw and pitch are
+  negated and up is −Z.
+- XYOrbit and ThirdPersonFollower (``XYOrbitViewController::updateCamera``; ROS 1's follower does the same):
+  the Orbit camera lifted by ``0.2 · distance`` along its own up vector ``(−sin pitch cos yaw, −sin pitch sin yaw,
+  cos pitch)``, so the focal point sits in the lower half of the image; the view direction is unchanged.
+- FPS (``FPSViewController::getOrientation``: yaw about Z · pitch about Y · roll about X): from Position,
+  looking along ``(cos pitch cos yaw, cos pitch sin yaw, −sin pitch)``.
+- TopDownOrtho (``FixedOrientationOrthoViewController``): straight down at (X, Y), the image turned by Angle,
+  ``Scale`` pixels a metre.
+
+Pure: no rerun.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,6 +33,8 @@ from .errors import R2d2VizError
 MAX_BYTES = 4 * 1024 * 1024
 FIXED = "<Fixed Frame>"
 FOV_Y = math.radians(45.0)
+XY_ORBIT_LIFT = 0.2
+"""RViz's XYOrbit / ThirdPersonFollower ``CAMERA_OFFSET``: the eye is lifted by this times the distance."""
 ASSUMED_VIEW_HEIGHT_PX = 800
 """TopDownOrtho's Scale is pixels a metre; Rerun has no orthographic 3D camera, so the eye stands as high as
 shows this many pixels' worth of metres (an RViz window's 3D view is about this tall)."""
@@ -45,6 +59,10 @@ UNSHOWN_BY_RERUN = ("LaserScan", "Marker", "MarkerArray", "Path", "Odometry", "M
 """Topic displays whose messages Rerun 0.41's MCAP decoders cannot draw (the entity is still mapped)."""
 
 
+SCENE_ROBOT_DISPLAYS = ("MotionPlanning", "PlanningScene")
+"""MoveIt's displays (``moveit_rviz_plugin/…``) that draw the robot as their "Scene Robot"."""
+
+
 class RvizError(R2d2VizError):
     """An .rviz file that cannot be read; the message names the file and the key."""
 
@@ -58,6 +76,8 @@ class Camera:
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
     orbit: bool = True
     """Rerun's orbital eye (else first person)."""
+    orthographic: bool = False
+    """RViz drew it with an orthographic projection (TopDownOrtho); Rerun's 3D view is perspective."""
     target_frame: str | None = None
     """A frame the camera follows (RViz's Target Frame, when not the fixed frame)."""
 
@@ -170,11 +190,40 @@ def orbit_eye(
     )
 
 
-def missing_fixed_frame(spec: ViewSpec, frames: set[str]) -> str | None:
+def orbit_view(
+    focal: tuple[float, float, float],
+    distance: float,
+    yaw: float,
+    pitch: float,
+    *,
+    invert_z: bool = False,
+    lift: float = 0.0,
+) -> tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]:
+    """(eye, look target, up) of RViz's Orbit view, lifted by ``lift · distance`` along the camera's own up
+    (``lift`` = :data:`XY_ORBIT_LIFT` for XYOrbit and ThirdPersonFollower). See the module's docstring."""
+    sign = -1.0 if invert_z else 1.0
+    yaw, pitch = sign * yaw, sign * pitch
+    eye = orbit_eye(focal, distance, yaw, pitch)
+    # the camera's up: world ±Z made perpendicular to the view direction (Ogre's fixed yaw axis)
+    cam_up = (
+        -sign * math.sin(pitch) * math.cos(yaw),
+        -sign * math.sin(pitch) * math.sin(yaw),
+        sign * math.cos(pitch),
+    )
+    shift = tuple(lift * distance * u for u in cam_up)
+    eye = (eye[0] + shift[0], eye[1] + shift[1], eye[2] + shift[2])
+    target = (focal[0] + shift[0], focal[1] + shift[1], focal[2] + shift[2])
+    return eye, target, (0.0, 0.0, sign)
+
+
+def missing_fixed_frame(spec: ViewSpec, frames: Iterable[str]) -> str | None:
     """RViz's words when the fixed frame is not among the frames a run has."""
-    if spec.fixed_frame in frames:
+    if spec.fixed_frame in set(frames):
         return None
     return f"{spec.source}: Fixed Frame [{spec.fixed_frame}] does not exist; the view opens on it all the same"
+
+
+missing_fixed_frame_warning = missing_fixed_frame
 
 
 def short_class(cls: Any) -> str:

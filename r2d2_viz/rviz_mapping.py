@@ -51,18 +51,31 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "disabled; the classes Rerun 0.41's MCAP decoders cannot draw are noted",
     ),
     ("Image, Camera", "Topic / Image Topic, Enabled", "a 2D view of that topic's entity beside the plots"),
+    (
+        "moveit_rviz_plugin/MotionPlanning, PlanningScene",
+        "Scene Robot: Show Robot Visual, Show Robot Collision, Robot Alpha, Links",
+        "as RobotModel when the config has none (the planning UI, scene and trajectories are noted)",
+    ),
     ("Group", "Displays, Enabled", "its displays, as if at the top level (a disabled group disables them)"),
     (
-        "Views: Orbit, XYOrbit",
+        "Views: Orbit",
         "Distance, Yaw, Pitch, Focal Point, Invert Z Axis",
         "orbital `EyeControls3D`: eye "
-        "at focal + distance · (cos yaw cos pitch, sin yaw cos pitch, sin pitch), looking at the focal point "
-        "(XYOrbit: in the XY plane), up ±Z",
+        "at focal + distance · (cos yaw cos pitch, sin yaw cos pitch, sin pitch), looking at the focal point, "
+        "up +Z (Invert Z Axis: yaw and pitch negated, up −Z)",
     ),
     (
+        "Views: XYOrbit, ThirdPersonFollower",
+        "as Orbit",
+        "the Orbit eye and target lifted by 0.2 · distance along the camera's up (RViz's `CAMERA_OFFSET`: the "
+        "focal point in the lower half of the image)",
+    ),
+    ("Views (ROS 1)", "Field of View", "none: Rerun's 3D view has its own (a value other than 45° is noted)"),
+    (
         "Views: FPS",
-        "Position, Yaw, Pitch",
-        "first-person `EyeControls3D` at Position, looking along (cos pitch cos yaw, cos pitch sin yaw, −sin pitch)",
+        "Position, Yaw, Pitch, Roll",
+        "first-person `EyeControls3D` at Position, looking along (cos pitch cos yaw, cos pitch sin yaw, −sin pitch), "
+        "up turned by Roll",
     ),
     (
         "Views: TopDownOrtho",
@@ -70,7 +83,11 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "looking straight down at (X, Y) from the height that shows "
         "800 px / Scale metres, the image turned by Angle (Rerun has no orthographic 3D view: noted)",
     ),
-    ("Views: ThirdPersonFollower", "as Orbit, Target Frame", "as Orbit, tracking the target frame's axes entity"),
+    (
+        "Views: ThirdPersonFollower",
+        "Target Frame",
+        "`tracking_entity` follows the frame's position; RViz also turns with its yaw (noted)",
+    ),
     ("Views", "Target Frame", "`tracking_entity=/tf_axes/<frame>` when not the fixed frame"),
     ("other displays, tools, panels", "Class", "none: one note each, naming the class"),
 )

@@ -12,8 +12,10 @@ from .rviz import (
     ASSUMED_VIEW_HEIGHT_PX,
     FIXED,
     FOV_Y,
+    SCENE_ROBOT_DISPLAYS,
     TOPIC_DISPLAYS,
     UNSHOWN_BY_RERUN,
+    XY_ORBIT_LIFT,
     Camera,
     Grid,
     RobotModel,
@@ -22,6 +24,7 @@ from .rviz import (
     TopicDisplay,
     ViewSpec,
     orbit_eye,
+    orbit_view,
     short_class,
 )
 
@@ -110,6 +113,16 @@ class Reader:
                 tf = self.tf(display, where)
             elif kind == "RobotModel" and robot is None:
                 robot = self.robot(display, where)
+            elif kind in SCENE_ROBOT_DISPLAYS and isinstance(display.get("Scene Robot"), dict):
+                # MoveIt's planning displays draw the robot themselves (their "Scene Robot")
+                if robot is None and self.enabled(display, where):
+                    robot = self.robot(display["Scene Robot"], f"{where} / Scene Robot", scene=True)
+                    self.note(
+                        f"display {display.get('Class')}: its Scene Robot is shown as a RobotModel; "
+                        "planning scene, goal state and trajectories have no counterpart"
+                    )
+                else:
+                    self.note(f"display {display.get('Class')}: no counterpart in Rerun; skipped")
             elif kind in TOPIC_DISPLAYS:
                 topic = self.text(display, "Topic", "", where) or self.text(display, "Image Topic", "", where)
                 enabled = self.enabled(display, where)
@@ -183,18 +196,24 @@ class Reader:
             hidden_frames=hidden,
         )
 
-    def robot(self, d: Mapping[str, Any], where: str) -> RobotModel:
+    def robot(self, d: Mapping[str, Any], where: str, *, scene: bool = False) -> RobotModel:
+        """A RobotModel display, or (``scene``) the Scene Robot of MoveIt's planning displays."""
+        visual_key, collision_key, alpha_key = (
+            ("Show Robot Visual", "Show Robot Collision", "Robot Alpha")
+            if scene
+            else ("Visual Enabled", "Collision Enabled", "Alpha")
+        )
         links = d.get("Links") or {}
         hidden = ()
         if isinstance(links, dict):
             hidden = tuple(sorted(k for k, v in links.items() if isinstance(v, dict) and v.get("Value") is False))
-        alpha = self.number(d, "Alpha", 1.0, where)
+        alpha = self.number(d, alpha_key, 1.0, where)
         if alpha < 1:
             self.note(f"RobotModel / Alpha {alpha:g}: shown opaque (the URDF colours' alpha applies)")
         return RobotModel(
-            enabled=self.enabled(d, where),
-            visual=self.flag(d, "Visual Enabled", True, where),
-            collision=self.flag(d, "Collision Enabled", False, where),
+            enabled=True if scene else self.enabled(d, where),
+            visual=self.flag(d, visual_key, True, where),
+            collision=self.flag(d, collision_key, False, where),
             alpha=alpha,
             hidden_links=hidden,
         )
@@ -208,22 +227,29 @@ def read_camera(self: Reader, v: Mapping[str, Any], fixed: str) -> Camera:
     follow = None if target_frame in (FIXED, fixed) else target_frame
     if kind in ("Orbit", "XYOrbit", "ThirdPersonFollower"):
         focal = self.vector(v, "Focal Point", where)
-        if kind == "XYOrbit":
-            focal = (focal[0], focal[1], 0.0)  # its focal point lies in the XY plane
         d = self.number(v, "Distance", 10.0, where)
         yaw = self.number(v, "Yaw", 0.785398, where)
         pitch = self.number(v, "Pitch", 0.785398, where)
-        eye = orbit_eye(focal, d, yaw, pitch)
-        up = (0.0, 0.0, -1.0) if v.get("Invert Z Axis") is True else (0.0, 0.0, 1.0)
-        return Camera(kind, eye, focal, up, True, follow)
+        lift = XY_ORBIT_LIFT if kind != "Orbit" else 0.0
+        invert = self.flag(v, "Invert Z Axis", False, where)
+        fov = self.number(v, "Field of View", FOV_Y, where)  # ROS 1 only
+        if abs(fov - FOV_Y) > 1e-3:
+            self.note(f"Views / Field of View {fov:.3g} rad: Rerun's 3D view has its own (45 degrees)")
+        if kind == "ThirdPersonFollower" and follow is not None:
+            self.note(f"Views / ThirdPersonFollower: Rerun follows {follow}'s position, not its yaw")
+        eye, target, up = orbit_view(focal, d, yaw, pitch, invert_z=invert, lift=lift)
+        return Camera(kind, eye, target, up, orbit=True, target_frame=follow)
     if kind == "FPS":
         eye = self.vector(v, "Position", where)
         yaw = self.number(v, "Yaw", 0.0, where)
         pitch = self.number(v, "Pitch", 0.0, where)
+        roll = self.number(v, "Roll", 0.0, where)  # ROS 1 only
         forward = (math.cos(pitch) * math.cos(yaw), math.cos(pitch) * math.sin(yaw), -math.sin(pitch))
-        up = (math.sin(pitch) * math.cos(yaw), math.sin(pitch) * math.sin(yaw), math.cos(pitch))
+        # up: Rz(yaw) · Ry(pitch) · Rx(roll) applied to +Z
+        ux, uy, uz = math.cos(roll) * math.sin(pitch), -math.sin(roll), math.cos(roll) * math.cos(pitch)
+        up = (ux * math.cos(yaw) - uy * math.sin(yaw), ux * math.sin(yaw) + uy * math.cos(yaw), uz)
         target = (eye[0] + forward[0], eye[1] + forward[1], eye[2] + forward[2])
-        return Camera(kind, eye, target, up, False, follow)
+        return Camera(kind, eye, target, up, orbit=False, target_frame=follow)
     if kind == "TopDownOrtho":
         x, y = self.number(v, "X", 0.0, where), self.number(v, "Y", 0.0, where)
         scale = self.number(v, "Scale", 10.0, where)
@@ -233,6 +259,7 @@ def read_camera(self: Reader, v: Mapping[str, Any], fixed: str) -> Camera:
             f"Views / TopDownOrtho: Rerun has no orthographic 3D view; a perspective eye {height:.3g} m "
             "above looks straight down instead"
         )
-        return Camera(kind, (x, y, height), (x, y, 0.0), (-math.sin(angle), math.cos(angle), 0.0), True, follow)
+        up = (-math.sin(angle), math.cos(angle), 0.0)
+        return Camera(kind, (x, y, height), (x, y, 0.0), up, orthographic=True, target_frame=follow)
     self.note(f"Views / Current {v.get('Class')}: no counterpart; the default orbit is used")
     return Camera(kind, orbit_eye((0.0, 0.0, 0.0), 10.0, 0.785398, 0.785398), (0.0, 0.0, 0.0))

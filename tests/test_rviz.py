@@ -142,3 +142,84 @@ def test_python_m_blueprint_converts_a_config(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     components = blueprint_components(out)
     assert components[f"{_scene(components)}/SpatialInformation"]["SpatialInformation:target_frame"] == ["odom"]
+
+
+# RViz's camera maths, written out from the view controllers' sources (independently of r2d2_viz.rviz):
+# OrbitViewController::updateCamera (eye on the sphere; Invert Z Axis negates yaw and pitch, up is −Z) and
+# XYOrbitViewController::updateCamera / ROS 1 ThirdPersonFollowerViewController::updateCamera (the eye moved by
+# CAMERA_OFFSET = 0.2 × distance along the camera's up, which Ogre derives from the fixed yaw axis +Z).
+
+
+def _camera_up(yaw, pitch):
+    """Ogre's camera up for a camera at yaw/pitch on the orbit sphere looking at its centre, yaw axis +Z:
+    +Z minus its component along the view direction, normalised."""
+    d = (math.cos(yaw) * math.cos(pitch), math.sin(yaw) * math.cos(pitch), math.sin(pitch))
+    up = [z - d[2] * di for z, di in zip((0, 0, 1), d, strict=True)]
+    norm = math.sqrt(sum(u * u for u in up))
+    return tuple(u / norm for u in up)
+
+
+def _xy_orbit(focal, d, yaw, pitch):
+    eye = _orbit(focal, d, yaw, pitch)
+    up = _camera_up(yaw, pitch)
+    lift = tuple(0.2 * d * u for u in up)
+    return tuple(e + s for e, s in zip(eye, lift, strict=True)), tuple(f + s for f, s in zip(focal, lift, strict=True))
+
+
+def test_turtlebot3_burger_ros1_xy_orbit(tmp_path: Path) -> None:
+    spec = load_rviz(DATA / "turtlebot3_burger_ros1.rviz")
+    # Global Options: Background Color 108; 108; 108, Fixed Frame base_footprint
+    assert spec.fixed_frame == "base_footprint" and spec.background == (108, 108, 108)
+    # Views / Current: rviz/XYOrbit, Distance 1.910049319267273, Yaw 4.793606281280518, Pitch 0.7953976392745972,
+    # Focal Point (-0.02010004222393036, -0.467065691947937, -4.76837158203125e-7)
+    focal = (-0.02010004222393036, -0.467065691947937, -4.76837158203125e-7)
+    eye, target = _xy_orbit(focal, 1.910049319267273, 4.793606281280518, 0.7953976392745972)
+    assert spec.camera is not None and spec.camera.kind == "XYOrbit"
+    assert spec.camera.eye == pytest.approx(eye) and spec.camera.target == pytest.approx(target)
+    # by hand: yaw ≈ 274.7°, pitch ≈ 45.6°: the eye is south of the focal point (−y) and above it; the lift
+    # (0.38 m along the camera's up, which leans north) moves it north and up
+    assert spec.camera.eye[1] < focal[1] and spec.camera.eye[2] > 1.3
+    assert spec.camera.target[2] == pytest.approx(0.2 * 1.910049319267273 * math.cos(0.7953976392745972), abs=1e-6)
+    # TF: Marker Scale 0.4, Show Names true; rviz/Axes display and rviz/Time panel have no counterpart
+    assert spec.tf is not None and spec.tf.marker_scale == pytest.approx(0.4) and spec.tf.show_names
+    assert any("display rviz/Axes: no counterpart" in n for n in spec.notes)
+    assert any("panel rviz/Time" in n for n in spec.notes)
+    assert [(t.kind, t.topic) for t in spec.topics] == [("LaserScan", "/scan")]
+    components = _blueprint(spec, tmp_path)
+    view = _scene(components)
+    assert components[f"{view}/SpatialInformation"]["SpatialInformation:target_frame"] == ["base_footprint"]
+    eye_bp = components[f"{view}/EyeControls3D"]
+    assert eye_bp["EyeControls3D:position"][0] == pytest.approx(eye, abs=1e-5)
+    assert eye_bp["EyeControls3D:look_target"][0] == pytest.approx(target, abs=1e-5)
+
+
+def test_universal_robots_ros2_view_robot(tmp_path: Path) -> None:
+    spec = load_rviz(DATA / "ur_view_robot.rviz")
+    assert spec.fixed_frame == "base_link" and spec.background == (48, 48, 48)
+    focal = (-0.0457618348300457, -0.07058511674404144, 0.49734944105148315)
+    assert spec.camera is not None and spec.camera.kind == "Orbit"
+    assert spec.camera.eye == pytest.approx(_orbit(focal, 3.493516445159912, 0.5353983640670776, 0.15039828419685364))
+    assert spec.camera.target == pytest.approx(focal)
+    # no TF display in the file: no TF axes or arrows, as in RViz; the RobotModel from a topic is ours
+    assert spec.tf is None and spec.robot is not None and spec.robot.visual
+    assert sum("tool rviz_default_plugins/" in n for n in spec.notes) == 8
+    components = _blueprint(spec, tmp_path)
+    hidden = _hidden(components, _scene(components))
+    assert {"/tf_axes", "/tf_arrows", "/tf", "/robot/collision"} <= hidden and "/robot/visual" not in hidden
+
+
+def test_moveit_panda_shows_the_scene_robot_and_names_the_planning_plugins(tmp_path: Path) -> None:
+    spec = load_rviz(DATA / "panda_moveit.rviz")
+    assert spec.fixed_frame == "panda_link0"
+    focal = (-0.03982115536928177, 0.10271645337343216, 0.17354051768779755)
+    assert spec.camera is not None
+    assert spec.camera.eye == pytest.approx(_orbit(focal, 2.718453884124756, 0.6603923439979553, 0.5503982305526733))
+    # no RobotModel display: MoveIt's PlanningScene draws the robot (Scene Robot: Show Robot Visual true)
+    assert spec.robot is not None and spec.robot.visual and not spec.robot.collision
+    assert any("moveit_rviz_plugin/PlanningScene: its Scene Robot" in n for n in spec.notes)
+    for cls in ("moveit_rviz_plugin/Trajectory", "moveit_rviz_plugin/MotionPlanning"):
+        assert sum(f"display {cls}: no counterpart" in n for n in spec.notes) == 1, cls
+    assert any("panel rviz_visual_tools/RvizVisualToolsGui" in n for n in spec.notes)
+    assert [(t.kind, t.topic, t.enabled) for t in spec.topics] == [("MarkerArray", "/rviz_visual_tools", True)]
+    components = _blueprint(spec, tmp_path)
+    assert "/robot/visual" not in _hidden(components, _scene(components))
