@@ -15,7 +15,7 @@ from conftest import REPO, SHARED_REFERENCE, cli
 from rrd import blueprint_components
 
 from r2d2_viz.blueprint import generate_blueprint, tutorial_spec
-from r2d2_viz.rviz import load_rviz
+from r2d2_viz.rviz import load_rviz, parse_rviz
 
 DATA = REPO / "tests" / "data" / "rviz"
 
@@ -223,3 +223,27 @@ def test_moveit_panda_shows_the_scene_robot_and_names_the_planning_plugins(tmp_p
     assert [(t.kind, t.topic, t.enabled) for t in spec.topics] == [("MarkerArray", "/rviz_visual_tools", True)]
     components = _blueprint(spec, tmp_path)
     assert "/robot/visual" not in _hidden(components, _scene(components))
+
+
+def test_unticked_frames_links_and_tf_parts_are_hidden(tmp_path: Path) -> None:
+    """turtlebot3's ROS 1 config as RViz saves it after unticking base_scan under TF / Frames,
+    wheel_left_link under RobotModel / Links, then Show Arrows (and, second, Show Axes)."""
+    text = (DATA / "turtlebot3_burger_ros1.rviz").read_text()
+    frames_base_scan = "        base_scan:\n          Value: true\n        caster_back_link:\n          Value: true\n"
+    link_wheel_left = (
+        "        wheel_left_link:\n          Alpha: 1\n          Show Axes: false\n          Show Trail: false\n"
+    )
+    assert text.count(frames_base_scan) == 1 and text.count(link_wheel_left) == 1
+    text = text.replace(frames_base_scan, frames_base_scan.replace("true\n", "false\n", 1))
+    text = text.replace(link_wheel_left + "          Value: true", link_wheel_left + "          Value: false")
+    text = text.replace("      Show Arrows: true\n", "      Show Arrows: false\n")
+    spec = parse_rviz(text, source="edited.rviz")
+    assert spec.tf is not None and spec.tf.hidden_frames == ("base_scan",)
+    assert spec.robot is not None and spec.robot.hidden_links == ("wheel_left_link",)
+    components = _blueprint(spec, tmp_path)
+    hidden = _hidden(components, _scene(components))
+    assert {"/tf_axes/base_scan", "/robot/visual/wheel_left_link", "/tf_arrows", "/tf"} <= hidden
+    assert "/tf_axes" not in hidden and "/robot/visual" not in hidden
+    no_axes = parse_rviz(text.replace("      Show Axes: true\n", "      Show Axes: false\n"), source="edited.rviz")
+    components = _blueprint(no_axes, tmp_path)
+    assert "/tf_axes" in _hidden(components, _scene(components))
