@@ -2,9 +2,10 @@
 
 Mesh files reach the viewer as they are where Rerun reads them fully (STL, PLY, GLB, OBJ without ``mtllib``):
 :meth:`MeshCache.asset` reads each file once however many links use it. COLLADA (``.dae``), glTF (``.gltf``)
-and OBJ files with material libraries are converted once with trimesh (pycollada for COLLADA) into one GLB that
-embeds their colours, materials and textures (Rerun's own COLLADA reader drops textures); the GLB is kept in a
-disk cache (:class:`DiskCache`) keyed by the file's content, so later runs skip the conversion.
+and OBJ files with material libraries are converted once into one GLB that embeds their colours, materials and
+textures (Rerun's own COLLADA reader drops textures): COLLADA with pycollada (:mod:`.collada_glb`), the others
+with trimesh. The GLB is kept in a disk cache (:class:`DiskCache`) keyed by the file's content, so later runs skip
+the conversion.
 """
 
 from __future__ import annotations
@@ -25,12 +26,13 @@ import numpy as np
 import numpy.typing as npt
 
 from . import primitives
+from .collada_glb import collada_to_glb
 from .mesh_disk_cache import DiskCache, sha256
 from .model import Box, Cylinder, MeshFile, Shape, Sphere
 
 CYLINDER_SECTIONS = 48
 SPHERE_SUBDIVISIONS = 3
-CONVERTER_VERSION = 3
+CONVERTER_VERSION = 4
 """Bump when the conversion below changes what it writes: old cache entries are then never looked up."""
 
 MAX_MESH_BYTES = 1 << 30
@@ -183,22 +185,19 @@ def convert_to_glb(path: Path, data: bytes, suffix: str | None = None) -> tuple[
     Raises ``ValueError`` when the file holds no triangles or cannot be parsed.
     """
     file_type = CONVERTED[suffix or path.suffix.lower()]
-    if file_type == "dae" and re.search(rb"<!(DOCTYPE|ENTITY)", data[: max(data.find(b"<COLLADA"), 0)]):
-        # pycollada parses with entity expansion on and lxml's size limits off: a DTD could read other files
-        # into the mesh or blow up ("billion laughs"). COLLADA needs none.
-        raise ValueError("declares a DTD or entities, which COLLADA files do not need; refused")
+    if file_type == "dae":  # pycollada alone: no trimesh import on the way to a robot's first frame
+        read: dict[str, str] = {}
+
+        def read_beside(name: str) -> bytes:
+            found = _read_beside(_Beside(path), name)
+            read[name] = sha256(found)
+            return found
+
+        return collada_to_glb(data, read_beside), read
     resolver = _recording_resolver(path)
     scene = _load_scene(data, file_type, resolver)
-    if file_type == "dae" and not _has_triangles(scene) and b"<instance_material" in data:
-        # pycollada drops a whole node when one bound material is broken (anymal's foot: a sampler that
-        # names a missing surface); unbind only the broken materials and load again, as RViz shows them.
-        scene = _load_scene(_unbind_broken_materials(data), file_type, resolver)
     if not _has_triangles(scene):
         raise ValueError("holds no triangles")
-    if file_type == "dae":
-        unit = _collada_unit(data)
-        if unit is not None and unit != 1.0:
-            scene = scene.scaled(unit)  # RViz (assimp) scales COLLADA by its <unit meter="…">
     for geometry in scene.geometry.values():
         # trimesh writes extra vertex attributes (e.g. an OBJ's per-vertex "color") as custom glTF attributes
         # ("_color"), which Rerun's glTF reader refuses outright: "invalid semantic name", nothing drawn.
@@ -218,7 +217,7 @@ def _load_scene(data: bytes, file_type: str, resolver: Any) -> Any:
     try:
         # process=False: no vertex merging (a third of the conversion time; the GLB comes out the same size)
         return trimesh.load_scene(io.BytesIO(data), file_type=file_type, resolver=resolver, process=False)
-    except Exception as exc:  # trimesh and pycollada raise many kinds for unreadable files
+    except Exception as exc:  # trimesh raises many kinds for unreadable files
         raise ValueError(f"cannot be read: {_one_line(exc)}") from None
 
 
@@ -226,36 +225,6 @@ def _has_triangles(scene: Any) -> bool:
     import trimesh
 
     return any(isinstance(g, trimesh.Trimesh) and len(g.faces) > 0 for g in scene.geometry.values())
-
-
-def _unbind_broken_materials(data: bytes) -> bytes:
-    """The COLLADA document without the ``<instance_material>`` bindings pycollada cannot resolve."""
-    import collada
-    from lxml import etree
-
-    ignore = [collada.common.DaeBrokenRefError, collada.common.DaeUnsupportedError, collada.common.DaeError]
-    try:
-        loaded = collada.Collada(io.BytesIO(data), ignore=ignore)
-    except Exception:
-        return data
-    good = {material.id for material in loaded.materials}
-    root = etree.fromstring(data, etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=True))
-    for element in root.iter("{*}instance_material"):
-        if str(element.get("target", "")).lstrip("#") not in good:
-            parent = element.getparent()
-            if parent is not None:
-                parent.remove(element)
-    result: bytes = etree.tostring(root)
-    return result
-
-
-def _collada_unit(data: bytes) -> float | None:
-    match = re.search(rb"<unit\b[^>]*\bmeter\s*=\s*\"([^\"]+)\"", data[:65536])
-    try:
-        value = float(match.group(1)) if match else None
-    except ValueError:
-        return None
-    return value if value is not None and np.isfinite(value) and value > 0 else None
 
 
 def _obj_material_libraries(data: bytes) -> bool:
