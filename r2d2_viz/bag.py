@@ -20,12 +20,11 @@ from functools import cache
 from itertools import islice
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from rosbags.rosbag2 import Reader
-from rosbags.typesys import Stores, get_typestore
-from rosbags.typesys.store import Typestore
-from ruamel.yaml import YAML
+if TYPE_CHECKING:  # rosbags and ruamel.yaml are imported when a bag is opened: not on a run without one
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys.store import Typestore
 
 from .errors import BagError
 from .mcap_scan import McapScan
@@ -39,6 +38,8 @@ def to_stderr(message: str) -> None:
 
 @cache
 def typestore() -> Typestore:
+    from rosbags.typesys import Stores, get_typestore
+
     return get_typestore(Stores.ROS2_HUMBLE)
 
 
@@ -65,6 +66,8 @@ class _File:
         """Why the file was read without its index (it breaks off), if it was."""
         self.reader: Reader | None = None
         self.scan = McapScan(path) if path.suffix == ".mcap" else None
+        from rosbags.rosbag2 import Reader
+
         try:
             reader = Reader(path)
             reader.open()
@@ -215,6 +218,8 @@ def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:
             f"{path}: no metadata.yaml in this directory (a rosbag2 directory needs one; "
             "give the .db3 or .mcap file itself to read it without)"
         )
+    from ruamel.yaml import YAML
+
     try:
         info = YAML(typ="safe").load(meta.read_text())["rosbag2_bagfile_information"]
         compression = info.get("compression_mode") or ""
