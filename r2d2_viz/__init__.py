@@ -16,6 +16,7 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "RobotLogger": "api",
     "load_urdf": "model",
+    "load_robot": "xacro_load",
     "parse_urdf": "model",
     "default_urdf_path": "model",
     "Robot": "model",
@@ -47,6 +48,7 @@ __all__ = [
     "UsageError",
     "default_urdf_path",
     "generate_blueprint",
+    "load_robot",
     "load_urdf",
     "make_motion",
     "parse_urdf",
@@ -60,6 +62,7 @@ if TYPE_CHECKING:
     from .model import Robot, default_urdf_path, load_urdf, parse_urdf
     from .motion import MOTIONS, make_motion
     from .sources import ArraySource, FrameTrack, SampleChunk, Source
+    from .xacro_load import load_robot
 
 
 def __getattr__(name: str) -> Any:

@@ -3,7 +3,7 @@
     import numpy as np, rerun as rr, r2d2_viz
 
     rr.init("my_app", spawn=True)
-    robot = r2d2_viz.load_urdf("arm.urdf")             # or r2d2_viz.parse_urdf(text)
+    robot = r2d2_viz.load_robot("arm.urdf")            # a URDF or xacro file; or r2d2_viz.parse_urdf(text)
     logger = r2d2_viz.RobotLogger(robot)                # the current recording, or recording=rec
     logger.log_static()                                 # meshes, fixed transforms, TF axes and arrows, plot styles
     t = np.linspace(0, 10, 1001)
@@ -16,7 +16,7 @@ Same pinned kinematics and the same entities as the ``r2d2-viz`` command line (`
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -26,12 +26,13 @@ import rerun as rr
 from .entities import TIMELINE
 from .errors import UsageError
 from .kinematics import compile_tree
-from .model import Robot, load_urdf
+from .model import Robot
 from .motion import ODOM
 from .notices import Warn, to_stderr
 from .runner import BATCH_CHUNK_SAMPLES
 from .sources import ArraySource, Clock, FrameTrack, Source
 from .stream import RobotStream
+from .xacro_load import load_robot
 
 
 class RobotLogger:
@@ -40,7 +41,8 @@ class RobotLogger:
     ``moving_root``: every :meth:`log_joint_positions` call also gives the root's pose in ``fixed_frame``
     (``root_translation``, ``root_quat_xyzw``); otherwise the root sits at the fixed frame's origin.
     ``timestamps``: times are seconds since the Unix epoch (a timestamp timeline) instead of seconds since
-    the start (a duration timeline)."""
+    the start (a duration timeline). ``robot`` given as a path may be a URDF or a xacro file (its ``NAME:=VALUE``
+    arguments in ``mappings``; ``package://`` and ``$(find)`` resolved as the command line does)."""
 
     def __init__(
         self,
@@ -52,8 +54,9 @@ class RobotLogger:
         timestamps: bool = False,
         timeline: str = TIMELINE,
         warn: Warn = to_stderr,
+        mappings: Mapping[str, str] | None = None,
     ) -> None:
-        self.robot = robot if isinstance(robot, Robot) else load_urdf(robot)
+        self.robot = robot if isinstance(robot, Robot) else load_robot(robot, mappings=mappings)
         rec = recording if recording is not None else rr.get_data_recording()
         if rec is None:
             raise UsageError("no Rerun recording: call rr.init(...) first or pass recording=")

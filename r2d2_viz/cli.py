@@ -17,6 +17,7 @@ from .errors import R2d2VizError
 from .motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+CONNECT_DEFAULT = "rerun+http://127.0.0.1:9876/proxy"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -92,10 +93,10 @@ def build_parser() -> argparse.ArgumentParser:
     sinks.add_argument(
         "--connect",
         nargs="?",
-        const="rerun+http://127.0.0.1:9876/proxy",
+        const=CONNECT_DEFAULT,
         default=None,
         metavar="URL",
-        help="stream live to a running viewer (default rerun+http://127.0.0.1:9876/proxy)",
+        help=f"stream live to a running viewer (default {CONNECT_DEFAULT})",
     )
     sinks.add_argument("--serve", action="store_true", help="serve a web viewer and stream live to it")
     sinks.add_argument("--headless", action="store_true", help="compute everything, show nothing (checks a URDF)")
@@ -130,6 +131,9 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .runner import RunConfig, print_summary, run
     from .sinks import SinkConfig
 
+    if args.connect is not None and ":=" in args.connect:  # "--connect ur_type:=ur5e": a xacro argument, not a URL
+        args.xacro_args = [args.connect, *args.xacro_args]
+        args.connect = CONNECT_DEFAULT
     live = [flag for flag, on in (("--spawn", args.spawn), ("--connect", args.connect), ("--serve", args.serve)) if on]
     if len(live) > 1:
         raise UsageError(f"choose one live sink, not {' and '.join(live)}")

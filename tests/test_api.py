@@ -127,3 +127,34 @@ def test_the_example_records_named_frames_for_the_arm(tmp_path: Path) -> None:
     edges = frame_edges_at(recording, 1_000_000_000)
     tool = pose_in(edges, "tool", "odom")
     assert 0.0 < np.linalg.norm(tool[:3, 3]) < 1.5  # somewhere within the arm's reach of its base
+
+
+def test_a_xacro_file_with_arguments_through_the_logger(tmp_path: Path) -> None:
+    # Universal Robots' ROS 2 description (tests/data/xacro, see its README) with its two arguments; poses checked
+    # against yourdfpy on what the unmodified `xacro` command makes of the same file.
+    from xacro_cases import plain_xacro
+
+    ur = REPO / "tests" / "data" / "xacro" / "Universal_Robots_ROS2_Description"
+    path = ur / "urdf" / "ur.urdf.xacro"
+    args = {"ur_type": "ur5e", "name": "ur"}
+    reference = plain_xacro(tmp_path, path, args, {"ur_description": ur})
+    expanded, err = reference.communicate(timeout=120)
+    assert reference.returncode == 0, err
+    (tmp_path / "ur.urdf").write_text(expanded)
+
+    out = tmp_path / "ur.rrd"
+    rec = rr.RecordingStream("my_app")
+    rec.save(out)
+    logger = r2d2_viz.RobotLogger(path, mappings=args, recording=rec, warn=lambda _: None)
+    assert len(logger.joints) == 6
+    logger.log_static()
+    q = np.random.default_rng(1).uniform(-2, 2, (5, 6))
+    logger.log_joint_positions(np.arange(5) / 10, q)
+    logger.finish()
+    rec.flush()
+    rec.disconnect()
+    configs = [dict(zip(logger.joints, row, strict=True)) for row in q]
+    times = np.rint(np.arange(5) / 10 * 1e9)
+    assert _worst(read_recording(out), tmp_path / "ur.urdf", times, configs) < 1e-5
+    with pytest.raises(UsageError, match="arguments for a xacro file"):
+        r2d2_viz.RobotLogger(ARM, mappings={"x": "1"}, recording=rec)

@@ -114,3 +114,23 @@ def test_save_defaults_to_one_lap_whatever_the_rate(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     times = tf_by_child(read_recording(out))["axis"].times
     assert len(times) == 1440 and times[-1] == round(1439 * 1e9 / 60)  # 360° at ¼° a frame: 24 s at 60 Hz
+
+
+def test_connect_without_a_url_leaves_xacro_arguments_alone(monkeypatch: pytest.MonkeyPatch) -> None:
+    # "--connect" takes an optional URL; "--connect ur_type:=ur5e" used to send the run to a viewer at
+    # "ur_type:=ur5e". The run itself is replaced: only what the command line makes of its arguments is checked.
+    from r2d2_viz import runner
+    from r2d2_viz.cli import CONNECT_DEFAULT
+
+    seen: list[runner.RunConfig] = []
+
+    def fake_run(config: runner.RunConfig, **_: object) -> None:
+        seen.append(config)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner, "run", fake_run)
+    assert main(["--urdf", "ur.urdf.xacro", "--connect", "ur_type:=ur5e", "name:=ur"]) == 130
+    assert main(["--urdf", "ur.urdf.xacro", "--connect", "rerun+http://10.0.0.2:9876/proxy", "name:=ur"]) == 130
+    first, second = seen
+    assert (first.mappings, first.sink.connect) == ({"ur_type": "ur5e", "name": "ur"}, CONNECT_DEFAULT)
+    assert (second.mappings, second.sink.connect) == ({"name": "ur"}, "rerun+http://10.0.0.2:9876/proxy")
