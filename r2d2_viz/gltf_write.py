@@ -1,4 +1,6 @@
-"""A minimal glTF 2.0 binary (GLB) writer: triangle meshes, materials, embedded images, nodes with matrices.
+"""A minimal glTF 2.0 binary (GLB) writer: triangle meshes, materials, embedded images, nodes with matrices; and
+what the viewer's colour rule needs to know of any GLB: which primitives carry a colour of their own, and the
+same GLB with a material given to those that do not (:func:`paint_bare_primitives`).
 
 Only what a converted mesh file needs, written straight from numpy arrays (no trimesh, whose import costs
 about a second). The layout follows the glTF 2.0 specification: a 12-byte header, a JSON chunk padded with
@@ -148,3 +150,65 @@ class GlbBuilder:
         if self._blob:
             chunks += struct.pack("<I4s", len(self._blob), b"BIN\0") + bytes(self._blob)
         return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks
+
+
+def split_glb(glb: bytes) -> tuple[dict[str, Any], bytes]:
+    """The JSON document and the BIN chunk of a GLB. Raises ``ValueError`` when it is not one."""
+    try:
+        magic, version, _ = struct.unpack_from("<4sII", glb)
+        size, kind = struct.unpack_from("<I4s", glb, 12)
+        if magic != b"glTF" or version != 2 or kind != b"JSON":
+            raise ValueError("not a glTF 2.0 binary")
+        doc = json.loads(glb[20 : 20 + size])
+        rest = glb[20 + size :]
+        blob = rest[8 : 8 + struct.unpack_from("<I", rest)[0]] if len(rest) >= 8 and rest[4:8] == b"BIN\0" else b""
+    except (struct.error, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"not a readable GLB: {exc}") from None
+    if not isinstance(doc, dict):
+        raise ValueError("not a readable GLB: its JSON is not an object")
+    return doc, blob
+
+
+def _primitives(doc: dict[str, Any]) -> list[dict[str, Any]]:
+    meshes = doc.get("meshes")
+    if not isinstance(meshes, list):
+        return []
+    found = []
+    for mesh in meshes:
+        for p in mesh.get("primitives", []) if isinstance(mesh, dict) else []:
+            if isinstance(p, dict):
+                found.append(p)
+    return found
+
+
+def _coloured(primitive: dict[str, Any]) -> bool:
+    attributes = primitive.get("attributes")
+    return "material" in primitive or (isinstance(attributes, dict) and "COLOR_0" in attributes)
+
+
+def colour_parts(glb: bytes) -> tuple[bool, bool]:
+    """(some primitive has a material or vertex colours, some primitive has neither); (False, True) when the bytes
+    cannot be read as a GLB (the viewer would then draw them in one default colour, if at all)."""
+    try:
+        doc, _ = split_glb(glb)
+    except ValueError:
+        return False, True
+    parts = [_coloured(p) for p in _primitives(doc)]
+    return any(parts), not all(parts)
+
+
+def paint_bare_primitives(glb: bytes, rgba: tuple[float, float, float, float]) -> bytes:
+    """The GLB with one more material, of colour ``rgba`` (0..1), on each primitive without a colour of its own."""
+    doc, blob = split_glb(glb)
+    materials = doc.setdefault("materials", [])
+    materials.append({"pbrMetallicRoughness": {"baseColorFactor": [float(c) for c in rgba], "metallicFactor": 0.0}})
+    for primitive in _primitives(doc):
+        if not _coloured(primitive):
+            primitive["material"] = len(materials) - 1
+    text = json.dumps(doc, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<I4s", len(text), b"JSON") + text
+    if blob:
+        blob += b"\0" * (-len(blob) % 4)
+        chunks += struct.pack("<I4s", len(blob), b"BIN\0") + blob
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks

@@ -13,10 +13,8 @@ from __future__ import annotations
 import functools
 import hashlib
 import io
-import json
 import os
 import re
-import struct
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +25,7 @@ import numpy.typing as npt
 
 from . import primitives
 from .collada_glb import collada_to_glb
+from .gltf_write import colour_parts, paint_bare_primitives
 from .mesh_disk_cache import DiskCache, sha256
 from .model import Box, Cylinder, MeshFile, Shape, Sphere
 
@@ -57,7 +56,9 @@ class Asset:
     data: bytes
     media_type: str
     own_colors: bool
-    """The bytes carry colours, materials or textures (else the viewer would draw one default colour)."""
+    """Some part of the mesh carries colours, materials or textures (else the viewer draws one default colour)."""
+    bare_parts: bool = True
+    """Some part of the mesh carries none (all of it when ``own_colors`` is False)."""
 
 
 class MeshCache:
@@ -72,6 +73,7 @@ class MeshCache:
         self.disk: DiskCache | None = disk if isinstance(disk, DiskCache) else DiskCache() if disk else None
         self.reads: Counter[Path] = Counter()
         self._assets: dict[Path, Asset | str] = {}
+        self._painted: dict[tuple[Asset, tuple[float, ...]], Asset] = {}
 
     def asset(self, path: Path, filename: str | None = None) -> Asset:
         """The viewer's bytes for mesh file ``path``. Raises ``ValueError`` naming ``filename`` when unreadable."""
@@ -85,6 +87,13 @@ class MeshCache:
         if isinstance(found, str):
             raise ValueError(f"mesh file {filename or str(path)!r} {found}")
         return found
+
+    def painted(self, asset: Asset, rgba: tuple[float, float, float, float]) -> Asset:
+        """``asset`` (a GLB) with colour ``rgba`` on its parts that have none of their own; one per colour."""
+        key = (asset, rgba)
+        if key not in self._painted:
+            self._painted[key] = Asset(paint_bare_primitives(asset.data, rgba), GLB, own_colors=True, bare_parts=False)
+        return self._painted[key]
 
     def read(self, path: Path) -> bytes:
         self.reads[path] += 1
@@ -103,16 +112,19 @@ class MeshCache:
             raise ValueError(f"has an unsupported format {kind!r} (STL, OBJ, DAE, GLB, GLTF, PLY)")
         data = self.read(path)
         if suffix in AS_IS and not (suffix == ".obj" and _obj_material_libraries(data)):
-            return Asset(data, AS_IS[suffix], own_colors=_own_colors(suffix, data))
+            if suffix == ".glb":
+                return _glb_asset(data)
+            coloured = _own_colors(suffix, data)
+            return Asset(data, AS_IS[suffix], own_colors=coloured, bare_parts=not coloured)
         key = _cache_key(suffix, data)
         if self.disk is not None:
             glb = self.disk.get(key, lambda name: _dependency(path, name))
             if glb is not None:
-                return Asset(glb, GLB, own_colors=glb_has_colours(glb))
+                return _glb_asset(glb)
         glb, dependencies = convert_to_glb(path, data, suffix)
         if self.disk is not None:
             self.disk.put(key, glb, dependencies)
-        return Asset(glb, GLB, own_colors=glb_has_colours(glb))
+        return _glb_asset(glb)
 
 
 # --- conversion ---------------------------------------------------------------------------------------
@@ -231,20 +243,12 @@ def _obj_material_libraries(data: bytes) -> bool:
     return re.search(rb"^\s*mtllib\s", data, re.MULTILINE) is not None
 
 
-def glb_has_colours(glb: bytes) -> bool:
-    """Whether a GLB carries materials or vertex colours (else the viewer draws it in one default colour)."""
-    try:
-        magic, _, _, length, kind = struct.unpack_from("<4sIII4s", glb)
-        doc = json.loads(glb[20 : 20 + length]) if magic == b"glTF" and kind == b"JSON" else {}
-        primitives = [p for m in doc.get("meshes", []) for p in m.get("primitives", [])]
-        return bool(doc.get("materials")) or any("COLOR_0" in p.get("attributes", {}) for p in primitives)
-    except (struct.error, ValueError, AttributeError, TypeError):  # not a GLB we can read: say "no colours"
-        return False
+def _glb_asset(glb: bytes) -> Asset:
+    coloured, bare = colour_parts(glb)
+    return Asset(glb, GLB, own_colors=coloured, bare_parts=bare)
 
 
 def _own_colors(suffix: str, data: bytes) -> bool:
-    if suffix == ".glb":
-        return glb_has_colours(data)
     if suffix == ".ply":
         header = data[: data.find(b"end_header")] if b"end_header" in data[:4096] else b""
         return re.search(rb"property\s+\w+\s+(red|diffuse_red)\b", header) is not None

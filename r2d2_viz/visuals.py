@@ -5,10 +5,11 @@ Every shape entity is drawn in its link's named frame (``CoordinateFrame``). Mes
 the shape's ``<origin>`` and the mesh ``scale`` (as Rerun's own URDF loader does), so nothing is re-encoded.
 Boxes, cylinders and spheres are small ``Mesh3D`` with their origin baked in.
 
-Colours follow the rule the issue asks for: a URDF colour (``<material>``) wins over the mesh's own (it is the
-``albedo_factor``, which Rerun applies in place of the mesh materials' colour factors); without one, the mesh
-keeps its own colours, materials and textures; a mesh without any (STL) gets RViz-like light grey. Collision
-shapes are all one translucent orange.
+Colours follow RViz's rule (``RobotLink::assignMaterialsToEntities`` in RViz 1 and 2): a part of a mesh that has
+a material of its own keeps it, and the URDF colour (``<material>``) paints only the parts that have none — a
+whole STL, or a COLLADA/OBJ/glTF part without a material. A mesh with no colour anywhere gets the URDF colour as
+its ``albedo_factor``; a mesh with some bare parts gets those parts a material of that colour in its GLB; without
+a URDF colour, RViz-like light grey. Collision shapes are all one translucent orange.
 """
 
 from __future__ import annotations
@@ -36,6 +37,13 @@ def rgba8(rgba: Rgba | None, default: tuple[int, ...]) -> tuple[int, ...]:
     return tuple(round(min(max(c, 0.0), 1.0) * 255) for c in rgba)
 
 
+def linear_rgba(rgba: tuple[int, ...]) -> tuple[float, float, float, float]:
+    """An 8-bit sRGB colour (as Rerun reads ``albedo_factor``) as glTF's linear ``baseColorFactor``, so a painted
+    part looks the same as an asset coloured through its albedo factor."""
+    r, g, b = (((c / 255 + 0.055) / 1.055) ** 2.4 if c / 255 > 0.04045 else c / 255 / 12.92 for c in rgba[:3])
+    return (r, g, b, rgba[3] / 255)
+
+
 def shape_archetypes(link: str, shape: Shape, *, visual: bool, cache: MeshCache) -> list[rr.AsComponents]:
     """What to log on the shape's entity. Raises ``ValueError`` (naming the mesh file) when it cannot be drawn."""
     geometry = shape.geometry
@@ -54,13 +62,14 @@ def shape_archetypes(link: str, shape: Shape, *, visual: bool, cache: MeshCache)
     if geometry.path is None:
         raise ValueError(f"mesh file {geometry.filename!r} not found")
     asset = cache.asset(geometry.path, geometry.filename)
-    factor: tuple[int, ...] | None
+    factor: tuple[int, ...] | None = None
+    colour = rgba8(shape.rgba, DEFAULT_VISUAL_COLOR)
     if not visual:
         factor = COLLISION_COLOR
-    elif shape.rgba is not None:
-        factor = rgba8(shape.rgba, DEFAULT_VISUAL_COLOR)
-    else:
-        factor = None if asset.own_colors else DEFAULT_VISUAL_COLOR
+    elif not asset.own_colors:
+        factor = colour
+    elif asset.bare_parts:
+        asset = cache.painted(asset, linear_rgba(colour))
     T = np.asarray(shape.T_link_shape, dtype=np.float64)
     return [
         rr.CoordinateFrame(link),

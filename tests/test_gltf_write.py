@@ -11,7 +11,7 @@ import numpy as np
 import trimesh
 from PIL import Image
 
-from r2d2_viz.gltf_write import GlbBuilder, Material, Primitive
+from r2d2_viz.gltf_write import GlbBuilder, Material, Primitive, colour_parts, paint_bare_primitives
 
 SQUARE = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=np.float32)
 CORNERS = np.array([0, 1, 2, 0, 2, 3], dtype=np.uint32)
@@ -76,3 +76,22 @@ def test_an_empty_builder_is_still_a_valid_glb() -> None:
     glb = GlbBuilder().to_bytes()
     ((kind, text),) = chunks(glb)
     assert kind == b"JSON" and json.loads(text)["asset"]["version"] == "2.0"
+
+
+def test_colour_parts_tells_coloured_from_bare_primitives() -> None:
+    def glb(*materials: bool, vertex_colours: bool = False) -> bytes:
+        builder = GlbBuilder()
+        grey = builder.add_material(Material(base_color=(0.5, 0.5, 0.5, 1.0)))
+        colours = np.ones((4, 3), dtype=np.float32) if vertex_colours else None
+        parts = [Primitive(SQUARE, CORNERS, colors=colours, material=grey if m else None) for m in materials]
+        builder.add_node(builder.add_mesh(parts), np.eye(4))
+        return builder.to_bytes()
+
+    assert colour_parts(glb(True, True)) == (True, False)
+    assert colour_parts(glb(True, False)) == (True, True)
+    assert colour_parts(glb(False)) == (False, True)
+    assert colour_parts(glb(False, vertex_colours=True)) == (True, False)  # COLOR_0 is a colour of its own
+    assert colour_parts(b"solid ascii stl") == (False, True)
+    painted = paint_bare_primitives(glb(True, False), (0.0, 0.0, 1.0, 1.0))
+    assert colour_parts(painted) == (True, False)
+    chunks(painted)  # still a well-formed GLB

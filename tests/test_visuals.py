@@ -12,6 +12,7 @@ import rerun as rr
 from rrd import read_recording
 from test_meshes import FINGER, G1_PELVIS, ROBOTS, glb_base_colours, glb_json
 
+from r2d2_viz.gltf_write import GlbBuilder, Material, Primitive
 from r2d2_viz.meshes import MeshCache
 from r2d2_viz.model import Box, MeshFile, Shape, load_urdf
 from r2d2_viz.visuals import COLLISION_COLOR, DEFAULT_VISUAL_COLOR, log_shape, shape_archetypes
@@ -70,18 +71,54 @@ def _factor(archetypes: list[rr.AsComponents]) -> int | None:
     return int(value)
 
 
-def test_urdf_colour_wins_over_the_mesh_colours() -> None:
+def test_urdf_colour_paints_only_mesh_parts_without_their_own(tmp_path: Path) -> None:
+    # RViz's rule (rviz_default_plugins robot_link.cpp, RobotLink::assignMaterialsToEntities; the same in ROS 1's
+    # rviz): "Assign materials only if the submesh does not have one already".
     cache = MeshCache(disk=None)
-    finger = MeshFile("finger.dae", FINGER)
+    finger = MeshFile("finger.dae", FINGER)  # every part has its own material: a URDF colour changes nothing
     red = Shape(geometry=finger, rgba=(1.0, 0.0, 0.0, 1.0))
-    assert _factor(shape_archetypes("l", red, visual=True, cache=cache)) == 0xFF0000FF
+    (asset,) = [a for a in shape_archetypes("l", red, visual=True, cache=cache) if isinstance(a, rr.Asset3D)]
+    assert _factor([asset]) is None
+    assert asset.blob is not None and bytes(asset.blob.as_arrow_array()[0].values) == cache.asset(FINGER).data
     assert _factor(shape_archetypes("l", Shape(geometry=finger), visual=True, cache=cache)) is None
-    # STL has no colours of its own: light grey, as RViz's default
-    stl = Shape(geometry=MeshFile("pelvis.STL", G1_PELVIS))
-    assert _factor(shape_archetypes("l", stl, visual=True, cache=cache)) == _u32(DEFAULT_VISUAL_COLOR)
+    # STL has no colours of its own: the URDF colour, or light grey as RViz's default
+    stl = MeshFile("pelvis.STL", G1_PELVIS)
+    assert _factor(shape_archetypes("l", Shape(geometry=stl, rgba=(1.0, 0.0, 0.0, 1.0)), visual=True, cache=cache)) == (
+        0xFF0000FF
+    )
+    assert _factor(shape_archetypes("l", Shape(geometry=stl), visual=True, cache=cache)) == _u32(DEFAULT_VISUAL_COLOR)
     assert DEFAULT_VISUAL_COLOR == (204, 204, 204, 255)
     # collisions: one translucent orange, whatever the file holds
     assert _factor(shape_archetypes("l", Shape(geometry=finger), visual=False, cache=cache)) == _u32(COLLISION_COLOR)
+
+
+def test_a_mesh_with_bare_and_coloured_parts_gets_the_urdf_colour_on_the_bare_ones(tmp_path: Path) -> None:
+    builder = GlbBuilder()
+    green = builder.add_material(Material(base_color=(0.0, 1.0, 0.0, 1.0)))
+    triangle = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
+    builder.add_node(builder.add_mesh([Primitive(triangle, material=green), Primitive(triangle + 2)]), np.eye(4))
+    path = tmp_path / "two.glb"
+    path.write_bytes(builder.to_bytes())
+    cache = MeshCache(disk=None)
+    blue = Shape(geometry=MeshFile("two.glb", path), rgba=(0.0, 0.0, 1.0, 1.0))
+    (asset,) = [a for a in shape_archetypes("l", blue, visual=True, cache=cache) if isinstance(a, rr.Asset3D)]
+    assert _factor([asset]) is None
+    assert asset.blob is not None
+    doc = glb_json(bytes(asset.blob.as_arrow_array()[0].values))
+    first, second = doc["meshes"][0]["primitives"]
+    colours = [m["pbrMetallicRoughness"]["baseColorFactor"] for m in doc["materials"]]
+    assert colours[first["material"]] == [0.0, 1.0, 0.0, 1.0]  # its own, kept
+    assert colours[second["material"]] == [0.0, 0.0, 1.0, 1.0]  # the URDF's (0 and 1 are the same in sRGB and linear)
+    # grey 204 without a URDF colour: sRGB 0.8 is linear ((0.8 + 0.055) / 1.055) ** 2.4 = 0.6038
+    (grey,) = [
+        a
+        for a in shape_archetypes("l", Shape(geometry=blue.geometry), visual=True, cache=cache)
+        if isinstance(a, rr.Asset3D)
+    ]
+    assert grey.blob is not None
+    doc = glb_json(bytes(grey.blob.as_arrow_array()[0].values))
+    bare = doc["materials"][doc["meshes"][0]["primitives"][1]["material"]]["pbrMetallicRoughness"]["baseColorFactor"]
+    assert np.allclose(bare, [0.6038, 0.6038, 0.6038, 1.0], atol=1e-4)
 
 
 def test_mesh_scale_and_origin_go_to_the_instance_pose() -> None:
