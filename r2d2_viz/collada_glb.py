@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import io
 import re
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -33,33 +33,39 @@ def collada_to_glb(data: bytes, read: ReadFile) -> bytes:
         # into the mesh or blow up ("billion laughs"). COLLADA needs none.
         raise ValueError("declares a DTD or entities, which COLLADA files do not need; refused")
     document = _parse(data)
-    instances = list(_instances(document))
-    if not _has_triangles(instances) and b"<instance_material" in data:
+    instances = _instances(document)
+    triangle_sets = _TriangleSets()
+    if not triangle_sets.any_triangles(instances) and b"<instance_material" in data:
         # pycollada drops a whole node when one bound material is broken (anymal's foot: a sampler that
         # names a missing surface); unbind only the broken materials and load again, as RViz shows them.
         document = _parse(_unbind_broken_materials(data))
-        instances = list(_instances(document))
-    if not _has_triangles(instances):
+        instances = _instances(document)
+    if not triangle_sets.any_triangles(instances):
         raise ValueError("holds no triangles")
     unit = _unit(document)
     T_scaled = np.diag([unit, unit, unit, 1.0])
     builder = GlbBuilder()
-    materials: dict[int, int] = {}  # id(pycollada material) -> glTF index
-    for T_root_node, triangle_sets, bindings in instances:
-        primitives = []
-        for triangles in triangle_sets:
-            material = bindings.get(triangles.material)
-            index = None
-            if material is not None:
-                if id(material) not in materials:
-                    materials[id(material)] = builder.add_material(_material(material.effect, builder, read))
-                index = materials[id(material)]
-            try:
-                primitives.append(_primitive(triangles, index))
-            except (IndexError, ValueError) as exc:  # indices past their sources, ragged arrays
-                raise ValueError(f"cannot be read: {_one_line(exc)}") from None
-        if primitives:
-            builder.add_node(builder.add_mesh(primitives), T_scaled @ T_root_node)
+    materials: dict[int, int] = {}  # id(pycollada material) -> glTF material
+    meshes: dict[tuple[int, ...], int | None] = {}  # id(geometry), id(bound materials)... -> glTF mesh
+    for T_root_node, geometry, bindings in instances:
+        bound = [bindings.get(triangles.material) for triangles in triangle_sets(geometry)]
+        key = (id(geometry), *(id(material) for material in bound))
+        if key not in meshes:  # an instanced geometry is one mesh however many nodes draw it
+            primitives = []
+            for triangles, material in zip(triangle_sets(geometry), bound, strict=True):
+                index = None
+                if material is not None:
+                    if id(material) not in materials:
+                        materials[id(material)] = builder.add_material(_material(material.effect, builder, read))
+                    index = materials[id(material)]
+                try:
+                    primitives.append(_primitive(triangles, index))
+                except (IndexError, ValueError) as exc:  # indices past their sources, ragged arrays
+                    raise ValueError(f"cannot be read: {_one_line(exc)}") from None
+            meshes[key] = builder.add_mesh(primitives) if primitives else None
+        mesh = meshes[key]
+        if mesh is not None:
+            builder.add_node(mesh, T_scaled @ T_root_node)
     return builder.to_bytes()
 
 
@@ -79,40 +85,60 @@ def _parse(data: bytes) -> Any:
         raise ValueError(f"cannot be read: {_one_line(exc)}") from None
 
 
-Instance = tuple[npt.NDArray[np.float64], list[Any], dict[str, Any]]
-"""T_root_node, the geometry's triangle sets, and its material bindings (symbol -> pycollada material)."""
+Instance = tuple[npt.NDArray[np.float64], Any, dict[str, Any]]
+"""T_root_node, the pycollada geometry, and its material bindings (symbol -> pycollada material)."""
+
+MAX_DEPTH = 256
+"""Node nesting we follow: ``<instance_node>`` can refer to an ancestor, which would otherwise never end."""
+MAX_INSTANCES = 100_000
+"""Geometry instances we draw: ``<instance_node>`` can also fan out, each level doubling the last."""
 
 
-def _instances(document: Any) -> Iterator[Instance]:
+def _instances(document: Any) -> list[Instance]:
     """Each ``<instance_geometry>`` in the scene with its accumulated matrix (trimesh's ``_parse_node`` walk)."""
     import collada
 
     scene = document.scene
+    found: list[Instance] = []
     if scene is None:
-        return
+        return found
     stack: list[tuple[Any, npt.NDArray[np.float64], int]] = [(n, np.eye(4), 0) for n in reversed(scene.nodes)]
+    visited = 0
     while stack:
         node, T_root_parent, depth = stack.pop()
+        visited += 1
+        if visited > MAX_INSTANCES:
+            raise ValueError(f"has more than {MAX_INSTANCES} scene nodes (instances of instances?); refused")
         if isinstance(node, collada.scene.GeometryNode):
             bindings = {m.symbol: m.target for m in node.materials if m.target is not None}
+            found.append((T_root_parent, node.geometry, bindings))
+        elif isinstance(node, collada.scene.Node) and node.children and depth < MAX_DEPTH:
+            T_root_node = T_root_parent @ np.asarray(node.matrix, dtype=np.float64)
+            stack.extend((child, T_root_node, depth + 1) for child in reversed(node.children))
+    return found
+
+
+class _TriangleSets:
+    """Each geometry's triangle sets (polylists and polygons triangulated), computed once per geometry."""
+
+    def __init__(self) -> None:
+        self._sets: dict[int, tuple[Any, list[Any]]] = {}  # id -> (geometry, kept alive so ids stay unique)
+
+    def __call__(self, geometry: Any) -> list[Any]:
+        import collada
+
+        if id(geometry) not in self._sets:
             sets = []
-            for primitive in node.geometry.primitives:
+            for primitive in geometry.primitives:
                 if isinstance(primitive, collada.polylist.Polylist):  # also <polygons>
                     primitive = primitive.triangleset()
                 if isinstance(primitive, collada.triangleset.TriangleSet) and primitive.vertex is not None:
                     sets.append(primitive)
-            yield T_root_parent, sets, bindings
-        elif isinstance(node, collada.scene.Node) and node.children and depth < MAX_DEPTH:
-            T_root_node = T_root_parent @ np.asarray(node.matrix, dtype=np.float64)
-            stack.extend((child, T_root_node, depth + 1) for child in reversed(node.children))
+            self._sets[id(geometry)] = (geometry, sets)
+        return self._sets[id(geometry)][1]
 
-
-MAX_DEPTH = 256
-"""Node nesting we follow: ``<instance_node>`` can refer to an ancestor, which would otherwise never end."""
-
-
-def _has_triangles(instances: list[Instance]) -> bool:
-    return any(len(t.vertex_index) > 0 for _, sets, _ in instances for t in sets)
+    def any_triangles(self, instances: list[Instance]) -> bool:
+        return any(len(t.vertex_index) > 0 for _, geometry, _ in instances for t in self(geometry))
 
 
 def _primitive(triangles: Any, material: int | None) -> Primitive:

@@ -84,10 +84,7 @@ def test_texture_coordinates_match_trimeshs_and_the_jpeg_is_embedded_as_it_is() 
     np.testing.assert_allclose(ours, theirs, atol=2e-4)
 
 
-def test_unit_scale_and_flat_normals_on_a_hand_written_triangle() -> None:
-    # One triangle in centimetres (<unit meter="0.01">), no normals: by hand, the corners become (0,0,0),
-    # (0.01,0,0), (0,0.01,0) m and the face normal is +z.
-    dae = b"""<?xml version="1.0"?>
+TRIANGLE = b"""<?xml version="1.0"?>
 <COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
 <asset><unit meter="0.01"/><up_axis>Z_UP</up_axis></asset>
 <library_geometries><geometry id="g"><mesh>
@@ -100,6 +97,12 @@ def test_unit_scale_and_flat_normals_on_a_hand_written_triangle() -> None:
 </mesh></geometry></library_geometries>
 <library_visual_scenes><visual_scene id="s"><node id="n"><instance_geometry url="#g"/></node></visual_scene>
 </library_visual_scenes><scene><instance_visual_scene url="#s"/></scene></COLLADA>"""
+
+
+def test_unit_scale_and_flat_normals_on_a_hand_written_triangle() -> None:
+    # One triangle in centimetres (<unit meter="0.01">), no normals: by hand, the corners become (0,0,0),
+    # (0.01,0,0), (0,0.01,0) m and the face normal is +z.
+    dae = TRIANGLE
     glb = collada_to_glb(dae, read_beside(Path("/nonexistent/x.dae")))
     mesh = trimesh.load_scene(io.BytesIO(glb), file_type="glb", process=False).to_mesh()
     np.testing.assert_allclose(mesh.triangles[0], [[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0]], atol=1e-7)
@@ -107,3 +110,38 @@ def test_unit_scale_and_flat_normals_on_a_hand_written_triangle() -> None:
     # an index past the end of its source is a clear error (pycollada drops that set), not an IndexError
     with pytest.raises(ValueError, match=r"cannot be read|holds no triangles"):
         collada_to_glb(dae.replace(b"<p>0 1 2</p>", b"<p>0 1 7</p>"), read_beside(Path("/x.dae")))
+
+
+def _instancing(levels: int) -> bytes:
+    """TRIANGLE drawn through <library_nodes>: n0 draws it, each n{k} draws n{k-1} twice, 1 m apart in x."""
+    nodes = ['<node id="n0"><instance_geometry url="#g"/></node>']
+    for k in range(1, levels + 1):
+        nodes.append(
+            f'<node id="n{k}"><node><instance_node url="#n{k - 1}"/></node>'
+            f'<node><translate>{2 ** (k - 1)} 0 0</translate><instance_node url="#n{k - 1}"/></node></node>'
+        )
+    library = ("<library_nodes>" + "".join(nodes) + "</library_nodes>").encode()
+    return (
+        TRIANGLE.replace(b'<unit meter="0.01"/>', b"")
+        .replace(b"<library_visual_scenes>", library + b"<library_visual_scenes>")
+        .replace(
+            b'<instance_geometry url="#g"/></node></visual_scene>',
+            f'<instance_node url="#n{levels}"/></node></visual_scene>'.encode(),
+        )
+    )
+
+
+def test_an_instanced_geometry_is_one_mesh_drawn_by_several_nodes() -> None:
+    dae = _instancing(2)  # four triangles, at x offsets 0, 1, 2, 3 (worked out by hand)
+    glb = collada_to_glb(dae, read_beside(Path("/x.dae")))
+    (n,) = struct.unpack_from("<I", glb, 12)
+    doc = json.loads(glb[20 : 20 + n])
+    assert len(doc["meshes"]) == 1 and len(doc["nodes"]) == 4
+    flat = trimesh.load_scene(io.BytesIO(glb), file_type="glb", process=False).to_mesh()
+    assert sorted(np.round(flat.triangles[:, 0, 0], 6).tolist()) == [0.0, 1.0, 2.0, 3.0]
+
+
+def test_instances_that_fan_out_are_refused_not_followed() -> None:
+    dae = _instancing(40)  # 2**40 triangles if followed
+    with pytest.raises(ValueError, match="more than 100000 scene nodes"):
+        collada_to_glb(dae, read_beside(Path("/x.dae")))
