@@ -1,6 +1,6 @@
 """RViz configs (``.rviz``, ROS 1 and ROS 2) → a :class:`ViewSpec`: what the Rerun layout needs to look like it.
 
-Read with ``yaml.safe_load`` (no tags, no objects; size-limited). Every display, tool and panel class with no
+Read with a YAML safe loader (no tags, no objects; size-limited). Every display, tool and panel class with no
 counterpart is named once in :attr:`ViewSpec.notes`. Camera formulas are RViz's own (rviz_default_plugins'
 view controllers, ROS 2; rviz's ``default_plugin/view_controllers``, ROS 1 — the same maths):
 
@@ -161,9 +161,13 @@ def load_rviz(path: str | Path) -> ViewSpec:
     return parse_rviz(text, source=name)
 
 
+_SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+"""libyaml's safe loader (~10x faster: 3 ms for r2d2.rviz against 29 ms), pure Python's where PyYAML lacks it."""
+
+
 def parse_rviz(text: str, *, source: str = "config.rviz") -> ViewSpec:
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_SAFE_LOADER)  # a safe loader (no tags, no objects)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}: " if mark is not None else ""
