@@ -6,8 +6,9 @@ tree is a glTF node with the product of its ancestors' matrices; each triangle s
 triangulated by pycollada) is a primitive with a vertex per corner; a COLLADA effect becomes a metallic-roughness
 material (diffuse colour or texture as the base colour, the transparent colour's alpha as its alpha, roughness
 ``sqrt(2 / (2 + shininess))``, emission). The ``<unit meter>`` scale is applied, as RViz (assimp) does;
-``<up_axis>`` is ignored, as RViz does. Done without trimesh, whose import (SciPy, networkx) costs about a second:
-a cold first frame of a robot with COLLADA meshes pays only pycollada's parse.
+``<up_axis>`` is ignored, as RViz does (its mesh loader skips assimp's root node, which holds the up-axis turn).
+Done without trimesh, whose import (SciPy, networkx) costs about a second: a cold first frame of a robot with
+COLLADA meshes pays only pycollada's parse.
 """
 
 from __future__ import annotations
