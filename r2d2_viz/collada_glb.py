@@ -2,8 +2,9 @@
 
 Rerun's own COLLADA reader drops textures, so a ``.dae`` reaches the viewer as a GLB. The mapping is trimesh's
 (``trimesh.exchange.dae``, which our tests compare against): each ``<instance_geometry>`` under the scene's node
-tree is a glTF node with the product of its ancestors' matrices; each triangle set (polylists and polygons are
-triangulated by pycollada) is a primitive with a vertex per corner; a COLLADA effect becomes a metallic-roughness
+tree is a glTF node with the product of its ancestors' matrices (a geometry drawn by several nodes is one glTF
+mesh); each triangle set (polylists and polygons are triangulated by pycollada) is a primitive whose vertices are
+shared as the file's indices share them; a COLLADA effect becomes a metallic-roughness
 material (diffuse colour or texture as the base colour, the transparent colour's alpha as its alpha, roughness
 ``sqrt(2 / (2 + shininess))``, emission). The ``<unit meter>`` scale is applied, as RViz (assimp) does;
 ``<up_axis>`` is ignored, as RViz does (its mesh loader skips assimp's root node, which holds the up-axis turn).
