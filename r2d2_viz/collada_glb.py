@@ -29,7 +29,13 @@ ReadFile = Callable[[str], bytes]
 
 
 def collada_to_glb(data: bytes, read: ReadFile) -> bytes:
-    """The GLB for COLLADA bytes ``data``. Raises ``ValueError`` when they cannot be parsed or hold no triangles."""
+    """The GLB for COLLADA bytes ``data``. Raises ``ValueError`` when they cannot be parsed, hold no triangles, or
+    place a vertex at a coordinate that is not a finite number."""
+    with np.errstate(all="ignore"):  # NaN and overflow are checked for, not printed as numpy warnings
+        return _convert(data, read)
+
+
+def _convert(data: bytes, read: ReadFile) -> bytes:
     if re.search(rb"<!(DOCTYPE|ENTITY)", data[: max(data.find(b"<COLLADA"), 0)]):
         # pycollada parses with entity expansion on and lxml's size limits off: a DTD could read other files
         # into the mesh or blow up ("billion laughs"). COLLADA needs none.
@@ -67,7 +73,10 @@ def collada_to_glb(data: bytes, read: ReadFile) -> bytes:
             meshes[key] = builder.add_mesh(primitives) if primitives else None
         mesh = meshes[key]
         if mesh is not None:
-            builder.add_node(mesh, T_scaled @ T_root_node)
+            T_glb_node = T_scaled @ T_root_node
+            if not np.isfinite(T_glb_node).all():
+                raise ValueError("cannot be read: a node's matrix is not finite")
+            builder.add_node(mesh, T_glb_node)
     return builder.to_bytes()
 
 
@@ -160,15 +169,18 @@ def _primitive(triangles: Any, material: int | None) -> Primitive:
         columns.append(np.asarray(triangles.index)[:, :, offset].ravel())
     first, indices = _weld(columns)
     positions = np.asarray(triangles.vertex, dtype=np.float32)[columns[0][first]]
+    if not np.isfinite(positions).all():  # NaN, or past float32's range
+        raise ValueError("a vertex position is not a finite number")
     uvs = None
     if has_uvs:
         uv = np.asarray(triangles.texcoordset[0], dtype=np.float32)[columns[uv_column][first]]
-        uvs = np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float32)  # COLLADA: V up; glTF: V down
+        uvs = np.nan_to_num(np.column_stack([uv[:, 0], 1.0 - uv[:, 1]]).astype(np.float32), posinf=0, neginf=0)
+        # (COLLADA: V up; glTF: V down)
     colors = None
     if color_source is not None:
         values = np.asarray(color_source.data, dtype=np.float32)
         if values.ndim == 2 and values.shape[1] >= 3:
-            colors = np.clip(values[columns[-1][first], :4], 0.0, 1.0)
+            colors = np.clip(np.nan_to_num(values[columns[-1][first], :4], nan=1.0), 0.0, 1.0)
     if has_normals:
         normals = _unit_rows(np.asarray(triangles.normal, dtype=np.float32)[columns[1][first]])
         return Primitive(positions, indices, normals=normals, uvs=uvs, colors=colors, material=material)
@@ -195,6 +207,8 @@ def _weld(columns: list[npt.NDArray[Any]]) -> tuple[npt.NDArray[np.intp], npt.ND
 
 
 def _unit_rows(vectors: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+    """Each row scaled to length 1; rows of zeros, NaN or infinity become zeros."""
+    vectors = np.where(np.isfinite(vectors).all(axis=1, keepdims=True), vectors, np.float32(0))
     lengths = np.linalg.norm(vectors, axis=1, keepdims=True)
     unit: npt.NDArray[np.float32] = np.divide(vectors, lengths, out=np.zeros_like(vectors), where=lengths > 0)
     return unit

@@ -31,7 +31,7 @@ from .model import Box, Cylinder, MeshFile, Shape, Sphere
 
 CYLINDER_SECTIONS = 48
 SPHERE_SUBDIVISIONS = 3
-CONVERTER_VERSION = 5
+CONVERTER_VERSION = 6
 """Bump when the conversion below changes what it writes: old cache entries are then never looked up."""
 
 MAX_MESH_BYTES = 1 << 30

@@ -10,13 +10,16 @@ from __future__ import annotations
 
 import io
 import json
+import random
 import struct
 import sysconfig
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from lxml import etree
 
 from r2d2_viz.collada_glb import ReadFile, collada_to_glb
 
@@ -145,3 +148,72 @@ def test_instances_that_fan_out_are_refused_not_followed() -> None:
     dae = _instancing(40)  # 2**40 triangles if followed
     with pytest.raises(ValueError, match="more than 100000 scene nodes"):
         collada_to_glb(dae, read_beside(Path("/x.dae")))
+
+
+@pytest.mark.parametrize(
+    ("where", "replacement"),
+    [
+        (b"0 0 0 1 0 0 0 1 0</float_array>", b"0 0 0 1e39 0 0 0 1 0</float_array>"),  # past float32's range
+        (b'<node id="n">', b'<node id="n"><matrix>1 0 0 inf 0 1 0 0 0 0 1 0 0 0 0 1</matrix>'),  # a node at infinity
+    ],
+    ids=["float32-overflow", "infinite-matrix"],  # (pycollada reads a "nan" in a float_array as 0)
+)
+def test_coordinates_that_are_not_finite_are_refused_quietly(where: bytes, replacement: bytes) -> None:
+    assert where in TRIANGLE
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's RuntimeWarnings would reach the user's terminal
+        with pytest.raises(ValueError, match=r"not a finite number|not finite"):
+            collada_to_glb(TRIANGLE.replace(where, replacement), read_beside(Path("/x.dae")))
+
+
+def test_a_normal_past_float32s_range_becomes_zero_without_a_warning() -> None:
+    normals = (
+        b'<source id="nrm"><float_array id="na" count="3">1e39 0 1</float_array><technique_common>'
+        b'<accessor source="#na" count="1" stride="3"><param name="X" type="float"/><param name="Y" type="float"/>'
+        b'<param name="Z" type="float"/></accessor></technique_common></source>'
+    )
+    dae = TRIANGLE.replace(b'<vertices id="v">', normals + b'<vertices id="v">').replace(
+        b"<p>0 1 2</p>", b'<input semantic="NORMAL" source="#nrm" offset="1"/><p>0 0 1 0 2 0</p>'
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        glb = collada_to_glb(dae, read_beside(Path("/x.dae")))
+    mesh = trimesh.load_scene(io.BytesIO(glb), file_type="glb", process=False).to_mesh()
+    np.testing.assert_allclose(mesh.triangles[0], [[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0]], atol=1e-7)
+
+
+def _mangle(data: bytes, rng: random.Random) -> bytes:
+    """``data`` with one to four random edits: an element removed, a number or attribute made wrong or cut."""
+    root = etree.fromstring(data)
+    elements = list(root.iter())
+    for _ in range(rng.randint(1, 4)):
+        element = rng.choice(elements)
+        words = (element.text or "").split()
+        op = rng.randrange(4)
+        if op == 0 and element.getparent() is not None:
+            element.getparent().remove(element)
+        elif op == 1 and words:
+            words[rng.randrange(len(words))] = rng.choice(["-1", "999999", "inf", "x", "1e308", ""])
+            element.text = " ".join(words)
+        elif op == 2 and words:
+            element.text = " ".join(words[: rng.randrange(len(words))])
+        elif op == 3 and element.attrib:
+            element.attrib[rng.choice(list(element.attrib))] = rng.choice(["", "#nope", "-1", "99999"])
+    return bytes(etree.tostring(root))
+
+
+def test_mangled_real_files_convert_or_raise_value_error_and_print_nothing() -> None:
+    # What the app turns into one warning line per file; anything else would be an unexpected failure (exit 1).
+    rng = random.Random(10)
+    bases = [(SAMPLES[0], SAMPLES[0].read_bytes()), (Path("/x.dae"), _instancing(2))]  # materials; nodes
+    outcomes = {"converted": 0, "refused": 0}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for _ in range(200):
+            path, data = rng.choice(bases)
+            try:
+                collada_to_glb(_mangle(data, rng), read_beside(path))
+                outcomes["converted"] += 1
+            except ValueError:
+                outcomes["refused"] += 1
+    assert min(outcomes.values()) > 10, outcomes  # both kinds of outcome are exercised
