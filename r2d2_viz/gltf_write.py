@@ -164,6 +164,8 @@ def split_glb(glb: bytes) -> tuple[dict[str, Any], bytes]:
         blob = rest[8 : 8 + struct.unpack_from("<I", rest)[0]] if len(rest) >= 8 and rest[4:8] == b"BIN\0" else b""
     except (struct.error, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ValueError(f"not a readable GLB: {exc}") from None
+    except RecursionError:  # JSON nested deeper than Python's parser goes
+        raise ValueError("not a readable GLB: its JSON is nested too deeply") from None
     if not isinstance(doc, dict):
         raise ValueError("not a readable GLB: its JSON is not an object")
     return doc, blob
@@ -173,11 +175,11 @@ def _primitives(doc: dict[str, Any]) -> list[dict[str, Any]]:
     meshes = doc.get("meshes")
     if not isinstance(meshes, list):
         return []
-    found = []
+    found: list[dict[str, Any]] = []
     for mesh in meshes:
-        for p in mesh.get("primitives", []) if isinstance(mesh, dict) else []:
-            if isinstance(p, dict):
-                found.append(p)
+        primitives = mesh.get("primitives") if isinstance(mesh, dict) else None
+        if isinstance(primitives, list):
+            found.extend(p for p in primitives if isinstance(p, dict))
     return found
 
 

@@ -95,3 +95,16 @@ def test_colour_parts_tells_coloured_from_bare_primitives() -> None:
     painted = paint_bare_primitives(glb(True, False), (0.0, 0.0, 1.0, 1.0))
     assert colour_parts(painted) == (True, False)
     chunks(painted)  # still a well-formed GLB
+
+
+def test_hostile_glb_json_reads_as_uncoloured_not_as_a_crash() -> None:
+    # A user's .glb goes to the viewer as it is; only its JSON is read here, to tell coloured parts from bare.
+    def glb(text: str) -> bytes:
+        body = text.encode() + b" " * (-len(text) % 4)
+        chunk = struct.pack("<I4s", len(body), b"JSON") + body
+        return struct.pack("<4sII", b"glTF", 2, 12 + len(chunk)) + chunk
+
+    assert colour_parts(glb("[" * 100_000)) == (False, True)  # deeper than Python's JSON parser recurses
+    assert colour_parts(glb('{"meshes": [{"primitives": 5}]}')) == (False, False)  # no primitive at all
+    assert colour_parts(glb('{"meshes": [{"primitives": [{"attributes": 1}, 7]}]}')) == (False, True)
+    assert colour_parts(glb('{"meshes": [{"primitives": [{"material": 0}]}, 3, null]}')) == (True, False)
