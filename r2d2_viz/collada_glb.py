@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from .errors import one_line
 from .gltf_write import GlbBuilder, Material, Primitive
 
 ReadFile = Callable[[str], bytes]
@@ -69,7 +70,7 @@ def _convert(data: bytes, read: ReadFile) -> bytes:
                 try:
                     primitives.append(_primitive(triangles, index))
                 except (IndexError, ValueError) as exc:  # indices past their sources, ragged arrays
-                    raise ValueError(f"cannot be read: {_one_line(exc)}") from None
+                    raise ValueError(f"cannot be read: {one_line(exc)}") from None
             meshes[key] = builder.add_mesh(primitives) if primitives else None
         mesh = meshes[key]
         if mesh is not None:
@@ -93,7 +94,7 @@ def _parse(data: bytes) -> Any:
     try:
         return collada.Collada(io.BytesIO(data), ignore=ignore)
     except Exception as exc:  # pycollada and lxml raise many kinds for unreadable files
-        raise ValueError(f"cannot be read: {_one_line(exc)}") from None
+        raise ValueError(f"cannot be read: {one_line(exc)}") from None
 
 
 Instance = tuple[npt.NDArray[np.float64], Any, dict[str, Any]]
@@ -307,7 +308,3 @@ def _unbind_broken_materials(data: bytes) -> bytes:
                 parent.remove(element)
     result: bytes = etree.tostring(root)
     return result
-
-
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split())[:200] or type(exc).__name__

@@ -38,3 +38,8 @@ class PackageError(UrdfError):
 class XacroError(UrdfError):
     """A xacro file cannot be expanded (bad XML, bad expression, refused expression, missing include or
     package); names the file and the include / macro chain."""
+
+
+def one_line(exc: BaseException) -> str:
+    """A third-party exception as part of one message line: whitespace collapsed, at most 200 characters."""
+    return " ".join(str(exc).split())[:200] or type(exc).__name__

@@ -25,6 +25,7 @@ import numpy.typing as npt
 
 from . import primitives
 from .collada_glb import collada_to_glb
+from .errors import one_line
 from .gltf_write import colour_parts, paint_bare_primitives
 from .mesh_disk_cache import DiskCache, sha256
 from .model import Box, Cylinder, MeshFile, Shape, Sphere
@@ -219,7 +220,7 @@ def convert_to_glb(path: Path, data: bytes, suffix: str | None = None) -> tuple[
     try:
         glb = scene.export(file_type="glb")
     except Exception as exc:  # trimesh raises many kinds for odd inputs
-        raise ValueError(f"cannot be converted: {_one_line(exc)}") from None
+        raise ValueError(f"cannot be converted: {one_line(exc)}") from None
     return bytes(glb), dict(resolver.read)
 
 
@@ -230,7 +231,7 @@ def _load_scene(data: bytes, file_type: str, resolver: Any) -> Any:
         # process=False: no vertex merging (a third of the conversion time; the GLB comes out the same size)
         return trimesh.load_scene(io.BytesIO(data), file_type=file_type, resolver=resolver, process=False)
     except Exception as exc:  # trimesh raises many kinds for unreadable files
-        raise ValueError(f"cannot be read: {_one_line(exc)}") from None
+        raise ValueError(f"cannot be read: {one_line(exc)}") from None
 
 
 def _has_triangles(scene: Any) -> bool:
@@ -274,10 +275,6 @@ def _version(distribution: str) -> str:
         return version(distribution)
     except PackageNotFoundError:
         return "-"
-
-
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split())[:200] or type(exc).__name__
 
 
 # --- primitives and baked meshes ----------------------------------------------------------------------

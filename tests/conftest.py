@@ -6,12 +6,22 @@ import os
 import socket
 import subprocess
 import sys
+import sysconfig
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED_REFERENCE = REPO.parent / "shared" / "reference"
+
+
+def example_robots() -> Path:
+    """The ``robots`` folder of the installed example-robot-data (a test dependency)."""
+    for root in {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}:
+        robots = Path(root) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+        if robots.is_dir():
+            return robots
+    raise AssertionError("example-robot-data is a test dependency: pip install '.[test]'")
 
 
 def cli(*args: str, timeout: float = 120, env: dict[str, str] | None = None, cwd: Path | None = None):

@@ -12,27 +12,18 @@ import io
 import json
 import random
 import struct
-import sysconfig
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from conftest import example_robots
 from lxml import etree
 
 from r2d2_viz.collada_glb import ReadFile, collada_to_glb
 
-
-def _robots() -> Path:
-    for root in {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}:
-        robots = Path(root) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
-        if robots.is_dir():
-            return robots
-    raise AssertionError("example-robot-data is a test dependency: pip install '.[test]'")
-
-
-ROBOTS = _robots()
+ROBOTS = example_robots()
 ANYMAL_BASE = ROBOTS / "anymal_b_simple_description/meshes/base/anymal_base.dae"  # textured (a JPEG)
 SAMPLES = [
     ROBOTS / "panda_description/meshes/visual/finger.dae",  # two diffuse colours

@@ -22,3 +22,9 @@ def test_the_cli_says_one_line_and_exits_2(kind, monkeypatch, capsys) -> None:
     monkeypatch.setattr("r2d2_viz.runner.run", fail)
     assert main(["--headless"]) == EXIT_BAD_INPUT
     assert capsys.readouterr().err == f"error: thing.urdf: the {kind.__name__} problem\n"
+
+
+def test_one_line_collapses_a_library_message_for_a_warning() -> None:
+    assert errors.one_line(ValueError("line 3:\n  bad   value\n")) == "line 3: bad value"  # by hand
+    assert errors.one_line(KeyError()) == "KeyError"  # an empty message still says something
+    assert len(errors.one_line(ValueError("x" * 500))) == 200

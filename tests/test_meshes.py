@@ -10,27 +10,18 @@ import json
 import re
 import shutil
 import struct
-import sysconfig
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import example_robots
 
 from r2d2_viz import meshes
 from r2d2_viz.mesh_disk_cache import DiskCache
 from r2d2_viz.meshes import MeshCache
 
-
-def _robots() -> Path:
-    for root in {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}:
-        robots = Path(root) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
-        if robots.is_dir():
-            return robots
-    raise AssertionError("example-robot-data is a test dependency: pip install '.[test]'")
-
-
-ROBOTS = _robots()
+ROBOTS = example_robots()
 FINGER = ROBOTS / "panda_description/meshes/visual/finger.dae"  # two plain diffuse colours
 FOOT = ROBOTS / "anymal_b_simple_description/meshes/foot/anymal_foot.dae"  # a broken material reference
 G1_PELVIS = ROBOTS / "g1_description/meshes/pelvis.STL"
