@@ -88,8 +88,8 @@ def _command(command: list[str]) -> tuple[float, float]:
 OURS = """
     import sys, time
     import numpy as np
-    from r2d2_viz.bag import open_bag
-    from r2d2_viz.bag_source import BagSource
+    from r2d2_viz.sources.bag import open_bag
+    from r2d2_viz.sources.bag_joints import BagSource
     t = time.perf_counter()
     with open_bag(sys.argv[1]) as bag:
         chunks = list(BagSource(bag, [f"joint_{i}" for i in range(int(sys.argv[2]))]).chunks(10_000))
@@ -133,8 +133,8 @@ RERUN_READER = """
 
 MEMORY = """
     import sys, time
-    from r2d2_viz.bag import open_bag
-    from r2d2_viz.bag_source import BagSource
+    from r2d2_viz.sources.bag import open_bag
+    from r2d2_viz.sources.bag_joints import BagSource
     if sys.argv[2] == "0":
         print(0, 0, 0.0, HWM()); raise SystemExit
     t, n = time.perf_counter(), 0

@@ -63,7 +63,8 @@ print(time.perf_counter() - t)
 """
 OURS_AFTER_IMPORTS = """
 import contextlib, io, sys, time
-from r2d2_viz import cli, runner, sinks, stream, visuals
+from r2d2_viz import cli, runner
+from r2d2_viz.viewer import sinks, stream, visuals
 import rerun
 t = time.perf_counter()
 with contextlib.redirect_stdout(io.StringIO()):

@@ -121,10 +121,10 @@ def rrlog_baseline(n_samples: int, out: Path) -> None:
     flush are. Prints seconds per sample."""
     import rerun as rr
 
-    from r2d2_viz.entities import TIMELINE, path
-    from r2d2_viz.kinematics import compile_tree, joint_transforms, moving_values
-    from r2d2_viz.model import default_urdf_path, load_urdf
-    from r2d2_viz.motion import ODOM, make_motion
+    from r2d2_viz.kinematics.tree import compile_tree, joint_transforms, moving_values
+    from r2d2_viz.robot.model import default_urdf_path, load_urdf
+    from r2d2_viz.sources.motion import ODOM, make_motion
+    from r2d2_viz.viewer.entities import TIMELINE, path
 
     robot = load_urdf(default_urdf_path())
     tree = compile_tree(robot)
@@ -243,9 +243,9 @@ def bench_kinematics(s: Sizes, r: Report) -> None:
     import numpy as np
     from rerun.urdf import UrdfTree
 
-    from r2d2_viz.kinematics import compile_tree, joint_transforms
-    from r2d2_viz.model import default_urdf_path, load_urdf
-    from r2d2_viz.motion import make_motion
+    from r2d2_viz.kinematics.tree import compile_tree, joint_transforms
+    from r2d2_viz.robot.model import default_urdf_path, load_urdf
+    from r2d2_viz.sources.motion import make_motion
 
     robot = load_urdf(default_urdf_path())
     tree = compile_tree(robot)
@@ -361,8 +361,8 @@ def sdk_floor(rate: float, seconds: float, out: Path) -> None:
     import pyarrow as pa
     import rerun as rr
 
-    from r2d2_viz.columns import send
-    from r2d2_viz.sinks import SinkConfig, close_recording, open_recording
+    from r2d2_viz.viewer.columns import send
+    from r2d2_viz.viewer.sinks import SinkConfig, close_recording, open_recording
 
     recording = open_recording(SinkConfig(save=out), save_to=out, live=True)
     rows, block = 4, max(1, round(rate))
@@ -473,11 +473,11 @@ def bench_robots(s: Sizes, tmp: Path, r: Report) -> None:
     """Goal 5: generated chains and trees; load, first sample, per-sample cost vs number of links."""
     import rerun as rr
 
-    from r2d2_viz.kinematics import compile_tree, joint_transforms
-    from r2d2_viz.model import load_urdf
-    from r2d2_viz.motion import make_motion
-    from r2d2_viz.stream import RobotStream
-    from r2d2_viz.synth import random_urdf
+    from r2d2_viz.kinematics.tree import compile_tree, joint_transforms
+    from r2d2_viz.robot.model import load_urdf
+    from r2d2_viz.robot.synth import random_urdf
+    from r2d2_viz.sources.motion import make_motion
+    from r2d2_viz.viewer.stream import RobotStream
 
     types = ("fixed", "revolute", "continuous", "prismatic")
     table: dict[str, dict[int, dict[str, float]]] = {}

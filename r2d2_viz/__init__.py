@@ -1,9 +1,10 @@
-"""r2d2-viz: see a URDF robot move in the Rerun viewer, without ROS.
+"""r2d2-viz: see a robot, and what it senses, in the Rerun viewer — without ROS.
 
-Layers (each knows only the ones before it): model (URDF → frozen dataclasses) → sources (generated motions,
-recordings; pure numpy) → kinematics (pure numpy) → stream, sinks, blueprint (the only modules importing
-rerun) → runner → cli. The Python API (:class:`RobotLogger` and friends, listed in ``__all__``) is imported
-lazily, so ``import r2d2_viz`` stays light.
+Stages, each importing only from the ones before it: ``robot`` (descriptions → model) → ``meshes`` →
+``kinematics`` (pure numpy) → ``msgs`` (ROS messages as numpy) → ``sources`` (motions, bags) → ``rviz`` (configs)
+→ ``viewer`` (the only stage importing rerun) → ``ros_out`` (bags written) → ``runner``, ``api``, ``cli``.
+The Python API (:class:`RobotLogger` and friends, listed in ``__all__``) is imported lazily, so
+``import r2d2_viz`` stays light.
 """
 
 from __future__ import annotations
@@ -15,23 +16,23 @@ __version__ = "0.1.0"
 
 _EXPORTS = {
     "RobotLogger": "api",
-    "load_urdf": "model",
-    "load_robot": "xacro_load",
-    "parse_urdf": "model",
-    "default_urdf_path": "model",
-    "Robot": "model",
-    "make_motion": "motion",
-    "MOTIONS": "motion",
-    "Source": "sources",
-    "SampleChunk": "sources",
-    "FrameTrack": "sources",
-    "ArraySource": "sources",
-    "generate_blueprint": "blueprint",
+    "load_urdf": "robot.model",
+    "load_robot": "robot.xacro_load",
+    "parse_urdf": "robot.model",
+    "default_urdf_path": "robot.model",
+    "Robot": "robot.model",
+    "make_motion": "sources.motion",
+    "MOTIONS": "sources.motion",
+    "Source": "sources.base",
+    "SampleChunk": "sources.base",
+    "FrameTrack": "sources.base",
+    "ArraySource": "sources.base",
+    "generate_blueprint": "viewer.layout.blueprint",
     "R2d2VizError": "errors",
     "UrdfError": "errors",
     "UsageError": "errors",
-    "APP_ID": "entities",
-    "TIMELINE": "entities",
+    "APP_ID": "viewer.entities",
+    "TIMELINE": "viewer.entities",
 }
 __all__ = [
     "APP_ID",
@@ -55,14 +56,14 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from .api import RobotLogger
-    from .blueprint import generate_blueprint
-    from .entities import APP_ID, TIMELINE
-    from .errors import R2d2VizError, UrdfError, UsageError
-    from .model import Robot, default_urdf_path, load_urdf, parse_urdf
-    from .motion import MOTIONS, make_motion
-    from .sources import ArraySource, FrameTrack, SampleChunk, Source
-    from .xacro_load import load_robot
+    from r2d2_viz.api import RobotLogger
+    from r2d2_viz.errors import R2d2VizError, UrdfError, UsageError
+    from r2d2_viz.robot.model import Robot, default_urdf_path, load_urdf, parse_urdf
+    from r2d2_viz.robot.xacro_load import load_robot
+    from r2d2_viz.sources.base import ArraySource, FrameTrack, SampleChunk, Source
+    from r2d2_viz.sources.motion import MOTIONS, make_motion
+    from r2d2_viz.viewer.entities import APP_ID, TIMELINE
+    from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 
 
 def __getattr__(name: str) -> Any:

@@ -18,21 +18,25 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
-import rerun as rr
 
-from .entities import TIMELINE
-from .errors import UsageError
-from .kinematics import compile_tree
-from .model import Robot
-from .motion import ODOM
-from .notices import Warn, to_stderr
-from .runner import BATCH_CHUNK_SAMPLES
-from .sources import ArraySource, Clock, FrameTrack, Source
-from .stream import RobotStream
-from .xacro_load import load_robot
+from r2d2_viz.errors import UsageError
+from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.robot.model import Robot
+from r2d2_viz.robot.xacro_load import load_robot
+from r2d2_viz.runner import BATCH_CHUNK_SAMPLES
+from r2d2_viz.sources.base import ArraySource, Clock, FrameTrack, Source
+from r2d2_viz.sources.motion import ODOM
+from r2d2_viz.viewer.entities import TIMELINE
+from r2d2_viz.viewer.notices import Warn, to_stderr
+from r2d2_viz.viewer.sinks import current_recording
+from r2d2_viz.viewer.stream import RobotStream
+
+if TYPE_CHECKING:
+    from rerun import RecordingStream  # annotations only: the viewer stage talks to Rerun
 
 
 class RobotLogger:
@@ -48,7 +52,7 @@ class RobotLogger:
         self,
         robot: Robot | str | Path,
         *,
-        recording: rr.RecordingStream | None = None,
+        recording: RecordingStream | None = None,
         fixed_frame: str = ODOM,
         moving_root: bool = False,
         timestamps: bool = False,
@@ -57,9 +61,7 @@ class RobotLogger:
         mappings: Mapping[str, str] | None = None,
     ) -> None:
         self.robot = robot if isinstance(robot, Robot) else load_robot(robot, mappings=mappings)
-        rec = recording if recording is not None else rr.get_data_recording()
-        if rec is None:
-            raise UsageError("no Rerun recording: call rr.init(...) first or pass recording=")
+        rec = current_recording(recording)
         self.tree = compile_tree(self.robot)
         self._frames = ((fixed_frame, self.robot.root),) if moving_root else ()
         self._clock: Clock = "timestamp" if timestamps else "duration"

@@ -13,8 +13,8 @@ import sys
 import traceback
 from pathlib import Path
 
-from .errors import R2d2VizError
-from .motion import MOTIONS
+from r2d2_viz.errors import R2d2VizError
+from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 CONNECT_DEFAULT = "rerun+http://127.0.0.1:9876/proxy"
@@ -127,9 +127,9 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     # Heavy imports (rerun, yourdfpy, trimesh) only after the arguments parsed: --help stays instant.
-    from .errors import UsageError
-    from .runner import RunConfig, print_summary, run
-    from .sinks import SinkConfig
+    from r2d2_viz.errors import UsageError
+    from r2d2_viz.runner import RunConfig, print_summary, run
+    from r2d2_viz.viewer.sinks import SinkConfig
 
     if args.connect is not None and ":=" in args.connect:  # "--connect ur_type:=ur5e": a xacro argument, not a URL
         args.xacro_args = [args.connect, *args.xacro_args]

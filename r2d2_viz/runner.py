@@ -1,7 +1,7 @@
 """One run of the app: model → source → kinematics → stream, batch or paced to the wall clock.
 
-No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.sinks` and written by
-:mod:`r2d2_viz.stream` (and, for a bag's recorded transforms, :mod:`r2d2_viz.tf_recorded`).
+No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.viewer.sinks` and written by
+:mod:`r2d2_viz.viewer.stream` (and, for a bag's recorded transforms, :mod:`r2d2_viz.viewer.tf_recorded`).
 """
 
 from __future__ import annotations
@@ -18,23 +18,23 @@ from pathlib import Path
 
 import numpy as np
 
-from .bag import open_bag
-from .bag_source import TimeSource
-from .blueprint import generate_blueprint
-from .errors import UsageError
-from .kinematics import compile_tree
-from .model import Robot, default_urdf_path
-from .motion import ODOM, make_motion
-from .notices import Notices
-from .packages import PackageIndex
-from .replay import Replay, open_replay
-from .signals import signals_set, sigterm_raises
-from .sinks import SinkConfig, close_recording, open_recording
-from .sources import Source
-from .stream import RobotStream
-from .tf_recorded import RecordedTf, TfFeed
-from .view_plan import plan_view
-from .xacro_load import is_xacro, load_description, load_robot, read_bounded
+from r2d2_viz.errors import UsageError
+from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.robot.model import Robot, default_urdf_path
+from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
+from r2d2_viz.signals import signals_set, sigterm_raises
+from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bag_joints import TimeSource
+from r2d2_viz.sources.base import Source
+from r2d2_viz.sources.motion import ODOM, make_motion
+from r2d2_viz.sources.replay import Replay, open_replay
+from r2d2_viz.viewer.layout.blueprint import generate_blueprint
+from r2d2_viz.viewer.layout.plan import plan_view
+from r2d2_viz.viewer.notices import Notices
+from r2d2_viz.viewer.sinks import SinkConfig, close_recording, open_recording
+from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""
@@ -106,7 +106,7 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
         plan = _plan(config, inputs)
         save = config.sink.save
         if save is not None and save.suffix == ".mcap":
-            from .bag_out import write_bag
+            from r2d2_viz.ros_out.bag_out import write_bag
 
             with sigterm_raises():
                 samples = write_bag(save, plan, plan.description or _description_text(config))
@@ -223,7 +223,7 @@ def _batch(
 
 def _other_topics(plan: Replay, config: RunConfig, notices: Notices) -> None:
     """What Rerun's own MCAP decoders show of the bag's other topics (batch runs; .mcap storage only)."""
-    from .bag_topics import log_other_topics
+    from r2d2_viz.viewer.bag_topics import log_other_topics
 
     result = log_other_topics(notices.rec, plan.mcap_files, time=config.time)
     if result.skipped:

@@ -1,5 +1,5 @@
 """Bags for the tests, written by ``rosbags`` itself (its own serializer and writer: independent of
-:mod:`r2d2_viz.bag_write`), in either storage and in metadata versions 4 to 9."""
+:mod:`r2d2_viz.ros_out.bag_write`), in either storage and in metadata versions 4 to 9."""
 
 from __future__ import annotations
 

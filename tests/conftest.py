@@ -40,7 +40,7 @@ def cli(*args: str, timeout: float = 120, env: dict[str, str] | None = None, cwd
 
 @pytest.fixture(scope="session")
 def tutorial_urdf() -> Path:
-    from r2d2_viz.model import default_urdf_path
+    from r2d2_viz.robot.model import default_urdf_path
 
     return default_urdf_path()
 
@@ -55,7 +55,7 @@ def lap_recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, subpr
 
 
 def rerun_viewer() -> str | None:
-    from r2d2_viz.sinks import viewer_executable
+    from r2d2_viz.viewer.sinks import viewer_executable
 
     return viewer_executable()
 

@@ -1,5 +1,5 @@
 """Whole-tree forward kinematics with 4×4 matrices, link by link: the plain form the tests compare
-:func:`r2d2_viz.kinematics.link_positions` against (test-only; the app composes only what it draws)."""
+:func:`r2d2_viz.kinematics.tree.link_positions` against (test-only; the app composes only what it draws)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import numpy as np
 import numpy.typing as npt
 
 from r2d2_viz.arrays import F64
-from r2d2_viz.kinematics import KinematicTree, joint_transforms
-from r2d2_viz.transforms import quat_to_matrix
+from r2d2_viz.kinematics.transforms import quat_to_matrix
+from r2d2_viz.kinematics.tree import KinematicTree, joint_transforms
 
 
 def link_poses(tree: KinematicTree, q: npt.ArrayLike, *, T_fixed_root: npt.ArrayLike | None = None) -> F64:

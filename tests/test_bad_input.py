@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from conftest import cli
 from rrd import read_recording
-from test_urdf_check import BAD, BAD_MANIFEST, GOOD
+from urdfdata import BAD, BAD_MANIFEST, GOOD
 
 from r2d2_viz.cli import main
 

@@ -56,7 +56,7 @@ def test_duration_rate_and_motion_shape_the_recording(tmp_path: Path) -> None:
 
 
 def test_any_urdf_sweeps_by_default(tmp_path: Path) -> None:
-    from r2d2_viz.synth import random_urdf
+    from r2d2_viz.robot.synth import random_urdf
 
     urdf = tmp_path / "arm.urdf"
     urdf.write_text(random_urdf(12, seed=9, joint_types=("revolute", "prismatic", "fixed")))

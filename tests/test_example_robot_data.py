@@ -23,8 +23,8 @@ import yourdfpy
 from fk import link_poses
 
 from r2d2_viz.cli import main
-from r2d2_viz.kinematics import compile_tree
-from r2d2_viz.model import load_urdf
+from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.robot.model import load_urdf
 
 try:
     ROBOTS = Path(

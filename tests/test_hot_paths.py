@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 from reference import state_publisher_bounces
 
-from r2d2_viz.kinematics import compile_tree, joint_transforms, moving_values
-from r2d2_viz.model import load_urdf
-from r2d2_viz.motion import (
+from r2d2_viz.kinematics.transforms import quat_multiply
+from r2d2_viz.kinematics.tree import compile_tree, joint_transforms, moving_values
+from r2d2_viz.robot.model import load_urdf
+from r2d2_viz.robot.synth import random_urdf
+from r2d2_viz.sources.motion import (
     HEIGHT_LOWER,
     HEIGHT_START,
     HEIGHT_STEP,
@@ -18,8 +20,6 @@ from r2d2_viz.motion import (
     TILT_UPPER,
     bounce_cycle,
 )
-from r2d2_viz.synth import random_urdf
-from r2d2_viz.transforms import quat_multiply
 
 DAY_SAMPLES = 24 * 3600 * 30
 

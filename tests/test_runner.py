@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from r2d2_viz.runner import LAP_SAMPLES, RunConfig, _paced, _temp_path, batch_chunk_samples
-from r2d2_viz.sinks import SinkConfig
-from r2d2_viz.sources import ArraySource
+from r2d2_viz.sources.base import ArraySource
+from r2d2_viz.viewer.sinks import SinkConfig
 
 
 def test_lengths_and_chunks() -> None:

@@ -12,7 +12,7 @@ import pytest
 from lxml import etree
 
 from r2d2_viz.errors import UrdfError, XacroError
-from r2d2_viz.xacro_load import load_description
+from r2d2_viz.robot.xacro_load import load_description
 
 FAKE_AMENT = """import json, os
 def get_package_share_directory(name):

@@ -58,7 +58,7 @@ def _r2d2_viz(*args: str) -> None:
 
 @pytest.fixture(scope="module")
 def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    from r2d2_viz.model import default_urdf_path
+    from r2d2_viz.robot.model import default_urdf_path
 
     root = tmp_path_factory.mktemp("recordings")
     out = {name: root / f"{name}.rrd" for name in CASES}
@@ -72,7 +72,7 @@ def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
         ("head_hidden", "b.generate_blueprint(spec, layout=layout, hidden_links=['head'])"),
     ):
         code = (
-            "import sys, r2d2_viz.runner as r, r2d2_viz.blueprint as b; "
+            "import sys, r2d2_viz.runner as r, r2d2_viz.viewer.layout.blueprint as b; "
             f"r.generate_blueprint = lambda spec, layout: {blueprint}; "
             "from r2d2_viz.cli import main; sys.exit(main(sys.argv[1:]))"
         )

@@ -86,8 +86,8 @@ BBox = tuple[int, int, int, int]
 
 
 def rerun_cli() -> str:
-    """The ``rerun`` CLI the app itself uses (:func:`r2d2_viz.sinks.viewer_executable`)."""
-    from r2d2_viz.sinks import viewer_executable
+    """The ``rerun`` CLI the app itself uses (:func:`r2d2_viz.viewer.sinks.viewer_executable`)."""
+    from r2d2_viz.viewer.sinks import viewer_executable
 
     found = viewer_executable()
     if found is None:

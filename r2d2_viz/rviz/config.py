@@ -1,0 +1,56 @@
+"""RViz configs (``.rviz``, ROS 1 and ROS 2) → a :class:`~r2d2_viz.rviz.spec.ViewSpec`: what the Rerun layout needs
+to look like it. Read with a YAML safe loader (no tags, no objects; size-limited), then by
+:mod:`r2d2_viz.rviz.read`. Pure: no rerun.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from r2d2_viz.rviz.read import Reader
+from r2d2_viz.rviz.spec import MAX_BYTES, RvizError, ViewSpec
+
+
+def default_rviz_path() -> Path:
+    """The tutorial's r2d2.rviz, shipped as package data beside the URDF."""
+    from r2d2_viz.robot.model import asset_path
+
+    return asset_path("r2d2.rviz")
+
+
+def load_rviz(path: str | Path) -> ViewSpec:
+    path = Path(path)
+    name = path.name or str(path)
+    try:
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            raise RvizError(f"{name}: file is too large ({size} bytes; the limit is {MAX_BYTES})")
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise RvizError(f"{name}: file not found ({path})") from None
+    except IsADirectoryError:
+        raise RvizError(f"{name}: is a directory, not an .rviz file") from None
+    except UnicodeDecodeError as exc:
+        raise RvizError(f"{name}: not UTF-8 text (byte {exc.start})") from None
+    except OSError as exc:
+        raise RvizError(f"{name}: cannot read: {exc.strerror}") from None
+    return parse_rviz(text, source=name)
+
+
+def parse_rviz(text: str, *, source: str = "config.rviz") -> ViewSpec:
+    import yaml  # only when a config is read
+
+    # libyaml's safe loader (~10x faster: 3 ms for r2d2.rviz against 29 ms), pure Python's where PyYAML lacks it
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    try:
+        data = yaml.load(text, Loader=loader)  # a safe loader (no tags, no objects)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}: " if mark is not None else ""
+        raise RvizError(f"{source}: {where}not YAML: {getattr(exc, 'problem', None) or exc}") from None
+    if not isinstance(data, dict):
+        raise RvizError(f"{source}: not an RViz config (expected a mapping with 'Visualization Manager')")
+    manager = data.get("Visualization Manager")
+    if not isinstance(manager, dict):
+        raise RvizError(f"{source}: no 'Visualization Manager' mapping; is this an RViz config?")
+    return Reader(source).spec(data, manager)

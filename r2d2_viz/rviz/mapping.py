@@ -1,0 +1,103 @@
+"""What each RViz display class and property becomes in Rerun: the converter's mapping, as a table.
+
+:func:`mapping_markdown` renders it for the README (a test keeps the two in step). Pure data; no rerun import.
+"""
+
+from __future__ import annotations
+
+MAPPING: tuple[tuple[str, str, str], ...] = (
+    (
+        "Global Options",
+        "Fixed Frame",
+        "the 3D view's `SpatialInformation(target_frame=…)`; a frame the run does not "
+        'have is reported like RViz\'s "Fixed Frame [map] does not exist" and the view opens on it all the same',
+    ),
+    ("Global Options", "Background Color", "`Background(color=…)`"),
+    ("Global Options", "Frame Rate", "none: the viewer redraws at display rate"),
+    ("Grid", "Enabled / Value", "`LineGrid3D(visible=…)`"),
+    ("Grid", "Cell Size", "`spacing` (m)"),
+    ("Grid", "Color, Alpha", "`color=(r, g, b, 255 · alpha)`"),
+    ("Grid", "Plane, Offset", "`plane=Plane3D(normal, distance)`: XY, XZ or YZ through the offset"),
+    ("Grid", "Reference Frame", "the view's frame (Rerun's grid lies there; another frame is noted)"),
+    ("Grid", "Plane Cell Count, Normal Cell Count", "none: Rerun's grid is unbounded and fades with distance (noted)"),
+    ("Grid", "Line Style", "thin lines, `stroke_width=1` UI point (Billboards noted)"),
+    ("TF", "Enabled, Show Axes", "`/tf_axes/<frame>`: `TransformAxes3D` in each frame; hidden when off"),
+    (
+        "TF",
+        "Show Arrows",
+        "`/tf_arrows/<child>` (static, in the parent frame) and the moving arrows on `/tf`; hidden when off",
+    ),
+    ("TF", "Show Names", "`TransformAxes3D(show_frame=…)`"),
+    ("TF", "Marker Scale", "axis length 0.1 m × scale"),
+    ("TF", "Frames / <frame> / Value", "that frame's `/tf_axes/<frame>` hidden when false"),
+    (
+        "TF",
+        "Tree, Frame Timeout, Update Interval",
+        "none needed: the frame tree is the data; the time cursor shows the latest transform",
+    ),
+    ("RobotModel", "Enabled, Visual Enabled", "`/robot/visual/**` shown or hidden"),
+    ("RobotModel", "Collision Enabled", "`/robot/collision/**` shown or hidden (logged either way)"),
+    ("RobotModel", "Links / <link> / Value", "`/robot/visual/<link>` hidden when false"),
+    ("RobotModel", "Alpha", "the URDF colours' alpha; below 1 noted"),
+    (
+        "RobotModel",
+        "Description Source, Topic, File, TF Prefix",
+        "none: r2d2-viz reads the URDF itself (`--urdf`, or a bag's `/robot_description`)",
+    ),
+    (
+        "LaserScan, PointCloud2, Marker, MarkerArray, Path, Odometry, Pose, PoseArray, Map, Polygon, Range",
+        "Topic, Enabled",
+        "the entity a bag replay logs for that topic (its name, e.g. `/scan`), hidden when "
+        "disabled; the classes Rerun 0.41's MCAP decoders cannot draw are noted",
+    ),
+    ("Image, Camera", "Topic / Image Topic, Enabled", "a 2D view of that topic's entity beside the plots"),
+    (
+        "moveit_rviz_plugin/MotionPlanning, PlanningScene",
+        "Scene Robot: Show Robot Visual, Show Robot Collision, Robot Alpha, Links",
+        "as RobotModel when the config has none (the planning UI, scene and trajectories are noted)",
+    ),
+    ("Group", "Displays, Enabled", "its displays, as if at the top level (a disabled group disables them)"),
+    (
+        "Views: Orbit",
+        "Distance, Yaw, Pitch, Focal Point, Invert Z Axis",
+        "orbital `EyeControls3D`: eye "
+        "at focal + distance · (cos yaw cos pitch, sin yaw cos pitch, sin pitch), looking at the focal point, "
+        "up +Z (Invert Z Axis: yaw and pitch negated, up −Z)",
+    ),
+    (
+        "Views: XYOrbit, ThirdPersonFollower",
+        "as Orbit",
+        "the Orbit eye and target lifted by 0.2 · distance along the camera's up (RViz's `CAMERA_OFFSET`: the "
+        "focal point in the lower half of the image)",
+    ),
+    ("Views (ROS 1)", "Field of View", "none: Rerun's 3D view has its own (a value other than 45° is noted)"),
+    (
+        "Views: FPS",
+        "Position, Yaw, Pitch, Roll",
+        "first-person `EyeControls3D` at Position, looking along (cos pitch cos yaw, cos pitch sin yaw, −sin pitch), "
+        "up turned by Roll",
+    ),
+    (
+        "Views: TopDownOrtho",
+        "X, Y, Scale, Angle",
+        "looking straight down at (X, Y) from the height that shows "
+        "800 px / Scale metres, the image turned by Angle (Rerun has no orthographic 3D view: noted)",
+    ),
+    (
+        "Views: ThirdPersonFollower",
+        "Target Frame",
+        "`tracking_entity` follows the frame's position; RViz also turns with its yaw (noted)",
+    ),
+    ("Views", "Target Frame", "`tracking_entity=/tf_axes/<frame>` when not the fixed frame"),
+    ("other displays, tools, panels", "Class", "none: one note each, naming the class"),
+)
+
+
+def mapping_markdown() -> str:
+    lines = ["| RViz display class | property | Rerun counterpart |", "|---|---|---|"]
+    lines.extend(f"| {cls} | {prop} | {rerun} |" for cls, prop, rerun in MAPPING)
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # python -m r2d2_viz.rviz.mapping: the README's table
+    print(mapping_markdown())

@@ -1,0 +1,103 @@
+"""A bag's ``/tf`` and ``/tf_static`` (``tf2_msgs/msg/TFMessage``) as transform rows
+(:class:`~r2d2_viz.sources.base.TfRecords`), in chunks: each transform at its message's receive time, or at its own
+header stamp (``time="header"``).
+
+Decoded in bulk like JointState (:mod:`r2d2_viz.msgs.layouts`): messages with the same frames share a layout; others
+go through rosbags' deserializer; ones that cannot be decoded are skipped and counted in one warning. Pure.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+
+from r2d2_viz.errors import BagError
+from r2d2_viz.msgs.layouts import TfLayout, tf_layout
+from r2d2_viz.sources.bag import Bag
+from r2d2_viz.sources.bag_joints import TimeSource, stamps_ns
+from r2d2_viz.sources.base import TfRecords
+
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+_STAMP = np.dtype([("sec", "<i4"), ("nsec", "<u4")])
+
+
+def read_tf(bag: Bag, *, time: TimeSource = "receive") -> list[TfRecords]:
+    """``/tf_static`` (static) and ``/tf`` whole, one TfRecords each; topics the bag lacks are left out."""
+    out = []
+    for topic in ("/tf_static", "/tf"):
+        parts = list(tf_chunks(bag, topic, time=time))
+        if parts:
+            out.append(_concatenate(parts))
+    return out
+
+
+def tf_chunks(bag: Bag, topic: str, *, time: TimeSource = "receive", max_messages: int = 10_000) -> Iterator[TfRecords]:
+    """The transforms of ``topic`` (static when it is ``/tf_static``), a TfRecords per ``max_messages``."""
+    if not bag.require_type(topic, TF_MESSAGE):
+        return
+    reader = _TfReader(bag, topic, static=topic == "/tf_static", time=time)
+    for batch in bag.batches(topic, max_messages):
+        records = reader.decode(batch)
+        if len(records):
+            yield records
+    if reader.bad:
+        bag.warn(f"{bag.path}: {topic}: skipped {reader.bad} messages that cannot be decoded")
+
+
+def _concatenate(parts: list[TfRecords]) -> TfRecords:
+    if len(parts) == 1:
+        return parts[0]
+    return TfRecords(
+        np.concatenate([p.times_ns for p in parts]),
+        tuple(x for p in parts for x in p.parents),
+        tuple(x for p in parts for x in p.children),
+        np.vstack([p.translation for p in parts]),
+        np.vstack([p.quat_xyzw for p in parts]),
+        parts[0].static,
+    )
+
+
+class _TfReader:
+    def __init__(self, bag: Bag, topic: str, *, static: bool, time: TimeSource) -> None:
+        self.bag, self.topic, self.static, self.time = bag, topic, static, time
+        self.layouts: list[TfLayout] = []
+        self.bad = 0
+
+    def decode(self, messages: list[tuple[int, bytes | memoryview]]) -> TfRecords:
+        receive: list[int] = []
+        stamps: list[bytes | memoryview] = []
+        numbers: list[bytes | memoryview] = []
+        parents: list[str] = []
+        children: list[str] = []
+        for receive_ns, data in messages:
+            layout = next((lay for lay in self.layouts if lay.matches(data)), None)
+            if layout is None:
+                try:
+                    layout = tf_layout(data)
+                except ValueError:
+                    try:
+                        msg = self.bag.deserialize(data, TF_MESSAGE)
+                    except BagError:
+                        self.bad += 1
+                        continue
+                    for t in msg.transforms:
+                        s, v, q = t.header.stamp, t.transform.translation, t.transform.rotation
+                        stamps.append(np.array([(s.sec, s.nanosec)], dtype=_STAMP).tobytes())
+                        numbers.append(np.array([v.x, v.y, v.z, q.x, q.y, q.z, q.w], dtype="<f8").tobytes())
+                        receive.append(receive_ns)
+                        parents.append(t.header.frame_id)
+                        children.append(t.child_frame_id)
+                    continue
+                self.layouts.append(layout)
+            for stamp, translation in zip(layout.stamps, layout.translations, strict=True):
+                stamps.append(data[stamp : stamp + 8])
+                numbers.append(data[translation : translation + 56])
+            receive.extend([receive_ns] * len(layout.stamps))
+            parents.extend(layout.parents)
+            children.extend(layout.children)
+        values = np.frombuffer(b"".join(numbers), dtype="<f8").reshape(-1, 7)
+        times = np.asarray(receive, dtype=np.int64) if self.time == "receive" else stamps_ns(b"".join(stamps))
+        return TfRecords(
+            times, tuple(parents), tuple(children), values[:, :3].copy(), values[:, 3:].copy(), self.static
+        )

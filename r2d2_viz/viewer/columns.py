@@ -1,0 +1,101 @@
+"""Arrow columns for Rerun's ``send_columns``: built once per block of samples, sliced per send.
+
+Rerun's ``…columns()`` builders encode a whole block at once; a live run then sends any run of its samples
+by slicing those Arrow arrays (zero-copy) and handing them to the public ``rr.send_columns``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+import rerun as rr
+
+from r2d2_viz.arrays import I64
+from r2d2_viz.sources.base import Clock
+
+Encoded = list[tuple[rr.ComponentDescriptor, pa.Array]]
+
+
+def encoded(columns: rr.ComponentColumnList | list[rr.ComponentColumn]) -> Encoded:
+    """Each column's descriptor and Arrow list array, encoded once."""
+    return [(c.component_descriptor(), c.as_arrow_array()) for c in columns]
+
+
+class _Prebuilt(rr.ComponentColumn):
+    """A column whose Arrow list array is already built (by :func:`encoded`, then sliced)."""
+
+    def __init__(self, descriptor: rr.ComponentDescriptor, array: pa.Array) -> None:  # nothing to partition
+        self.descriptor = descriptor
+        self._array = array
+
+    def as_arrow_array(self) -> pa.Array:
+        return self._array
+
+
+class _TimeArray:
+    """A time column already in Arrow (``rr.TimeColumnLike``)."""
+
+    def __init__(self, timeline: str, times: pa.Array) -> None:
+        self._timeline, self._times = timeline, times
+
+    def timeline_name(self) -> str:
+        return self._timeline
+
+    def as_arrow_array(self) -> pa.Array:
+        return self._times
+
+
+def time_array(times_ns: I64, clock: Clock) -> pa.Array:
+    """Nanoseconds as Rerun's duration or timestamp column type."""
+    kind = "timedelta64[ns]" if clock == "duration" else "datetime64[ns]"
+    return pa.array(np.asarray(times_ns, dtype=np.int64).astype(kind))
+
+
+def send(
+    rec: rr.RecordingStream,
+    entity: str,
+    timeline: str,
+    times: pa.Array,
+    columns: Encoded,
+    start: int = 0,
+    count: int | None = None,
+) -> None:
+    """``rr.send_columns`` for rows ``start … start+count-1`` of prebuilt columns (all by default)."""
+    if start or (count is not None and count != len(times)):
+        n = len(times) - start if count is None else count
+        times = times.slice(start, n)
+        columns = [(d, a.slice(start, n)) for d, a in columns]
+    rr.send_columns(
+        entity,
+        indexes=[_TimeArray(timeline, times)],
+        columns=[_Prebuilt(d, a) for d, a in columns],
+        recording=rec,
+    )
+
+
+def tiled(texts: list[str], n: int) -> pa.StringArray:
+    """``texts * n`` as an Arrow string array, built from two buffers (no per-row Python strings).
+
+    Rerun takes an Arrow array of its own type as is; a Python list would be converted row by row.
+    The column itself is unchanged: every row still holds its name."""
+    data_parts = [t.encode() for t in texts]
+    lengths = np.tile(np.array([len(e) for e in data_parts], dtype=np.int64), n)
+    offsets = np.concatenate([[0], np.cumsum(lengths)])
+    if offsets[-1] > np.iinfo(np.int32).max:  # cannot happen for the chunk sizes used; stay correct anyway
+        return pa.array(texts * n, type=pa.utf8())
+    data = b"".join(data_parts) * n
+    return pa.StringArray.from_buffers(len(lengths), pa.py_buffer(offsets.astype(np.int32)), pa.py_buffer(data))
+
+
+def first_of_every(lists: pa.ListArray, rows: int) -> pa.ListArray:
+    """``lists`` (one list per sample) spread over ``rows`` rows per sample: each sample's list on its first
+    row, null on the others — a null cell is no data, so a query at that time finds the first row's."""
+    if rows == 1:
+        return lists
+    offsets = lists.offsets.to_numpy()
+    spread = np.empty(len(lists) * rows + 1, dtype=offsets.dtype)
+    spread[0] = offsets[0]
+    spread[1:] = np.repeat(offsets[1:], rows)
+    null = np.ones((len(lists), rows), dtype=bool)
+    null[:, 0] = False
+    return pa.ListArray.from_arrays(pa.array(spread), lists.values, type=lists.type, mask=pa.array(null.reshape(-1)))

@@ -1,0 +1,214 @@
+"""The viewer layout: an RViz config (:mod:`r2d2_viz.rviz.config`) as a Rerun blueprint.
+
+The built-in layout *is* the conversion of the tutorial's ``r2d2.rviz`` (shipped as ``assets/r2d2.rviz``): one
+3D view in the fixed frame with its Grid, TF and RobotModel displays and camera, plus plots of the joint values
+(what ``ros2 topic echo /joint_states`` would print) and a log of warnings. :func:`generate_blueprint` is a pure
+function of the config and of the run (:class:`Layout`: which plots the robot needs, a camera fitted to it).
+
+Save it with ``python -m r2d2_viz.blueprint [PATH]`` (default ``blueprints/r2d2.rbl``), or convert a config with
+``python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl``.
+"""
+
+from __future__ import annotations
+
+import sys
+import uuid
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import rerun as rr
+import rerun.blueprint as rrb
+
+from r2d2_viz.rviz.config import default_rviz_path, load_rviz
+from r2d2_viz.rviz.spec import Camera, ViewSpec
+from r2d2_viz.viewer.entities import APP_ID, JOINTS_CONTINUOUS, JOINTS_LIMITED, LIMITS, TF, TIMELINE, WARNINGS, path
+
+DEFAULT_BLUEPRINT_PATH = Path("blueprints/r2d2.rbl")
+_ID_NAMESPACE = uuid.UUID("5f1b7a52-3c1e-4d0e-9a43-6b2f3f2d2d20")
+MANY_JOINTS = 12
+"""Above this many joints in a plot its legend would cover it: the legend is hidden (hover a line for its
+name) and the limit lines are left out (a joint that leaves its limits is reported in the warnings)."""
+_PLANES = {"XY": (0.0, 0.0, 1.0), "XZ": (0.0, 1.0, 0.0), "YZ": (1.0, 0.0, 0.0)}
+
+
+@dataclass(frozen=True)
+class Layout:
+    """What the layout needs to know about a run (None everywhere: the tutorial's)."""
+
+    limited: int | None = None
+    """Joints with limits (None: unknown, show the plot)."""
+    continuous: int | None = None
+    camera: Camera | None = None
+    """A camera fitted to the robot, used instead of the config's (see :mod:`r2d2_viz.viewer.layout.fit`)."""
+    show_arrows: bool = True
+    """False hides the TF arrows (robots with many frames)."""
+    fixed_frame: str | None = None
+    """The run's fixed frame, instead of the config's (a bag's TF root)."""
+
+
+@lru_cache(maxsize=1)
+def tutorial_spec() -> ViewSpec:
+    """The built-in layout's config: the tutorial's r2d2.rviz."""
+    return load_rviz(default_rviz_path())
+
+
+def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
+    """Name-derived ids instead of random ones, so the saved blueprint is the same on every save."""
+    part.id = uuid.uuid5(_ID_NAMESPACE, key)
+
+
+def generate_blueprint(
+    spec: ViewSpec | None = None, *, layout: Layout | None = None, hidden_links: Sequence[str] = ()
+) -> rrb.Blueprint:
+    """The RViz-like layout of ``spec`` (default: the tutorial's) for a run described by ``layout``.
+
+    ``hidden_links`` hides those links' visuals, like unticking them under RobotModel / Links in RViz.
+    """
+    spec = spec or tutorial_spec()
+    layout = layout or Layout()
+    fixed = layout.fixed_frame or spec.fixed_frame
+    scene = rrb.Spatial3DView(
+        name=f"3D: {fixed} (Grid · TF · RobotModel)",
+        origin="/",
+        contents=["+ /**", "- /joints/**", f"- {WARNINGS}"],
+        background=rrb.Background(color=spec.background),
+        line_grid=_grid(spec),
+        spatial_information=rrb.SpatialInformation(target_frame=fixed, show_axes=False, show_bounding_box=False),
+        eye_controls=_eye(layout.camera or spec.camera),
+        overrides=_hidden(spec, layout, hidden_links),  # type: ignore[arg-type]  # EntityBehavior is accepted
+    )
+    parts: dict[str, rrb.View | rrb.Container] = {"scene": scene}
+    side: list[rrb.View] = []
+    shares: list[float] = []
+    # /joint_states as plots: joints with limits (and the limits), and continuous joints, which grow without
+    # bound (the tutorial's swivel) and would flatten the others on a shared axis. No empty panels.
+    if layout.limited is None or layout.limited > 0:
+        many = layout.limited is not None and layout.limited > MANY_JOINTS
+        limited = rrb.TimeSeriesView(
+            name="Joint states",
+            origin=JOINTS_LIMITED,
+            contents=[f"+ {JOINTS_LIMITED}/**", f"- {LIMITS}"] if many else "$origin/**",
+            plot_legend=rrb.PlotLegend(visible=False) if many else None,
+        )
+        parts["limited"] = limited
+        side.append(limited)
+        shares.append(3)
+    if layout.continuous is None or layout.continuous > 0:
+        many = layout.continuous is not None and layout.continuous > MANY_JOINTS
+        continuous = rrb.TimeSeriesView(
+            name="Continuous joints",
+            origin=JOINTS_CONTINUOUS,
+            plot_legend=rrb.PlotLegend(visible=False) if many else None,
+        )
+        parts["continuous"] = continuous
+        side.append(continuous)
+        shares.append(2)
+    for topic in spec.topics:
+        if topic.kind in ("Image", "Camera") and topic.enabled and topic.topic:
+            side.append(rrb.Spatial2DView(name=f"{topic.kind}: {topic.topic}", origin=topic.topic))
+            shares.append(2)
+    log = rrb.TextLogView(name="Warnings", origin=WARNINGS)
+    parts["log"] = log
+    side.append(log)
+    shares.append(1)
+    parts["side"] = rrb.Vertical(*side, row_shares=shares)
+    parts["root"] = rrb.Horizontal(scene, parts["side"], column_shares=[2, 1])
+    for key, part in parts.items():
+        _stable_id(part, key)
+    return rrb.Blueprint(
+        parts["root"],
+        rrb.BlueprintPanel(state=rrb.components.PanelState.Expanded),
+        rrb.SelectionPanel(state=rrb.components.PanelState.Collapsed),
+        # Play state left to the viewer: a recording plays once from the start and stays on its last
+        # sample; a live stream is followed as it arrives — RViz always shows the latest state.
+        rrb.TimePanel(state=rrb.components.PanelState.Collapsed, timeline=TIMELINE),
+        auto_views=False,
+    )
+
+
+def _grid(spec: ViewSpec) -> rrb.LineGrid3D:
+    grid = spec.grid
+    if grid is None:
+        return rrb.LineGrid3D(visible=False)
+    normal = _PLANES[grid.plane]
+    distance = sum(n * o for n, o in zip(normal, grid.offset, strict=True))
+    plane = (
+        rr.components.Plane3D.XY if (grid.plane, distance) == ("XY", 0.0) else rr.components.Plane3D(normal, distance)
+    )
+    return rrb.LineGrid3D(
+        visible=grid.enabled,
+        spacing=grid.cell_size,
+        plane=plane,
+        stroke_width=1.0,
+        color=(*grid.color, round(255 * grid.alpha)),
+    )
+
+
+def _eye(camera: Camera | None) -> rrb.EyeControls3D | None:
+    if camera is None:
+        return None
+    return rrb.EyeControls3D(
+        kind=rrb.Eye3DKind.Orbital if camera.orbit else rrb.Eye3DKind.FirstPerson,
+        position=camera.eye,
+        look_target=camera.target,
+        eye_up=camera.up,
+        tracking_entity=path("tf_axes", camera.target_frame) if camera.target_frame else None,
+    )
+
+
+def _hidden(spec: ViewSpec, layout: Layout, hidden_links: Sequence[str]) -> dict[str, rrb.EntityBehavior]:
+    """What RViz's unticked displays, frames and links hide."""
+    hidden: list[str] = []
+    robot, tf = spec.robot, spec.tf
+    if robot is None or not robot.enabled:
+        hidden.append("/robot")
+    else:
+        if not robot.collision:
+            hidden.append("/robot/collision")
+        if not robot.visual:
+            hidden.append("/robot/visual")
+        hidden.extend(path("robot", "visual", link) for link in robot.hidden_links)
+    hidden.extend(path("robot", "visual", link) for link in hidden_links)
+    if tf is None or not tf.enabled or not tf.show_axes:
+        hidden.append("/tf_axes")
+    elif tf.hidden_frames:
+        hidden.extend(path("tf_axes", frame) for frame in tf.hidden_frames)
+    if tf is None or not tf.enabled or not tf.show_arrows or not layout.show_arrows:
+        hidden.extend(["/tf_arrows", TF])  # the arrows on /tf; its transforms still place every frame
+    hidden.extend(topic.topic for topic in spec.topics if not topic.enabled and topic.topic.startswith("/"))
+    return {entity: rrb.EntityBehavior(visible=False) for entity in dict.fromkeys(hidden)}
+
+
+def save_blueprint(path: Path = DEFAULT_BLUEPRINT_PATH, spec: ViewSpec | None = None) -> Path:
+    """Write :func:`generate_blueprint` as an ``.rbl`` file for ``rerun FILE.rrd PATH.rbl``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    generate_blueprint(spec).save(APP_ID, path)
+    return path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m r2d2_viz.blueprint [PATH]`` or ``python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl``."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    spec = None
+    if args[:1] == ["--rviz"]:
+        if len(args) != 3:
+            print("usage: python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl", file=sys.stderr)
+            return 2
+        from r2d2_viz.errors import R2d2VizError
+
+        try:
+            spec = load_rviz(args[1])
+        except R2d2VizError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        for note in spec.notes:
+            print(f"note: {note}", file=sys.stderr)
+        args = args[2:]
+    print(save_blueprint(Path(args[0]) if args else DEFAULT_BLUEPRINT_PATH, spec))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

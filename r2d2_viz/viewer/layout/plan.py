@@ -1,0 +1,96 @@
+"""How a run is shown: the RViz config it follows (``--rviz``, else the tutorial's), the camera and TF marker
+scale fitted to the robot (:mod:`r2d2_viz.viewer.layout.fit`), which plots it needs, and the fixed frame — decided
+once, before anything is logged."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from r2d2_viz.rviz.config import load_rviz
+from r2d2_viz.rviz.spec import Camera, ViewSpec, missing_fixed_frame, orbit_eye
+from r2d2_viz.sources.base import JointState, SampleChunk
+from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
+from r2d2_viz.sources.replay import Replay
+from r2d2_viz.viewer.layout.blueprint import Layout, tutorial_spec
+from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, fit_view
+
+PREVIEW_SAMPLES = 3000
+"""The stretch of a generated motion the view is fitted to (100 s at 30 Hz), sampled at 256 points."""
+
+
+@dataclass(frozen=True)
+class ViewPlan:
+    spec: ViewSpec
+    layout: Layout
+    axis_length: float
+    show_names: bool
+    notes: tuple[str, ...]
+    """Lines for the user: what the config has no counterpart for, a fixed frame that does not exist."""
+
+
+def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> ViewPlan:
+    spec = load_rviz(rviz) if rviz is not None else tutorial_spec()
+    notes = list(spec.notes) if rviz is not None else []
+    tree, source = plan.tree, plan.source
+    limits = tree.limits if tree is not None else {}
+    n_limited = len(limits)
+    n_continuous = len(tree.moving) - n_limited if tree is not None else 0
+    scale = spec.tf.marker_scale if spec.tf is not None else 1.0
+    axis_length, camera, arrows = AXIS_LENGTH * scale, None, True
+    fitted = (
+        rviz is None
+        and tree is not None
+        and not isinstance(source, TutorialMotion)
+        and not (plan.root_placed and plan.moving_tf is not None)
+    )
+    if fitted and tree is not None:
+        fit = fit_view(tree, _preview(plan))
+        axis_length, arrows = fit.axis_length(), fit.show_arrows
+        yaw, pitch = _orbit_angles(spec)
+        camera = Camera("Orbit", orbit_eye(fit.center, fit.distance(), yaw, pitch), fit.center)
+    frame = fixed_frame or (plan.fixed_frame if rviz is None else spec.fixed_frame)
+    frames = {plan.fixed_frame, *(tree.links if tree is not None else ())}
+    for records in (plan.static_tf, plan.moving_tf):
+        if records is not None:
+            frames |= {*records.parents, *records.children}
+    missing = missing_fixed_frame(spec, frames) if rviz is not None and fixed_frame is None else None
+    if missing:
+        notes.append(missing)
+    layout = Layout(
+        limited=n_limited if tree is not None else 0,
+        continuous=n_continuous,
+        camera=camera,
+        show_arrows=arrows,
+        fixed_frame=frame,
+    )
+    show_names = spec.tf.show_names if spec.tf is not None else False
+    return ViewPlan(spec, layout, axis_length, show_names, tuple(notes))
+
+
+def _orbit_angles(spec: ViewSpec) -> tuple[float, float]:
+    """Yaw and pitch of the config's orbit camera (r2d2.rviz: 4.6186, 0.4598)."""
+    camera = spec.camera
+    if camera is None:
+        return 0.785398, 0.785398
+    dx, dy, dz = (e - t for e, t in zip(camera.eye, camera.target, strict=True))
+    distance = float(np.sqrt(dx * dx + dy * dy + dz * dz)) or 1.0
+    return float(np.arctan2(dy, dx)), float(np.arcsin(dz / distance))
+
+
+def _preview(plan: Replay) -> np.ndarray:
+    """Joint positions over a stretch of the motion, full rows for the kinematics."""
+    tree, source = plan.tree, plan.source
+    assert tree is not None
+    state = JointState(tree.actuated)
+    if isinstance(source, GeneratedMotion):
+        k = np.unique(np.linspace(0, PREVIEW_SAMPLES, 256).astype(np.int64))
+        positions, _ = source.at(k)
+        return state.update(SampleChunk(k, source.joints, positions))
+    if source is not None:
+        chunk = next(iter(source.chunks(2000)), None)
+        if chunk is not None and len(chunk):
+            return state.update(chunk)
+    return np.zeros((1, len(tree.actuated)))

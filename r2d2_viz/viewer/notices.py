@@ -1,0 +1,49 @@
+"""Warnings for the user: one line on stderr (or wherever ``warn`` sends it) and a ``TextLog`` row on
+``/warnings``, static or at a time; each reported once."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+
+import numpy as np
+import rerun as rr
+
+from r2d2_viz.sources.base import Clock
+from r2d2_viz.viewer.entities import TIMELINE, WARNINGS
+
+Warn = Callable[[str], None]
+
+
+def to_stderr(message: str) -> None:
+    print(f"warning: {message}", file=sys.stderr, flush=True)
+
+
+class Notices:
+    """Reports each message (or each ``key``) once."""
+
+    def __init__(self, rec: rr.RecordingStream, *, warn: Warn = to_stderr, timeline: str = TIMELINE) -> None:
+        self.rec, self.warn, self.timeline = rec, warn, timeline
+        self._said: set[str] = set()
+
+    def said(self, key: str) -> bool:
+        return key in self._said
+
+    def report(
+        self, message: str, *, key: str | None = None, at_ns: int | None = None, clock: Clock = "duration"
+    ) -> None:
+        """Warn once per ``key`` (the message by default); static unless ``at_ns`` (on ``clock``) is given."""
+        key = message if key is None else key
+        if key in self._said:
+            return
+        self._said.add(key)
+        self.warn(message)
+        row = rr.TextLog(message, level=rr.TextLogLevel.WARN)
+        if at_ns is None:
+            self.rec.log(WARNINGS, row, static=True)
+            return
+        if clock == "duration":
+            self.rec.set_time(self.timeline, duration=np.timedelta64(at_ns, "ns"))
+        else:
+            self.rec.set_time(self.timeline, timestamp=np.datetime64(at_ns, "ns"))
+        self.rec.log(WARNINGS, row)

@@ -1,0 +1,207 @@
+"""Where the recording goes: a spawned viewer, a remote viewer, a served web viewer, a file — or nowhere.
+
+Part of the stream layer (with :mod:`r2d2_viz.viewer.stream`, the only modules that import rerun).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from urllib.parse import quote
+
+import rerun as rr
+import rerun.blueprint as rrb
+
+from r2d2_viz.errors import SinkError, UsageError
+from r2d2_viz.viewer.entities import APP_ID
+
+DEFAULT_GRPC_PORT = 9876
+DEFAULT_WEB_PORT = 9090
+SERVER_START_TIMEOUT_S = 30.0
+
+
+@dataclass(frozen=True)
+class SinkConfig:
+    spawn: bool = False
+    connect: str | None = None
+    """gRPC URL of a running viewer (``rerun+http://HOST:PORT/proxy``)."""
+    serve: bool = False
+    save: Path | None = None
+    headless: bool = False
+    bind: str = "127.0.0.1"
+    port: int = DEFAULT_GRPC_PORT
+    web_port: int = DEFAULT_WEB_PORT
+
+    @property
+    def live(self) -> bool:
+        return self.spawn or self.connect is not None or self.serve
+
+
+def current_recording(recording: rr.RecordingStream | None = None) -> rr.RecordingStream:
+    """``recording``, else the caller's current Rerun recording (``rr.init``'s)."""
+    rec = recording if recording is not None else rr.get_data_recording()
+    if rec is None:
+        raise UsageError("no Rerun recording: call rr.init(...) first or pass recording=")
+    return rec
+
+
+def viewer_executable() -> str | None:
+    """The ``rerun`` viewer binary that ships with rerun-sdk (next to this Python), else on PATH."""
+    beside = Path(sys.executable).parent / "rerun"
+    if beside.is_file() and os.access(beside, os.X_OK):
+        return str(beside)
+    return shutil.which("rerun")
+
+
+def _check_port_free(bind: str, port: int, what: str) -> None:
+    with socket.socket(socket.AF_INET6 if ":" in bind else socket.AF_INET, socket.SOCK_STREAM) as s:
+        try:
+            s.bind((bind, port))
+        except OSError as exc:
+            raise SinkError(f"--serve: cannot listen on {bind}:{port} for the {what}: {exc.strerror}") from None
+
+
+def open_recording(
+    config: SinkConfig,
+    *,
+    save_to: Path | None = None,
+    live: bool = False,
+    on_ready: Callable[[str], None] | None = None,
+    blueprint: rrb.Blueprint | None = None,
+) -> Recording:
+    """A recording stream with the configured sinks and ``blueprint`` as its default blueprint.
+
+    ``save_to`` is the file actually written (the caller renames it into place when done). A ``live``
+    run sends small chunks, frame by frame, for hours: its file gets no footer, whose chunk manifest
+    Rerun keeps in memory until the end (1.2 GB after 10 minutes at 1 kHz).
+    """
+    if config.headless:
+        return Recording(rr.RecordingStream(APP_ID, default_enabled=False))
+    rec = rr.RecordingStream(APP_ID, send_properties=True)
+    sinks: list[rr.FileSink | rr.GrpcSink] = []
+    server: subprocess.Popen[bytes] | None = None
+    if config.spawn:
+        if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+            raise SinkError("--spawn: no display to open the viewer on; use --save FILE.rrd or --serve instead")
+        sinks.append(rr.GrpcSink(_spawn_viewer(config.port)))
+    if config.connect is not None:
+        sinks.append(rr.GrpcSink(config.connect))
+    if config.serve:
+        server, uri = _serve(config)
+        sinks.append(rr.GrpcSink(uri))
+    if save_to is not None:
+        sinks.append(rr.FileSink(save_to, write_footer=not live))
+    rec.set_sinks(*sinks, default_blueprint=blueprint)
+    if config.serve and on_ready is not None:
+        host = "localhost" if config.bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else config.bind
+        public = uri.replace("127.0.0.1", host)
+        on_ready(
+            f"serving: open http://{host}:{config.web_port}/?url={quote(public, safe='')} in a browser, "
+            f"or run: rerun {public}"
+        )
+    return Recording(rec, server)
+
+
+def _spawn_viewer(port: int) -> str:
+    """The native viewer, listening on 127.0.0.1 only, detached so it outlives the app (like an RViz window);
+    a viewer already listening on that port is reused, as ``rr.spawn`` does. Returns its gRPC URL.
+
+    (``rr.spawn`` starts the viewer without ``--bind``, so it listens on every address.)"""
+    url = f"rerun+http://127.0.0.1:{port}/proxy"
+    if _listening("127.0.0.1", port):
+        return url
+    executable = viewer_executable()
+    if executable is None:
+        raise SinkError("--spawn: the 'rerun' viewer binary was not found; use --save FILE.rrd or --serve instead")
+    command = [executable, "--bind", "127.0.0.1", f"--port={port}", "--expect-data-soon"]
+    try:
+        viewer = subprocess.Popen(
+            command,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,  # detached: Ctrl-C in the terminal ends the app, not the window
+            env={**os.environ, "RERUN_APP_ONLY": "true"},
+        )
+    except OSError as exc:
+        raise SinkError(f"--spawn: the viewer did not start ({exc.strerror}); use --save FILE.rrd or --serve") from None
+    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
+    while time.monotonic() < deadline and viewer.poll() is None:
+        if _listening("127.0.0.1", port):
+            return url
+        time.sleep(0.05)
+    _stop(viewer)
+    raise SinkError(f"--spawn: the viewer did not start on 127.0.0.1:{port}; use --save FILE.rrd or --serve instead")
+
+
+def _listening(host: str, port: int) -> bool:
+    with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as probe:
+        return probe.connect_ex((host, port)) == 0
+
+
+def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
+    """Rerun's own server (``rerun --serve-web``): a web viewer and a gRPC proxy, both on ``--bind``.
+
+    (The SDK's in-process ``serve_web_viewer`` always listens on every address; this one does not.)
+    """
+    _check_port_free(config.bind, config.port, "gRPC server")
+    _check_port_free(config.bind, config.web_port, "web viewer")
+    executable = viewer_executable()
+    if executable is None:
+        raise SinkError("--serve: the 'rerun' binary that ships with rerun-sdk was not found; use --save FILE.rrd")
+    command = [
+        executable,
+        "--serve-web",
+        "--bind",
+        config.bind,
+        "--port",
+        str(config.port),
+        "--web-viewer-port",
+        str(config.web_port),
+    ]
+    server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    local = "127.0.0.1" if config.bind in ("0.0.0.0", "::") else config.bind
+    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
+    while time.monotonic() < deadline and server.poll() is None:
+        if _listening(local, config.port):
+            host = f"[{local}]" if ":" in local else local
+            return server, f"rerun+http://{host}:{config.port}/proxy"
+        time.sleep(0.05)
+    _stop(server)
+    raise SinkError(f"--serve: the Rerun server did not start on {config.bind}:{config.port}")
+
+
+def _stop(process: subprocess.Popen[bytes]) -> None:
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGTERM)
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+
+
+@dataclass
+class Recording:
+    """The recording stream, and the server process ``--serve`` started, if any."""
+
+    rec: rr.RecordingStream
+    server: subprocess.Popen[bytes] | None = None
+
+
+def close_recording(recording: Recording) -> None:
+    """Flush everything to the sinks and close them (finalises an .rrd file); stop the server."""
+    try:
+        recording.rec.flush()
+        recording.rec.disconnect()
+    finally:
+        if recording.server is not None:
+            _stop(recording.server)

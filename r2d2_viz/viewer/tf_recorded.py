@@ -1,0 +1,153 @@
+"""Transforms as a bag recorded them (``/tf``, ``/tf_static``), logged as named frames like :mod:`r2d2_viz.viewer.scene`
+and :mod:`r2d2_viz.viewer.tf_rows` log a robot's: ``/tf_static/<child>`` (static), rows on ``/tf`` (each naming its
+frames, at their stamps), ``/tf_axes/<frame>`` for every frame and an arrow per edge (``/tf_arrows/<child>``,
+in the parent frame; per row for moving edges).
+
+Edges that the robot's URDF also defines are left out (the kinematics of the joint states draws them) — see
+:func:`r2d2_viz.sources.tf_check.disagreement` for the check that they agree.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import rerun as rr
+
+from r2d2_viz.sources.base import Clock, TfRecords
+from r2d2_viz.viewer import entities
+from r2d2_viz.viewer.columns import encoded, send, tiled, time_array
+from r2d2_viz.viewer.layout.fit import AXIS_LENGTH
+from r2d2_viz.viewer.scene import ARROW_COLOR
+
+
+class RecordedTf:
+    """Logs recorded transforms chunk by chunk; remembers which frames already have axes and arrows."""
+
+    def __init__(
+        self,
+        rec: rr.RecordingStream,
+        *,
+        clock: Clock,
+        timeline: str = entities.TIMELINE,
+        skip: set[tuple[str, str]] | None = None,
+        axis_length: float = AXIS_LENGTH,
+    ) -> None:
+        self.rec, self.clock, self.timeline = rec, clock, timeline
+        self.skip = skip or set()
+        self.axis_length = axis_length
+        self.frames: set[str] = set()
+        self._arrow_edges: set[tuple[str, str]] = set()
+        self.rows = 0
+
+    def log(self, records: TfRecords) -> None:
+        keep = np.array([(p, c) not in self.skip for p, c in zip(records.parents, records.children, strict=True)])
+        if not keep.any():
+            return
+        index = np.flatnonzero(keep)
+        parents = [records.parents[i] for i in index]
+        children = [records.children[i] for i in index]
+        translation, quat = records.translation[index], records.quat_xyzw[index]
+        self._log_axes({*parents, *children})
+        if records.static:
+            self._log_static(parents, children, translation, quat)
+        else:
+            self._log_moving(records.times_ns[index], parents, children, translation, quat)
+        self.rows += len(index)
+
+    def _log_axes(self, frames: set[str]) -> None:
+        for frame in sorted(frames - self.frames):
+            self.rec.log(
+                entities.tf_axes(frame),
+                rr.CoordinateFrame(frame),
+                rr.TransformAxes3D(self.axis_length, show_frame=False),
+                static=True,
+            )
+        self.frames |= frames
+
+    def _log_static(self, parents: list[str], children: list[str], translation: np.ndarray, quat: np.ndarray) -> None:
+        latest = {child: i for i, child in enumerate(children)}  # the last one of each child wins, as in tf2
+        for child, i in latest.items():
+            self.rec.log(
+                entities.tf_static(child),
+                rr.Transform3D(
+                    translation=translation[i],
+                    quaternion=rr.Quaternion(xyzw=quat[i]),
+                    parent_frame=parents[i],
+                    child_frame=child,
+                ),
+                static=True,
+            )
+            if float(np.linalg.norm(translation[i])) > 0:
+                self.rec.log(
+                    entities.tf_arrow(child),
+                    rr.CoordinateFrame(parents[i]),
+                    rr.Arrows3D(origins=[translation[i]], vectors=[-translation[i]], colors=[ARROW_COLOR]),
+                    static=True,
+                )
+
+    def _log_moving(
+        self, times_ns: np.ndarray, parents: list[str], children: list[str], translation: np.ndarray, quat: np.ndarray
+    ) -> None:
+        times = time_array(times_ns, self.clock)
+        columns = rr.Transform3D.columns(
+            translation=translation,
+            quaternion=quat,  # xyzw
+            parent_frame=tiled(parents, 1),
+            child_frame=tiled(children, 1),
+        )
+        send(self.rec, entities.TF, self.timeline, times, encoded(columns))
+        child_array = np.array(children, dtype=object)
+        for parent, child in sorted(set(zip(parents, children, strict=True))):
+            rows = np.flatnonzero(child_array == child)
+            if (parent, child) not in self._arrow_edges:
+                self._arrow_edges.add((parent, child))
+                self.rec.log(
+                    entities.tf_arrow(child),
+                    rr.CoordinateFrame(parent),
+                    rr.Arrows3D.from_fields(colors=[ARROW_COLOR]),
+                    static=True,
+                )
+            arrows = rr.Arrows3D.columns(origins=translation[rows], vectors=-translation[rows])
+            send(
+                self.rec,
+                entities.tf_arrow(child),
+                self.timeline,
+                time_array(times_ns[rows], self.clock),
+                encoded(arrows),
+            )
+
+
+class TfFeed:
+    """Recorded moving transforms handed to a :class:`RecordedTf` in time order, as far as a replay has got."""
+
+    def __init__(self, recorded: RecordedTf, records: TfRecords | None) -> None:
+        self.recorded = recorded
+        if records is None or len(records) == 0:
+            self._records: TfRecords | None = None
+            return
+        order = np.argsort(records.times_ns, kind="stable")
+        self._records = TfRecords(
+            records.times_ns[order],
+            tuple(records.parents[i] for i in order),
+            tuple(records.children[i] for i in order),
+            records.translation[order],
+            records.quat_xyzw[order],
+        )
+        self._next = 0
+
+    @property
+    def times_ns(self) -> np.ndarray:
+        return self._records.times_ns if self._records is not None else np.zeros(0, dtype=np.int64)
+
+    def until(self, time_ns: int | None = None) -> None:
+        """Log the records up to ``time_ns`` (inclusive; all of them when None) not logged yet."""
+        r = self._records
+        if r is None:
+            return
+        stop = len(r) if time_ns is None else int(np.searchsorted(r.times_ns, time_ns, side="right"))
+        if stop <= self._next:
+            return
+        part = slice(self._next, stop)
+        self.recorded.log(
+            TfRecords(r.times_ns[part], r.parents[part], r.children[part], r.translation[part], r.quat_xyzw[part])
+        )
+        self._next = stop

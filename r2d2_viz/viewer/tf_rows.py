@@ -1,0 +1,87 @@
+"""Per-sample transforms: the ``/tf`` entity, one ``Transform3D`` row per moving joint and per frame track
+of the source (such as ``odom → axis``) at every sample, each row naming its parent and child frames.
+
+The TF arrows that move — prismatic joints, and a root moved by the source — ride along in the first row of
+each sample, drawn in the fixed frame (``/tf``'s ``CoordinateFrame``), so a sample is one chunk.
+Arrows of other frame tracks (say ``map → odom``) are not drawn.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import rerun as rr
+
+from r2d2_viz.arrays import F64
+from r2d2_viz.kinematics.transforms import quat_to_matrix
+from r2d2_viz.kinematics.tree import PRISMATIC, KinematicTree, link_positions, transforms_from_values
+from r2d2_viz.sources.base import FrameTrack
+from r2d2_viz.viewer.columns import Encoded, encoded, first_of_every, tiled
+from r2d2_viz.viewer.scene import ARROW_COLOR
+
+
+class TfRows:
+    """The layout of ``/tf`` rows for one robot and one source's frame tracks."""
+
+    def __init__(self, tree: KinematicTree, *, tracks: tuple[tuple[str, str], ...], fixed_frame: str) -> None:
+        robot = tree.robot
+        self.tree = tree
+        moving = [robot.joint(name) for name in tree.moving]
+        self.parents = [*(j.parent for j in moving), *(p for p, _ in tracks)]
+        self.children = [*(j.child for j in moving), *(c for _, c in tracks)]
+        self.root_track = next((k for k, edge in enumerate(tracks) if edge == (fixed_frame, robot.root)), None)
+        """Which track moves the root in the fixed frame (its arrow is drawn; its pose places the others)."""
+        arrow_rows = [m for m in range(len(moving)) if tree.moving_kind[m] == PRISMATIC]
+        if self.root_track is not None:
+            arrow_rows.append(len(moving) + self.root_track)
+        index = {name: i for i, name in enumerate(tree.links)}  # the fixed frame is no link: -1
+        self._arrow_ends = [(index[self.children[r]], index.get(self.parents[r], -1)) for r in arrow_rows]
+        self._arrow_links = sorted({i for pair in self._arrow_ends for i in pair if i >= 0})
+        self.fixed_frame = fixed_frame
+
+    @property
+    def rows(self) -> int:
+        return len(self.children)
+
+    def log_static(self, rec: rr.RecordingStream, entity: str) -> None:
+        """The moving arrows' frame and colour, once."""
+        if self._arrow_ends:
+            rec.log(
+                entity,
+                rr.CoordinateFrame(self.fixed_frame),
+                rr.Arrows3D.from_fields(colors=[ARROW_COLOR] * len(self._arrow_ends)),
+                static=True,
+            )
+
+    def encode(self, values: F64, tracks: tuple[FrameTrack, ...]) -> Encoded:
+        """Columns of ``rows`` rows per sample for the moving joints' ``values`` ``(n, M)`` and the tracks."""
+        n = len(values)
+        translation, quat = transforms_from_values(self.tree, values)  # (n, M, 3), (n, M, 4)
+        arrows = self._arrow_columns(translation, quat, tracks) if self._arrow_ends else []
+        if tracks:
+            translation = np.concatenate([translation, *(t.translation[:, None] for t in tracks)], axis=1)
+            quat = np.concatenate([quat, *(t.quat_xyzw[:, None] for t in tracks)], axis=1)
+        columns = rr.Transform3D.columns(
+            translation=translation.reshape(-1, 3),
+            quaternion=quat.reshape(-1, 4),  # xyzw
+            parent_frame=tiled(self.parents, n),
+            child_frame=tiled(self.children, n),
+        )
+        return [*encoded(columns), *((d, first_of_every(a, self.rows)) for d, a in arrows)]
+
+    def _arrow_columns(self, translation: F64, quat: F64, tracks: tuple[FrameTrack, ...]) -> Encoded:
+        """The arrows that move, one row per sample: from each moving child's origin to its parent's, in the
+        fixed frame."""
+        n = len(translation)
+        T_fixed_root = None
+        if self.root_track is not None:
+            track = tracks[self.root_track]
+            T_fixed_root = np.zeros((n, 4, 4))
+            T_fixed_root[:, :3, :3] = quat_to_matrix(track.quat_xyzw)
+            T_fixed_root[:, :3, 3] = track.translation
+        at = link_positions(self.tree, translation, quat, self._arrow_links, T_fixed_root=T_fixed_root)
+        origin = np.zeros((n, 3))
+        child = np.stack([at[c] for c, _ in self._arrow_ends], axis=1)  # (n, k, 3)
+        parent = np.stack([at[p] if p >= 0 else origin for _, p in self._arrow_ends], axis=1)
+        k = len(self._arrow_ends)
+        arrows = rr.Arrows3D.columns(origins=child.reshape(-1, 3), vectors=(parent - child).reshape(-1, 3))
+        return encoded(arrows.partition(np.full(n, k)))

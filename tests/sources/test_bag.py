@@ -1,0 +1,188 @@
+"""Opening bags: every form and metadata version, real ROS 2 bags, and bad bags (one line, or what could be read
+and one warning)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+from bagmaker import T0, TS, BagSpec, joint_state, storage_file, string, write_bag
+from conftest import REPO
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+
+from r2d2_viz.errors import BagError
+from r2d2_viz.sources.bag import open_bag
+
+REAL = REPO / "tests" / "data" / "bags"
+HELLO = [f"Hello, world! {i}" for i in range(10)]  # what the ROS 2 demo talker published
+
+
+def _strings(bag, topic: str) -> list[str]:
+    return [bag.deserialize(data, "std_msgs/msg/String").data for _, data in bag.raw(topic)]
+
+
+def _spec(n: int = 20) -> BagSpec:
+    spec = BagSpec().add("/robot_description", T0, string("<robot name='r'/>"))
+    for k in range(n):
+        spec.add("/joint_states", T0 + k * 10**7, joint_state(T0 + k * 10**7, ["a"], [k]))
+    return spec
+
+
+@pytest.mark.parametrize("real", ["talker_db3", "talker_db3/talker.db3", "talker_mcap", "talker_mcap/talker.mcap"])
+def test_real_ros2_bags_directory_and_single_file(real: str) -> None:
+    """Recorded by ROS 2 (rosbag2's own test bags): metadata version 4, QoS written as ROS did."""
+    with open_bag(REAL / real) as bag:
+        assert bag.topics["/topic"].msgtype == "std_msgs/msg/String"
+        assert bag.topics["/topic"].count == 10
+        assert _strings(bag, "/topic") == HELLO
+        times = [t for t, _ in bag.raw("/topic")]
+        assert times == sorted(times) and times[0] == 1585866235112609068  # the file's own first timestamp
+
+
+@pytest.mark.parametrize("version", [4, 5, 6, 7, 8, 9])
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_every_metadata_version_and_storage(tmp_path: Path, storage: str, version: int) -> None:
+    path = write_bag(tmp_path / "b", _spec(), storage=storage, version=version)
+    for form in (path, storage_file(path)):
+        with open_bag(form) as bag:
+            assert bag.files == (storage_file(path),)
+            assert bag.topics["/joint_states"].count == 20
+            assert [t for t, _ in bag.raw("/joint_states")] == [T0 + k * 10**7 for k in range(20)]
+            assert _strings(bag, "/robot_description") == ["<robot name='r'/>"]
+
+
+def test_split_bag_reads_every_file_in_order(tmp_path: Path) -> None:
+    a = write_bag(tmp_path / "a", _spec(5))
+    b = BagSpec().add("/joint_states", T0 + 10**9, joint_state(T0 + 10**9, ["a"], [99]))
+    b = write_bag(tmp_path / "b", b)
+    bag_dir = tmp_path / "split"
+    bag_dir.mkdir()
+    (bag_dir / "split_0.mcap").write_bytes(storage_file(a).read_bytes())
+    (bag_dir / "split_1.mcap").write_bytes(storage_file(b).read_bytes())
+    meta = (a / "metadata.yaml").read_text().replace("- a.mcap", "- split_0.mcap\n  - split_1.mcap")
+    (bag_dir / "metadata.yaml").write_text(meta)
+    with open_bag(bag_dir) as bag:
+        times = [t for t, _ in bag.raw("/joint_states")]
+    assert times == [T0 + k * 10**7 for k in range(5)] + [T0 + 10**9]
+
+
+def _error(path: Path) -> str:
+    with pytest.raises(BagError) as info:
+        open_bag(path)
+    message = str(info.value)
+    assert "\n" not in message and str(path) in message
+    return message
+
+
+def test_missing_and_wrong_paths(tmp_path: Path) -> None:
+    assert "no such file" in _error(tmp_path / "nothing.mcap")
+    (tmp_path / "notes.txt").write_text("hi")
+    assert "not a ROS 2 bag" in _error(tmp_path / "notes.txt")
+    (tmp_path / "dir").mkdir()
+    assert "no metadata.yaml" in _error(tmp_path / "dir")
+
+
+def test_directory_without_metadata_but_with_storage(tmp_path: Path) -> None:
+    path = write_bag(tmp_path / "b", _spec())
+    (path / "metadata.yaml").unlink()
+    assert "no metadata.yaml" in _error(path)
+    with open_bag(storage_file(path)) as bag:  # the hint works: the storage file alone reads
+        assert bag.topics["/joint_states"].count == 20
+
+
+@pytest.mark.parametrize("suffix", [".mcap", ".db3"])
+def test_junk_and_empty_files(tmp_path: Path, suffix: str) -> None:
+    junk = tmp_path / f"junk{suffix}"
+    junk.write_bytes(os.urandom(4096))
+    assert "cannot read this bag" in _error(junk)
+    empty = tmp_path / f"empty{suffix}"
+    empty.write_bytes(b"")
+    assert "cannot read this bag" in _error(empty)
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_bag_without_messages(tmp_path: Path, storage: str) -> None:
+    path = tmp_path / "none"
+    with Writer(
+        path, version=9, storage_plugin=StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    ) as w:
+        w.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=TS)
+    assert "empty bag" in _error(path)
+    assert "empty bag" in _error(storage_file(path))
+
+
+def test_bad_metadata(tmp_path: Path) -> None:
+    path = write_bag(tmp_path / "b", _spec())
+    meta = path / "metadata.yaml"
+    text = meta.read_text()
+    meta.write_text("rosbag2_bagfile_information: [1, 2")
+    assert "not rosbag2 metadata" in _error(path)
+    meta.write_text(text.replace("relative_file_paths", "relative_paths"))
+    assert "not rosbag2 metadata" in _error(path)
+    meta.write_text(text.replace("b.mcap", "gone.mcap"))
+    assert "missing: gone.mcap" in _error(path)
+
+
+def test_compressed_bag_is_one_line(tmp_path: Path) -> None:
+    path = tmp_path / "z"
+    w = Writer(path, version=9, storage_plugin=StoragePlugin.SQLITE3)
+    w.set_compression(CompressionMode.FILE, CompressionFormat.ZSTD)
+    w.open()
+    c = w.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=TS)
+    w.write(c, T0, joint_state(T0, ["a"], [1.0]))
+    w.close()
+    assert "compressed bags" in _error(path)
+
+
+def test_truncated_db3_is_one_line(tmp_path: Path) -> None:
+    path = write_bag(tmp_path / "b", _spec(3000), storage="sqlite3")
+    file = storage_file(path)
+    cut = tmp_path / "cut.db3"
+    cut.write_bytes(file.read_bytes()[: file.stat().st_size // 2])
+    assert "cannot read this bag" in _error(cut)
+
+
+def test_truncated_mcap_gives_what_was_recorded_and_one_warning(tmp_path: Path) -> None:
+    """A recorder killed mid-way leaves an MCAP file with no footer: its complete chunks are read."""
+    path = write_bag(tmp_path / "b", _spec(20000))
+    full = storage_file(path).read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(full[: int(len(full) * 0.6)])
+    warnings: list[str] = []
+    with open_bag(cut, warn=warnings.append) as bag:
+        times = [t for t, _ in bag.raw("/joint_states")]
+    assert 1000 < len(times) < 20000
+    assert times == [T0 + k * 10**7 for k in range(len(times))]  # the first ones, in order, none lost between
+    assert len(warnings) == 1 and f"recovered {len(times) + 1} messages" in warnings[0]  # + /robot_description
+
+    # the same file inside its rosbag2 directory: the metadata knows how many there were
+    shutil.copy(cut, storage_file(path))
+    warnings.clear()
+    with open_bag(path, warn=warnings.append) as bag:
+        assert len(list(bag.raw("/joint_states"))) == len(times)
+    assert warnings == [f"{path}: /joint_states: recovered {len(times)} of 20000 messages"]
+
+
+def test_corrupt_mcap_chunk(tmp_path: Path) -> None:
+    """Bytes overwritten in the middle: the messages before the damage, and one warning."""
+    path = write_bag(tmp_path / "b", _spec(20000))
+    data = bytearray(storage_file(path).read_bytes())
+    middle = len(data) // 2
+    data[middle : middle + 4096] = b"\xff" * 4096
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    warnings: list[str] = []
+    with open_bag(bad, warn=warnings.append) as bag:
+        times = [t for t, _ in bag.raw("/joint_states")]
+    assert 0 < len(times) < 20000
+    assert times[:1000] == [T0 + k * 10**7 for k in range(1000)]
+    assert len(warnings) == 1 and "recovered" in warnings[0] and "of 20000" in warnings[0]
+
+
+def test_wrong_type_on_a_topic(tmp_path: Path) -> None:
+    spec = BagSpec(types={"/joint_states": "std_msgs/msg/String"}).add("/joint_states", T0, string("hi"))
+    path = write_bag(tmp_path / "b", spec)
+    with open_bag(path) as bag, pytest.raises(BagError, match="is std_msgs/msg/String, expected sensor_msgs"):
+        bag.require_type("/joint_states", "sensor_msgs/msg/JointState")

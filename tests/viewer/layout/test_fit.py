@@ -1,0 +1,63 @@
+"""The fitted view: the box a robot's links sweep, against yourdfpy's forward kinematics."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import yourdfpy
+
+from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.robot.model import load_urdf
+from r2d2_viz.robot.synth import random_urdf
+from r2d2_viz.sources.base import FrameTrack
+from r2d2_viz.viewer.layout.fit import MANY_FRAMES, fit_view
+
+
+def _box(tmp_path: Path, n_links: int, seed: int) -> tuple[Path, np.ndarray, np.ndarray]:
+    urdf = tmp_path / f"r{seed}.urdf"
+    urdf.write_text(random_urdf(n_links, seed=seed, joint_types=("fixed", "revolute", "prismatic"), visuals=False))
+    return urdf, *_reference_box(urdf, seed)
+
+
+def _reference_box(urdf: Path, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    model = yourdfpy.URDF.load(str(urdf), build_scene_graph=True, load_meshes=False)
+    rng = np.random.default_rng(seed)
+    names = model.actuated_joint_names
+    configs = rng.uniform(-1, 1, (20, len(names)))
+    points = []
+    for cfg in configs:
+        model.update_cfg(dict(zip(names, cfg, strict=True)))
+        points.extend(model.get_transform(link, model.base_link)[:3, 3] for link in model.link_map)
+    return np.array(points), configs
+
+
+def test_the_box_is_the_links_extent_over_the_motion(tmp_path: Path) -> None:
+    urdf, points, configs = _box(tmp_path, 30, seed=4)
+    tree = compile_tree(load_urdf(urdf))
+    names = yourdfpy.URDF.load(str(urdf), build_scene_graph=False, load_meshes=False).actuated_joint_names
+    q = configs[:, [names.index(a) for a in tree.actuated]]
+    fit = fit_view(tree, q)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    assert np.allclose(fit.center, (lo + hi) / 2, atol=1e-9)
+    assert math.isclose(fit.radius, np.linalg.norm(hi - lo) / 2, rel_tol=1e-9)  # no visuals: no shape padding
+    assert fit.frames == 31 and fit.show_arrows
+
+
+def test_a_moving_root_moves_the_box_and_big_robots_get_smaller_axes_and_no_arrows(tmp_path: Path) -> None:
+    urdf = tmp_path / "one.urdf"
+    urdf.write_text(
+        '<robot name="r"><link name="a"><visual><geometry><sphere radius="0.5"/></geometry></visual></link></robot>'
+    )
+    tree = compile_tree(load_urdf(urdf))
+    # the root at (0,0,0) and at (4,0,0): box from x=0 to 4, centre x=2; radius 2 + the 0.5 m sphere
+    root = FrameTrack("odom", "a", np.array([[0.0, 0, 0], [4.0, 0, 0]]), np.tile([0.0, 0, 0, 1], (2, 1)))
+    fit = fit_view(tree, np.zeros((2, 0)), root=root)
+    assert np.allclose(fit.center, (2, 0, 0)) and math.isclose(fit.radius, 2.5)
+    assert math.isclose(fit.distance(), 1.15 * 2.5 / math.sin(math.radians(22.5)))
+    chain = tmp_path / "chain.urdf"
+    chain.write_text(random_urdf(MANY_FRAMES + 5, seed=1, chain=True, joint_types=("fixed",), visuals=False))
+    big = fit_view(compile_tree(load_urdf(chain)), np.zeros((1, 0)))
+    assert not big.show_arrows
+    assert math.isclose(big.axis_length(), 0.1 * min(max(big.radius, 0.05), 20) / 2)

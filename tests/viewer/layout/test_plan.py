@@ -1,0 +1,53 @@
+"""How a run is shown: the tutorial keeps r2d2.rviz's view; other robots get its orbit angles, fitted."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import REPO
+
+from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.robot.model import default_urdf_path, load_urdf
+from r2d2_viz.sources.motion import make_motion
+from r2d2_viz.sources.replay import Replay
+from r2d2_viz.viewer.layout.plan import plan_view
+
+ARM = REPO / "examples" / "arm6.urdf"
+YAW, PITCH = 4.618575572967529, 0.459797203540802  # r2d2.rviz's Views / Current
+
+
+def _plan(urdf: Path, motion: str | None = None) -> Replay:
+    robot = load_urdf(urdf)
+    return Replay(compile_tree(robot), make_motion(robot, motion, n_samples=10), None, None, "odom")
+
+
+def test_the_tutorial_keeps_its_exact_view() -> None:
+    view = plan_view(_plan(default_urdf_path()), rviz=None, fixed_frame=None)
+    assert view.layout.camera is None  # r2d2.rviz's own camera
+    assert view.axis_length == 0.1 and view.layout.limited == 2 and view.layout.continuous == 1
+    assert view.notes == () and view.layout.fixed_frame == "odom"
+
+
+def test_another_robot_gets_the_same_orbit_angles_fitted_to_it() -> None:
+    view = plan_view(_plan(ARM), rviz=None, fixed_frame=None)
+    camera = view.layout.camera
+    assert camera is not None
+    d = np.subtract(camera.eye, camera.target)
+    assert math.atan2(d[1], d[0]) % (2 * math.pi) == pytest.approx(YAW, abs=1e-9)
+    assert math.asin(d[2] / np.linalg.norm(d)) == pytest.approx(PITCH, abs=1e-9)
+    assert 1.0 < np.linalg.norm(d) < 5.0  # a 1 m arm is looked at from metres away, not r2d2.rviz's 10 m
+    assert camera.target[2] > 0.2  # the focal point is up the arm, not at odom's origin
+    assert 0.05 < view.axis_length < 0.2 and view.layout.show_arrows  # marker scale ~ the arm's ~1.3 m reach
+    assert view.layout.limited == 4 and view.layout.continuous == 2  # arm6: 3 revolute + 1 prismatic, 2 continuous
+
+
+def test_an_rviz_config_wins_and_a_missing_fixed_frame_is_said(tmp_path: Path) -> None:
+    config = REPO / "tests" / "data" / "rviz" / "turtlebot3_navigation_ros1.rviz"
+    view = plan_view(_plan(ARM), rviz=config, fixed_frame=None)
+    assert view.layout.camera is None and view.layout.fixed_frame == "map"
+    assert any("Fixed Frame [map] does not exist" in n for n in view.notes)
+    override = plan_view(_plan(ARM), rviz=config, fixed_frame="odom")
+    assert override.layout.fixed_frame == "odom" and not any("Fixed Frame" in n for n in override.notes)

@@ -1,0 +1,45 @@
+"""Arrow columns built once and sliced: the same rows as building them the slow way, read back from a file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import rerun as rr
+from rrd import read_recording
+
+from r2d2_viz.viewer.columns import encoded, first_of_every, send, tiled, time_array
+
+
+def test_tiled_is_texts_times_n() -> None:
+    texts = ["odom", "base link", "ünïcode/with/slashes", ""]
+    assert tiled(texts, 5).to_pylist() == texts * 5
+    assert tiled(texts, 0).to_pylist() == []
+
+
+def test_first_of_every_puts_each_list_on_the_first_row_and_nulls_elsewhere() -> None:
+    lists = pa.array([[1.0, 2.0], [3.0], []], type=pa.list_(pa.float64()))
+    spread = first_of_every(lists, 3)
+    assert spread.to_pylist() == [[1.0, 2.0], None, None, [3.0], None, None, [], None, None]
+    assert first_of_every(lists, 1) is lists
+
+
+def test_sending_a_slice_sends_exactly_those_rows(tmp_path: Path) -> None:
+    out = tmp_path / "c.rrd"
+    rec = rr.RecordingStream("test")
+    rec.save(out)
+    n = 10
+    columns = encoded(rr.Scalars.columns(scalars=np.arange(n, dtype=np.float64) * 1.5))
+    times = time_array(np.arange(n, dtype=np.int64) * 1000, "duration")
+    send(rec, "/whole", "time", times, columns)
+    send(rec, "/part", "time", times, columns, 3, 4)  # rows 3 … 6
+    stamps = time_array(np.array([1_700_000_000_000_000_000], dtype=np.int64), "timestamp")
+    send(rec, "/stamped", "time2", stamps, encoded(rr.Scalars.columns(scalars=[7.0])))
+    rec.flush()
+    rec.disconnect()
+    recording = read_recording(out)
+    assert [v[0] for v in recording["/whole"].temporal["Scalars:scalars"]] == [k * 1.5 for k in range(n)]
+    assert recording["/part"].times == [3000, 4000, 5000, 6000]
+    assert [v[0] for v in recording["/part"].temporal["Scalars:scalars"]] == [4.5, 6.0, 7.5, 9.0]
+    assert times.type == pa.duration("ns") and stamps.type == pa.timestamp("ns")

@@ -1,0 +1,33 @@
+"""Sinks: the viewer binary the app uses, which sinks count as live, a port in use named."""
+
+from __future__ import annotations
+
+import os
+import socket
+import sys
+from pathlib import Path
+
+import pytest
+
+from r2d2_viz.errors import SinkError
+from r2d2_viz.viewer.sinks import SinkConfig, _check_port_free, viewer_executable
+
+
+def test_the_viewer_is_the_one_beside_this_python() -> None:
+    exe = viewer_executable()
+    assert exe is not None and Path(exe) == Path(sys.executable).parent / "rerun" and os.access(exe, os.X_OK)
+
+
+def test_live_sinks() -> None:
+    assert SinkConfig(spawn=True).live and SinkConfig(serve=True).live and SinkConfig(connect="x").live
+    assert not SinkConfig(save=Path("x.rrd")).live and not SinkConfig(headless=True).live
+    assert SinkConfig().bind == "127.0.0.1"  # safe by default
+
+
+def test_a_port_in_use_is_named() -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        with pytest.raises(SinkError, match=f"cannot listen on 127.0.0.1:{port} for the web viewer"):
+            _check_port_free("127.0.0.1", port, "web viewer")
