@@ -5,7 +5,10 @@ to look like it. Read with a YAML safe loader (no tags, no objects; size-limited
 
 from __future__ import annotations
 
+import json
+from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 from r2d2_viz.rviz.read import Reader
 from r2d2_viz.rviz.spec import MAX_BYTES, RvizError, ViewSpec
@@ -16,6 +19,15 @@ def default_rviz_path() -> Path:
     from r2d2_viz.robot.model import asset_path
 
     return asset_path("r2d2.rviz")
+
+
+@lru_cache(maxsize=1)
+def tutorial_spec() -> ViewSpec:
+    """The built-in layout's config: the tutorial's r2d2.rviz, read from ``assets/r2d2.rviz.json`` — the same
+    YAML loaded once into JSON (a test keeps the two equal), so a run without ``--rviz`` needs no YAML parser."""
+    from r2d2_viz.robot.model import asset_path
+
+    return spec_from_data(json.loads(asset_path("r2d2.rviz.json").read_text()), source="r2d2.rviz")
 
 
 def load_rviz(path: str | Path) -> ViewSpec:
@@ -48,6 +60,11 @@ def parse_rviz(text: str, *, source: str = "config.rviz") -> ViewSpec:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}: " if mark is not None else ""
         raise RvizError(f"{source}: {where}not YAML: {getattr(exc, 'problem', None) or exc}") from None
+    return spec_from_data(data, source=source)
+
+
+def spec_from_data(data: Any, *, source: str) -> ViewSpec:
+    """An RViz config already loaded (a YAML safe load's mappings, lists and scalars) → its view spec."""
     if not isinstance(data, dict):
         raise RvizError(f"{source}: not an RViz config (expected a mapping with 'Visualization Manager')")
     manager = data.get("Visualization Manager")

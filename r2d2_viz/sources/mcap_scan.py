@@ -13,14 +13,18 @@ import sys
 import zlib
 from collections.abc import Iterator
 from pathlib import Path
+from types import ModuleType
 from typing import BinaryIO, NamedTuple
 
-from lz4.frame import decompress as lz4_decompress
 
-if sys.version_info >= (3, 14):  # pragma: no cover
-    from compression import zstd
-else:
-    from backports import zstd
+def _zstd() -> ModuleType:
+    """zstd, imported when a chunk needs it (a run without a bag imports neither codec)."""
+    if sys.version_info >= (3, 14):  # pragma: no cover
+        from compression import zstd
+    else:
+        from backports import zstd
+    return zstd
+
 
 MAGIC = b"\x89MCAP0\r\n"
 _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE, _OP_CHUNK, _OP_DATA_END = 0x03, 0x04, 0x05, 0x06, 0x0F
@@ -63,9 +67,11 @@ def _chunk_data(body: bytes) -> bytes:
     (size,) = _U64.unpack_from(body, at)
     data = body[at + 8 : at + 8 + size]
     if compression == "lz4":
+        from lz4.frame import decompress as lz4_decompress
+
         data = lz4_decompress(data)
     elif compression == "zstd":
-        data = zstd.decompress(data)
+        data = _zstd().decompress(data)
     elif compression:
         raise _BrokenError
     if len(data) != uncompressed_size or (crc and zlib.crc32(data) != crc):
@@ -137,5 +143,13 @@ class McapScan:
                         elif op2 == _OP_SCHEMA:
                             (schema_id,) = _U16.unpack_from(data, start)
                             schemas[schema_id] = _string(data, start + 2)[0]
-            except (_BrokenError, struct.error, RuntimeError, ValueError, OverflowError, MemoryError, zstd.ZstdError):
+            except (
+                _BrokenError,
+                struct.error,
+                RuntimeError,
+                ValueError,
+                OverflowError,
+                MemoryError,
+                _zstd().ZstdError,
+            ):
                 return  # the rest of the file is missing or damaged

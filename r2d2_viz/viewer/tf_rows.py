@@ -12,7 +12,6 @@ import numpy as np
 import rerun as rr
 
 from r2d2_viz.arrays import F64
-from r2d2_viz.kinematics.transforms import quat_to_matrix
 from r2d2_viz.kinematics.tree import PRISMATIC, KinematicTree, link_positions, transforms_from_values
 from r2d2_viz.sources.base import FrameTrack
 from r2d2_viz.viewer.columns import Encoded, encoded, first_of_every, tiled
@@ -72,13 +71,9 @@ class TfRows:
         """The arrows that move, one row per sample: from each moving child's origin to its parent's, in the
         fixed frame."""
         n = len(translation)
-        T_fixed_root = None
-        if self.root_track is not None:
-            track = tracks[self.root_track]
-            T_fixed_root = np.zeros((n, 4, 4))
-            T_fixed_root[:, :3, :3] = quat_to_matrix(track.quat_xyzw)
-            T_fixed_root[:, :3, 3] = track.translation
-        at = link_positions(self.tree, translation, quat, self._arrow_links, T_fixed_root=T_fixed_root)
+        root = None if self.root_track is None else tracks[self.root_track]
+        root_pose = None if root is None else (root.translation, root.quat_xyzw)
+        at = link_positions(self.tree, translation, quat, self._arrow_links, root_pose=root_pose)
         origin = np.zeros((n, 3))
         child = np.stack([at[c] for c, _ in self._arrow_ends], axis=1)  # (n, k, 3)
         parent = np.stack([at[p] if p >= 0 else origin for _, p in self._arrow_ends], axis=1)

@@ -247,11 +247,13 @@ def test_link_positions_of_a_few_links_match_the_full_poses(tmp_path: Path) -> N
     tree = compile_tree(load_urdf(_write(tmp_path, random_urdf(30, seed=11, mimic_fraction=0.3))))
     q = _random_configs(tree, 20, seed=4)
     T_root = np.broadcast_to(np.eye(4), (20, 4, 4)).copy()
+    T_root[:, :3, :3] = [[0, -1, 0], [1, 0, 0], [0, 0, 1.0]]  # 90° about z, by hand: xyzw (0, 0, sin 45°, cos 45°)
     T_root[:, :3, 3] = [1.0, -2.0, 0.5]
     full = link_poses(tree, q, T_fixed_root=T_root)
     translation, quat = transforms_from_values(tree, moving_values(tree, q))
     links = [3, 17, 29, 0]
-    got = link_positions(tree, translation, quat, links, T_fixed_root=T_root)
+    root_pose = (np.tile([1.0, -2.0, 0.5], (20, 1)), np.tile([0, 0, math.sqrt(0.5), math.sqrt(0.5)], (20, 1)))
+    got = link_positions(tree, translation, quat, links, root_pose=root_pose)
     for link in links:
         assert np.allclose(got[link], full[:, link, :3, 3], atol=1e-12, equal_nan=True), link
     assert any(np.isnan(full[0, i, 0, 3]) for i in range(30))  # the tree has a floating joint: NaN subtrees

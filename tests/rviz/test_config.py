@@ -5,17 +5,19 @@ OrbitViewController::calculatePositionFromYawAndPitch; FixedOrientationOrthoView
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+import yaml
 from conftest import REPO, SHARED_REFERENCE, cli
 from rrd import blueprint_components
 
-from r2d2_viz.rviz.config import load_rviz, parse_rviz
-from r2d2_viz.viewer.layout.blueprint import generate_blueprint, tutorial_spec
+from r2d2_viz.rviz.config import load_rviz, parse_rviz, tutorial_spec
+from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 
 DATA = REPO / "tests" / "data" / "rviz"
 
@@ -57,6 +59,13 @@ def test_the_built_in_layout_is_the_tutorials_config(tmp_path: Path) -> None:
     assert sum("tool rviz_default_plugins/" in n for n in reference.notes) == 8
     assert sum("panel rviz_common/" in n for n in reference.notes) == 4
     assert any("Plane Cell Count 10" in n for n in reference.notes)
+
+
+def test_the_json_copy_the_app_reads_is_the_configs_yaml() -> None:
+    # assets/r2d2.rviz.json spares a plain run PyYAML's import: it must hold what PyYAML reads from r2d2.rviz
+    assert json.loads((REPO / "assets" / "r2d2.rviz.json").read_text()) == yaml.safe_load(
+        (REPO / "assets" / "r2d2.rviz").read_text()
+    )
 
 
 def test_the_shipped_config_is_the_tutorials_byte_for_byte() -> None:

@@ -15,13 +15,12 @@ import sys
 import uuid
 from collections.abc import Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 
 import rerun as rr
 import rerun.blueprint as rrb
 
-from r2d2_viz.rviz.config import default_rviz_path, load_rviz
+from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, ViewSpec
 from r2d2_viz.viewer.entities import APP_ID, JOINTS_CONTINUOUS, JOINTS_LIMITED, LIMITS, TF, TIMELINE, WARNINGS, path
 
@@ -46,12 +45,6 @@ class Layout:
     """False hides the TF arrows (robots with many frames)."""
     fixed_frame: str | None = None
     """The run's fixed frame, instead of the config's (a bag's TF root)."""
-
-
-@lru_cache(maxsize=1)
-def tutorial_spec() -> ViewSpec:
-    """The built-in layout's config: the tutorial's r2d2.rviz."""
-    return load_rviz(default_rviz_path())
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:

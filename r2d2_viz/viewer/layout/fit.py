@@ -13,7 +13,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from r2d2_viz.arrays import F64
-from r2d2_viz.kinematics.transforms import quat_to_matrix
 from r2d2_viz.kinematics.tree import KinematicTree, link_positions, moving_values, transforms_from_values
 from r2d2_viz.robot.model import Box, Cylinder, MeshFile, Sphere
 from r2d2_viz.sources.base import FrameTrack
@@ -61,12 +60,10 @@ def fit_view(tree: KinematicTree, q: F64, *, root: FrameTrack | None = None) -> 
     q = np.asarray(q, dtype=np.float64)
     q = q.reshape(len(q) if q.ndim == 2 else 1, len(tree.actuated))
     translation, quat = transforms_from_values(tree, moving_values(tree, q))
-    T_fixed_root = None
+    root_pose = None
     if root is not None:
-        T_fixed_root = np.zeros((len(q), 4, 4))
-        T_fixed_root[:, :3, :3] = quat_to_matrix(root.quat_xyzw)
-        T_fixed_root[:, :3, 3] = root.translation
-    at = link_positions(tree, translation, quat, range(len(tree.links)), T_fixed_root=T_fixed_root)
+        root_pose = (root.translation, root.quat_xyzw)
+    at = link_positions(tree, translation, quat, range(len(tree.links)), root_pose=root_pose)
     points = np.concatenate([p for p in at.values()])
     points = points[np.isfinite(points).all(axis=1)]
     if len(points) == 0:

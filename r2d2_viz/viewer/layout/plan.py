@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from r2d2_viz.rviz.config import load_rviz
+from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, ViewSpec, missing_fixed_frame, orbit_eye
 from r2d2_viz.sources.base import JointState, SampleChunk
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.replay import Replay
-from r2d2_viz.viewer.layout.blueprint import Layout, tutorial_spec
+from r2d2_viz.viewer.layout.blueprint import Layout
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, fit_view
 
 PREVIEW_SAMPLES = 3000
