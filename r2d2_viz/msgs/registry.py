@@ -5,6 +5,8 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable
 
+import numpy as np
+
 from r2d2_viz.errors import one_line
 from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
@@ -37,12 +39,14 @@ DECODERS: dict[str, Decoder] = {
 
 
 def decode(typename: str, data: bytes | memoryview, options: DecodeOptions | None = None) -> Decoded | list[MarkerOp]:
-    """Decode one message of ``typename``; unknown types and every failure raise ``MsgError``."""
+    """Decode one message of ``typename``; unknown types and every failure raise ``MsgError``. Hostile values
+    (huge doubles cast to float32 and the like) turn into inf / NaN silently: numpy prints nothing."""
     decoder = DECODERS.get(typename)
     if decoder is None:
         raise MsgError(f"no display for {typename}")
     try:
-        return decoder(data, options or DecodeOptions())
+        with np.errstate(all="ignore"):
+            return decoder(data, options or DecodeOptions())
     except ValueError:
         raise
     except (IndexError, KeyError, TypeError, OverflowError, AttributeError, struct.error) as exc:

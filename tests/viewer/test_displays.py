@@ -132,3 +132,59 @@ def test_marker_add_delete_deleteall_and_lifetime(tmp_path: Path) -> None:
     assert recording["/markers/_/9"].times == [5 * S]
     assert b1.temporal["Boxes3D:half_sizes"][0] == [[1, 1, 1]]
     assert book.live == {}
+
+
+def test_every_display_type_logs(tmp_path: Path) -> None:
+    """One message of every type: each lands with its natural archetype."""
+    from msgs_build import samples
+
+    stl = b"solid x\nendsolid x\n"
+
+    def body(rec: rr.RecordingStream) -> None:
+        for typename, data in samples().items():
+            entity = "/" + typename.split("/")[-1]
+            log_decoded(
+                rec,
+                entity,
+                decode(typename, data),
+                timeline="time",
+                time_ns=S,
+                markers=MarkerBook(),
+                load_mesh=lambda uri: (stl, "model/stl") if uri.endswith(".stl") else None,
+            )
+
+    recording = record(tmp_path, body)
+    components = {path: set(rows.temporal) for path, rows in recording.items()}
+    expected = {
+        "/LaserScan": "Points3D:positions",
+        "/Range": "LineStrips3D:strips",
+        "/PointCloud2": "Points3D:colors",
+        "/PointCloud": "Points3D:positions",
+        "/Image": "Image:buffer",
+        "/CompressedImage": "EncodedImage:blob",
+        "/CameraInfo": "Pinhole:image_from_camera",
+        "/Marker/ns/2": "Ellipsoids3D:half_sizes",
+        "/MarkerArray/ns/0": "Arrows3D:vectors",
+        "/MarkerArray/ns/1": "Boxes3D:half_sizes",
+        "/MarkerArray/ns/3": "Cylinders3D:lengths",
+        "/MarkerArray/ns/4": "LineStrips3D:strips",
+        "/MarkerArray/ns/9": "Points3D:labels",
+        "/MarkerArray/ns/10": "Asset3D:blob",
+        "/MarkerArray/ns/11": "Mesh3D:triangle_indices",
+        "/Path": "LineStrips3D:strips",
+        "/Odometry/0": "Arrows3D:vectors",
+        "/Odometry/1": "Ellipsoids3D:half_sizes",
+        "/OccupancyGrid": "Mesh3D:albedo_texture_buffer",
+        "/GridCells": "Boxes3D:centers",
+        "/PoseStamped": "Arrows3D:origins",
+        "/PoseArray": "Arrows3D:origins",
+        "/PoseWithCovarianceStamped/1": "Ellipsoids3D:centers",
+        "/PointStamped": "Ellipsoids3D:centers",
+        "/PolygonStamped": "LineStrips3D:strips",
+        "/WrenchStamped/1": "Arrows3D:vectors",
+        "/TwistStamped/0": "Arrows3D:vectors",
+    }
+    missing = {path: c for path, c in expected.items() if c not in components.get(path, set())}
+    assert not missing, {path: sorted(components.get(path, set())) for path in missing}
+    assert "CoordinateFrame:frame" not in components["/Image"]  # 2D: no frame
+    np.testing.assert_allclose(recording["/MarkerArray/ns/10"].temporal["InstancePoses3D:scales"][0], [[0.2] * 3])
