@@ -1,0 +1,210 @@
+"""Display data a decoder returns: rerun-free, frozen, numpy arrays in the message's frame.
+
+Colours are RGBA8 arrays ``(N, 4)`` (one per instance) or ``(1, 4)`` (one for all). Quaternions are ``xyzw``.
+``T_frame_item`` places a drawing inside the message frame (identity when its coordinates are already there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+F32 = npt.NDArray[np.float32]
+U8 = npt.NDArray[np.uint8]
+U32 = npt.NDArray[np.uint32]
+Rgba8 = tuple[int, int, int, int]
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A rigid transform: ``translation`` (m) and rotation quaternion ``xyzw``."""
+
+    translation: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    xyzw: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+
+
+IDENTITY = Pose()
+
+
+@dataclass(frozen=True, eq=False)
+class Points:
+    """Points ``positions (N, 3)`` of one ``radius`` (m)."""
+
+    positions: F32
+    colors: U8
+    radius: float
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True, eq=False)
+class LineStrips:
+    """Polylines, each ``(M_i, 3)``; ``colors`` per strip; ``radius`` of the line (m), 0 for a thin line."""
+
+    strips: tuple[F32, ...]
+    colors: U8
+    radius: float
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True, eq=False)
+class Arrows:
+    """Arrows from ``origins (N, 3)`` along ``vectors (N, 3)``; ``radius`` of the shaft (m)."""
+
+    origins: F32
+    vectors: F32
+    colors: U8
+    radius: float
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True, eq=False)
+class Boxes:
+    """Boxes: ``centers``, ``half_sizes`` and ``xyzw`` rotations, each one row per box."""
+
+    centers: F32
+    half_sizes: F32
+    xyzw: F32
+    colors: U8
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True, eq=False)
+class Ellipsoids:
+    """Ellipsoids (spheres, covariances): ``centers``, ``half_sizes`` and ``xyzw`` rotations, one row each."""
+
+    centers: F32
+    half_sizes: F32
+    xyzw: F32
+    colors: U8
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True, eq=False)
+class Cylinders:
+    """Cylinders along their local z: ``centers``, ``lengths``, ``radii``, ``xyzw`` rotations."""
+
+    centers: F32
+    lengths: F32
+    radii: F32
+    xyzw: F32
+    colors: U8
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True, eq=False)
+class TriangleMesh:
+    """Triangles ``indices (M, 3)`` into ``vertices (N, 3)``; ``colors`` per vertex ``(N, 4)`` or ``(1, 4)``."""
+
+    vertices: F32
+    indices: U32
+    colors: U8
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True)
+class Text:
+    """A label facing the viewer at ``position``, ``height`` m tall."""
+
+    text: str
+    position: tuple[float, float, float]
+    height: float
+    color: Rgba8
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True)
+class MeshResource:
+    """A mesh file by ``uri`` (``package://``, ``file://``), resolved elsewhere; ``color`` None keeps its own."""
+
+    uri: str
+    scale: tuple[float, float, float]
+    color: Rgba8 | None
+    T_frame_item: Pose = IDENTITY
+
+
+@dataclass(frozen=True, eq=False)
+class Image:
+    """A raw image: ``pixels`` ``(H, W)`` or ``(H, W, C)``, ``color_model`` L / RGB / RGBA / BGR / BGRA."""
+
+    pixels: npt.NDArray[np.generic]
+    color_model: Literal["L", "RGB", "RGBA", "BGR", "BGRA"]
+    encoding: str
+
+
+@dataclass(frozen=True)
+class CompressedImage:
+    """An encoded image: the file bytes and their media type (``image/jpeg``, ``image/png``)."""
+
+    data: bytes
+    media_type: str
+
+
+@dataclass(frozen=True, eq=False)
+class Pinhole:
+    """A camera model: intrinsics ``K`` (3x3, pixels) and image size; the frame is the optical frame (RDF)."""
+
+    K: npt.NDArray[np.float64]
+    width: int
+    height: int
+
+
+@dataclass(frozen=True, eq=False)
+class GridMap:
+    """A coloured grid: ``rgba (H, W, 4)`` where row 0 is y = 0, cells ``resolution`` m; ``T_frame_item`` is
+    the pose of cell (0, 0)'s corner."""
+
+    rgba: U8
+    resolution: float
+    T_frame_item: Pose = IDENTITY
+
+
+Shape = (
+    Points
+    | LineStrips
+    | Arrows
+    | Boxes
+    | Ellipsoids
+    | Cylinders
+    | TriangleMesh
+    | Text
+    | MeshResource
+    | Image
+    | CompressedImage
+    | Pinhole
+    | GridMap
+)
+
+
+@dataclass(frozen=True)
+class Decoded:
+    """One message's drawings in ``frame_id`` (no leading '/') at header time ``stamp_ns``."""
+
+    frame_id: str
+    stamp_ns: int
+    items: tuple[Shape, ...] = field(default_factory=tuple)
+
+
+@dataclass(frozen=True)
+class MarkerOp:
+    """One Marker's effect, keyed by ``(ns, id)``: ``add`` (ADD / MODIFY) draws ``decoded``, kept ``lifetime_ns``
+    (0 = forever); ``delete`` removes the key; ``deleteall`` removes every marker (of ``ns`` when it is set)."""
+
+    action: Literal["add", "delete", "deleteall"]
+    ns: str
+    id: int
+    decoded: Decoded | None = None
+    lifetime_ns: int = 0
+    frame_locked: bool = False
+
+
+@dataclass(frozen=True)
+class DecodeOptions:
+    """Display settings RViz offers per display (its defaults)."""
+
+    map_scheme: Literal["map", "costmap", "raw"] = "map"
+    point_radius: float = 0.005  # RViz's Size (m) 0.01 is a diameter
+    flat_color: Rgba8 = (255, 255, 255, 255)
+    covariance_scale: float = 1.0  # half sizes = scale x sqrt(eigenvalue): 1 sigma, RViz's default

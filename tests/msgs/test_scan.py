@@ -1,0 +1,95 @@
+"""LaserScan and Range decoding against hand-computed geometry and RViz's intensity colouring."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from msgs_build import T, cdr, header, rviz_intensity
+
+from r2d2_viz.msgs.registry import decode
+from r2d2_viz.msgs.scan import decode_laserscan, decode_range
+from r2d2_viz.msgs.shapes import DecodeOptions, LineStrips, Points
+from r2d2_viz.msgs.typestore import MsgError
+
+OPTIONS = DecodeOptions()
+
+
+def scan(ranges: list[float], intensities: list[float] | None = None, frame: str = "/base_laser") -> bytes:
+    msg = T("sensor_msgs/msg/LaserScan")(
+        header=header(frame, 7, 500_000_000),
+        angle_min=-math.pi / 2,
+        angle_max=math.pi / 2,
+        angle_increment=math.pi / 2,
+        time_increment=0.0,
+        scan_time=0.1,
+        range_min=0.5,
+        range_max=10.0,
+        ranges=np.array(ranges, dtype=np.float32),
+        intensities=np.array(intensities or [], dtype=np.float32),
+    )
+    return cdr(msg)
+
+
+def test_points_at_their_angles_with_nan_inf_and_out_of_range_dropped() -> None:
+    # beams at -90°, 0°, +90°, 180°, 270°: 1 m, NaN, 2 m, 0.2 m (< range_min), inf, then 11 m (> range_max), 3 m
+    decoded = decode_laserscan(scan([1.0, math.nan, 2.0, 0.2, math.inf, 11.0, 10.0]), OPTIONS)
+    assert decoded.frame_id == "base_laser"  # leading '/' dropped, as tf2 does
+    assert decoded.stamp_ns == 7_500_000_000
+    (points,) = decoded.items
+    assert isinstance(points, Points)
+    # by hand: beam 0 at -90° → (0, -1); beam 2 at +90° → (0, 2); beam 6 at -90° + 6·90° = 450° ≡ 90° → (0, 10)
+    np.testing.assert_allclose(points.positions, [[0, -1, 0], [0, 2, 0], [0, 10, 0]], atol=1e-5)  # float32 angles
+    assert points.colors.tolist() == [[255, 255, 255, 255]]  # no intensities: one flat colour
+
+
+def test_intensities_colour_the_kept_points_with_rvizs_rainbow() -> None:
+    decoded = decode_laserscan(scan([1.0, math.nan, 2.0, 3.0], [10.0, 999.0, 20.0, 40.0]), OPTIONS)
+    (points,) = decoded.items
+    assert isinstance(points, Points)
+    # the NaN beam is dropped before the bounds are computed (RViz projects the scan first): bounds 10..40
+    expected = rviz_intensity([10.0, 20.0, 40.0])
+    assert [tuple(c[:3]) for c in points.colors.tolist()] == expected
+    assert expected[0] == (255, 0, 0) and expected[-1] == (255, 0, 255)  # min red, max magenta
+    assert points.colors[:, 3].tolist() == [255, 255, 255]
+
+
+def test_all_invalid_is_empty_and_mismatched_intensities_refused() -> None:
+    (points,) = decode_laserscan(scan([math.nan, math.inf]), OPTIONS).items
+    assert isinstance(points, Points) and points.positions.shape == (0, 3)
+    with pytest.raises(MsgError, match="intensities"):
+        decode_laserscan(scan([1.0, 2.0], [1.0]), OPTIONS)
+
+
+@pytest.mark.parametrize("cut", [0, 3, 10, 40])
+def test_truncated_bytes_raise_value_error(cut: int) -> None:
+    data = scan([1.0, 2.0, 3.0])
+    with pytest.raises(ValueError):
+        decode("sensor_msgs/msg/LaserScan", data[:cut])
+
+
+def test_huge_claimed_array_does_not_allocate() -> None:
+    data = bytearray(scan([1.0]))
+    # the ranges length field sits right before the last 4+4+4 bytes (1 float range, empty intensities length)
+    data[-12:-8] = (0x7FFFFFFF).to_bytes(4, "little")
+    with pytest.raises(ValueError):
+        decode("sensor_msgs/msg/LaserScan", bytes(data))
+
+
+def test_range_is_a_cone_along_x() -> None:
+    msg = T("sensor_msgs/msg/Range")(
+        header=header("sonar"),
+        radiation_type=0,
+        field_of_view=math.pi / 2,
+        min_range=0.1,
+        max_range=4.0,
+        range=2.0,
+    )
+    (strips,) = decode_range(cdr(msg), OPTIONS).items
+    assert isinstance(strips, LineStrips)
+    circle, *sides = strips.strips
+    # fov 90°: the base circle at x = 2 has radius 2·tan(45°) = 2
+    np.testing.assert_allclose(circle[:, 0], 2.0)
+    np.testing.assert_allclose(np.hypot(circle[:, 1], circle[:, 2]), 2.0, rtol=1e-6)
+    assert len(sides) == 4 and all(np.allclose(s[0], 0.0) for s in sides)
