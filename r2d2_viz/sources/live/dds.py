@@ -31,6 +31,8 @@ from .names import LiveError, RosDiscovery, dds_topic, ros_topic, ros_type
 
 LATCHED_BY_NAME = frozenset({"/tf_static", "/robot_description", "/map", "/map_metadata", "/semantic_description"})
 """Topics taken as transient-local when no writer has been seen yet to tell."""
+READER_DEPTH = 256
+"""History of a volatile reader: the drain thread empties it within milliseconds, the queue holds the rest."""
 
 
 class Sample(NamedTuple):
@@ -124,7 +126,7 @@ class LiveGraph:
     def publications(self) -> list[Publication]:
         """The ROS 2 writers discovered so far (alive ones)."""
         found = []
-        for sample in self._publications.read(N=100_000, condition=self._alive):
+        for sample in self._publications.read(N=4096, condition=self._alive):
             if getattr(sample, "topic_name", None) is None:
                 continue
             pub = _publication(sample, self._dds)
@@ -157,7 +159,9 @@ class LiveGraph:
             )
         else:
             qos = self._dds["core"].Qos(
-                policy.Reliability.BestEffort, policy.Durability.Volatile, policy.History.KeepLast(self._queue)
+                policy.Reliability.BestEffort,
+                policy.Durability.Volatile,
+                policy.History.KeepLast(min(self._queue, READER_DEPTH)),
             )
         try:
             dds_topic_entity = self._dds["topic"].Topic(self._participant, name, self._types.struct(ros_type))
