@@ -1,0 +1,242 @@
+"""Join a live ROS 2 graph with Cyclone DDS and read any message type as the raw CDR bytes a bag would hold.
+
+Raw bytes: cyclonedds-python's sertype keeps every sample serialized (4-byte encapsulation header + body); its
+``DataReader.take`` deserialises them into Python objects, which we skip by calling the binding's own
+``ddspy_take`` (what ``take`` calls) and keeping the bytes. The topic type is still built from rosbags'
+definitions (:mod:`.idl_types`) because Cyclone validates incoming CDR against it.
+
+QoS per topic, from what its writers offer (the built-in DCPSPublication topic): when a writer is reliable and
+transient-local (``/tf_static``, ``/robot_description``, ``/map``) the reader is reliable + transient-local with a
+deep history, so the latched samples of several publishers all arrive; otherwise it is best-effort + volatile,
+which matches every writer, sensor-data ones included. Subscribe only: nothing is ever written.
+
+A drain thread moves samples from the readers into a bounded queue per topic (oldest dropped and counted);
+:meth:`LiveGraph.poll` never blocks.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import threading
+import time
+from collections import deque
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import ModuleType, TracebackType
+from typing import Any, NamedTuple
+
+from .idl_types import IdlTypes, typestore
+from .names import LiveError, RosDiscovery, dds_topic, ros_topic, ros_type
+
+LATCHED_BY_NAME = frozenset({"/tf_static", "/robot_description", "/map", "/map_metadata", "/semantic_description"})
+"""Topics taken as transient-local when no writer has been seen yet to tell."""
+READER_DEPTH = 256
+"""History of a volatile reader: the drain thread empties it within milliseconds, the queue holds the rest."""
+
+
+class Sample(NamedTuple):
+    """One received message: ROS topic, ROS type, the writer's source timestamp (ns), CDR bytes with header."""
+
+    topic: str
+    ros_type: str
+    source_timestamp_ns: int
+    data: bytes
+
+
+@dataclass(frozen=True)
+class Publication:
+    """One DDS writer of a ROS 2 topic, as discovery announced it."""
+
+    topic: str
+    ros_type: str
+    reliable: bool
+    transient_local: bool
+
+
+def cyclonedds_modules() -> dict[str, ModuleType]:
+    """cyclonedds' modules, imported on first use; LiveError naming ``pip install cyclonedds`` if missing."""
+    names = ("core", "domain", "topic", "sub", "builtin", "idl", "idl.types", "_clayer", "util")
+    try:
+        return {name: importlib.import_module(f"cyclonedds.{name}") for name in names}
+    except ImportError as exc:
+        raise LiveError(f"--ros needs Cyclone DDS for Python: pip install 'cyclonedds>=11,<12' ({exc})") from None
+
+
+def _publication(sample: Any, dds: Mapping[str, ModuleType]) -> Publication | None:
+    topic, rtype = ros_topic(sample.topic_name), ros_type(sample.type_name)
+    if topic is None or rtype is None:
+        return None
+    policy = dds["core"].Policy
+    qos = sample.qos
+    reliable = isinstance(qos[policy.Reliability], policy.Reliability.Reliable)
+    durability = qos[policy.Durability]
+    transient_local = durability is not None and durability != policy.Durability.Volatile
+    # (an absent policy is the default, volatile; transient and persistent writers also serve late joiners)
+    return Publication(topic, rtype, reliable, transient_local)
+
+
+class LiveGraph:
+    """A DDS participant on the ROS 2 graph of ``env`` (default: this process's environment).
+
+    ``queue`` bounds the samples kept per topic between two polls (older ones are dropped and counted in
+    :attr:`dropped`); ``latched_depth`` is the reader history of transient-local topics (one per publisher).
+    """
+
+    def __init__(
+        self,
+        env: Mapping[str, str] | None = None,
+        *,
+        distro: str = "jazzy",
+        queue: int = 2000,
+        latched_depth: int = 100,
+    ) -> None:
+        self._dds = cyclonedds_modules()
+        self.discovery = RosDiscovery.from_env(env)
+        config = self.discovery.cyclone_xml()
+        uri = (os.environ if env is None else env).get("CYCLONEDDS_URI", "")
+        if uri:
+            config += "," + uri
+        try:
+            self._domain = self._dds["domain"].Domain(self.discovery.domain_id, config)
+            self._participant = self._dds["domain"].DomainParticipant(self.discovery.domain_id)
+        except Exception as exc:
+            raise LiveError(f"cannot join ROS 2 domain {self.discovery.domain_id}: {exc}") from None
+        builtin = self._dds["builtin"]
+        self._publications = builtin.BuiltinDataReader(self._participant, builtin.BuiltinTopicDcpsPublication)
+        core = self._dds["core"]
+        self._alive = core.ReadCondition(
+            self._publications, core.SampleState.Any | core.ViewState.Any | core.InstanceState.Alive
+        )
+        self._types = IdlTypes(typestore(distro), self._dds["idl"])
+        self._queue = queue
+        self._latched_depth = latched_depth
+        self._readers: dict[str, tuple[str, Any]] = {}
+        self._queues: dict[str, deque[Sample]] = {}
+        self.dropped: dict[str, int] = {}
+        """Samples dropped per topic because the queue was full (oldest first)."""
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._waitset = core.WaitSet(self._participant)
+        self._wake = core.GuardCondition(self._participant)
+        self._waitset.attach(self._wake)
+        self._thread = threading.Thread(target=self._drain_loop, name="r2d2-viz-dds", daemon=True)
+        self._thread.start()
+
+    def publications(self) -> list[Publication]:
+        """The ROS 2 writers discovered so far (alive ones)."""
+        found = []
+        for sample in self._publications.read(N=4096, condition=self._alive):
+            if getattr(sample, "topic_name", None) is None:
+                continue
+            pub = _publication(sample, self._dds)
+            if pub is not None:
+                found.append(pub)
+        return found
+
+    def topics(self, timeout: float = 2.0) -> list[tuple[str, str, int]]:
+        """``(topic, type, publisher count)`` by topic, after ``timeout`` s of discovery (``ros2 topic list -t``)."""
+        time.sleep(max(0.0, timeout))
+        counts: dict[tuple[str, str], int] = {}
+        for pub in self.publications():
+            counts[(pub.topic, pub.ros_type)] = counts.get((pub.topic, pub.ros_type), 0) + 1
+        return sorted((topic, rtype, n) for (topic, rtype), n in counts.items())
+
+    def subscribe(self, topic: str, ros_type: str, *, wait: float = 1.0) -> Publication:
+        """Read ``topic`` (``pkg/msg/T``); waits up to ``wait`` s for a writer to learn its QoS. Returns the
+        reader's choice as a :class:`Publication` (``reliable`` / ``transient_local`` of the reader)."""
+        name = dds_topic(topic)
+        if topic in self._readers:
+            raise LiveError(f"{topic} is already subscribed")
+        writers = self._writers_of(topic, wait)
+        durable = any(w.reliable and w.transient_local for w in writers) if writers else topic in LATCHED_BY_NAME
+        policy = self._dds["core"].Policy
+        if durable:
+            qos = self._dds["core"].Qos(
+                policy.Reliability.Reliable(max_blocking_time=0),
+                policy.Durability.TransientLocal,
+                policy.History.KeepLast(self._latched_depth),
+            )
+        else:
+            qos = self._dds["core"].Qos(
+                policy.Reliability.BestEffort,
+                policy.Durability.Volatile,
+                policy.History.KeepLast(min(self._queue, READER_DEPTH)),
+            )
+        try:
+            dds_topic_entity = self._dds["topic"].Topic(self._participant, name, self._types.struct(ros_type))
+            reader = self._dds["sub"].DataReader(self._participant, dds_topic_entity, qos=qos)
+        except LiveError:
+            raise
+        except Exception as exc:
+            raise LiveError(f"cannot subscribe to {topic} ({ros_type}): {exc}") from None
+        core = self._dds["core"]
+        condition = core.ReadCondition(reader, core.SampleState.NotRead | core.ViewState.Any | core.InstanceState.Any)
+        with self._lock:
+            self._readers[topic] = (ros_type, reader)
+            self._queues[topic] = deque(maxlen=self._queue if not durable else max(self._queue, self._latched_depth))
+            self.dropped[topic] = 0
+        self._waitset.attach(condition)
+        self._wake.set(True)
+        return Publication(topic, ros_type, durable, durable)
+
+    def poll(self) -> list[Sample]:
+        """Every sample received since the last poll, oldest first per topic; never blocks."""
+        with self._lock:
+            out: list[Sample] = []
+            for q in self._queues.values():
+                out.extend(q)
+                q.clear()
+            return out
+
+    def close(self) -> None:
+        """Stop the drain thread and leave the domain."""
+        if self._stop.is_set():
+            return
+        self._stop.set()
+        self._wake.set(True)
+        self._thread.join(timeout=5)
+        self._participant = None
+        self._domain = None
+
+    def __enter__(self) -> LiveGraph:
+        return self
+
+    def __exit__(self, *exc: object | TracebackType) -> None:
+        self.close()
+
+    def _writers_of(self, topic: str, wait: float) -> list[Publication]:
+        deadline = time.monotonic() + max(0.0, wait)
+        while True:
+            writers = [p for p in self.publications() if p.topic == topic]
+            if writers or time.monotonic() >= deadline:
+                return writers
+            time.sleep(0.02)
+
+    def _drain_loop(self) -> None:
+        take = self._dds["_clayer"].ddspy_take
+        core = self._dds["core"]
+        mask = core.SampleState.Any | core.ViewState.Any | core.InstanceState.Any
+        while not self._stop.is_set():
+            self._waitset.wait(200_000_000)
+            self._wake.set(False)
+            with self._lock:
+                readers = list(self._readers.items())
+            for topic, (rtype, reader) in readers:
+                got = take(reader._ref, mask, 1024)
+                if isinstance(got, int) or not got:
+                    continue
+                samples = [Sample(topic, rtype, info.source_timestamp, data) for data, info in got if info.valid_data]
+                with self._lock:
+                    q = self._queues[topic]
+                    overflow = len(q) + len(samples) - (q.maxlen or 0)
+                    if overflow > 0:
+                        self.dropped[topic] += overflow
+                    q.extend(samples)
+            time.sleep(0.001)
+
+
+def list_topics(timeout: float = 2.0, env: Mapping[str, str] | None = None) -> list[tuple[str, str, int]]:
+    """``(topic, type, publisher count)`` of the ROS 2 graph, like ``ros2 topic list -t`` (``--ros --list``)."""
+    with LiveGraph(env) as graph:
+        return graph.topics(timeout)

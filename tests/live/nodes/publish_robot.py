@@ -1,0 +1,80 @@
+"""A real ROS 2 node (rclpy, run by the cached venv's Python): a latched ``/robot_description`` and ``/joint_states``.
+
+Publishes the URDF's text once on a transient-local ``/robot_description`` (std_msgs/String) right away, waits
+for a subscriber of ``/joint_states`` (up to ``--wait`` s), then publishes ``--count`` JointStates at ``--rate``
+Hz, message *k* being :func:`joint_state_values` of *k* (so a reader can rebuild what was sent), lingers
+``--linger`` s and exits. Prints one JSON line: what it sent and when the stream started.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import xml.etree.ElementTree as ET
+
+
+def joint_names(urdf: str, joints: int) -> list[str]:
+    """The URDF's movable joints, padded with ``extra_<i>`` (or cut) to ``joints`` when given."""
+    names = [j.get("name", "") for j in ET.fromstring(urdf).iter("joint") if j.get("type") != "fixed"]
+    if joints > 0:
+        names = (names + [f"extra_{i}" for i in range(joints)])[:joints]
+    return names
+
+
+def joint_state_values(k: int, count: int) -> tuple[int, int, list[float], list[float]]:
+    """Message ``k``: header stamp (sec, nanosec), positions and velocities of ``count`` joints."""
+    return 1000 + k // 1000, (k % 1000) * 1_000_000, [0.001 * k + i for i in range(count)], [float(k)] * count
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--urdf", required=True)
+    parser.add_argument("--rate", type=float, default=100.0)
+    parser.add_argument("--count", type=int, default=100)
+    parser.add_argument("--joints", type=int, default=0)
+    parser.add_argument("--wait", type=float, default=20.0)
+    parser.add_argument("--linger", type=float, default=2.0)
+    args = parser.parse_args()
+
+    import rclpy
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+
+    urdf = open(args.urdf, encoding="utf-8").read()
+    names = joint_names(urdf, args.joints)
+    rclpy.init()
+    node = rclpy.create_node("r2d2_viz_test_robot")
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
+    description = node.create_publisher(String, "/robot_description", latched)
+    states = node.create_publisher(JointState, "/joint_states", 10)
+    description.publish(String(data=urdf))
+    deadline = time.monotonic() + args.wait
+    while states.get_subscription_count() == 0 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    matched = states.get_subscription_count() > 0
+    time.sleep(0.2)  # the reader's side of the match settles too
+    msg = JointState()
+    msg.name = names
+    msg.header.frame_id = "base"
+    start = time.perf_counter()
+    for k in range(args.count):
+        sec, nanosec, position, velocity = joint_state_values(k, len(names))
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        msg.position, msg.velocity = position, velocity
+        states.publish(msg)
+        delay = start + (k + 1) / args.rate - time.perf_counter()
+        if delay > 0:
+            time.sleep(delay)
+    elapsed = time.perf_counter() - start
+    print(json.dumps({"sent": args.count, "joints": names, "matched": matched, "seconds": elapsed}), flush=True)
+    time.sleep(args.linger)
+    node.destroy_node()
+    rclpy.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
