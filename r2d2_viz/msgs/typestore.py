@@ -1,14 +1,15 @@
-"""The ROS 2 Humble typestore, and CDR deserialisation that fails only with ``MsgError``."""
+"""The one place message definitions come from — rosbags' typestores (Humble for bags and decoding, a live graph's
+distro for its DDS types) — and CDR deserialisation that fails only with ``MsgError``."""
 
 from __future__ import annotations
 
 import functools
-from typing import Any
-
-from rosbags.typesys import Stores, get_typestore
-from rosbags.typesys.store import Typestore
+from typing import TYPE_CHECKING, Any
 
 from r2d2_viz.errors import one_line
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 MAX_MESSAGE_BYTES = 1 << 30
 
@@ -17,10 +18,17 @@ class MsgError(ValueError):
     """A message that cannot be decoded: bad bytes, inconsistent sizes, unknown encoding."""
 
 
+DISTROS = {"humble": "ROS2_HUMBLE", "jazzy": "ROS2_JAZZY", "kilted": "ROS2_KILTED"}
+
+
 @functools.cache
-def typestore() -> Typestore:
-    """rosbags' typestore of ROS 2 Humble (built once)."""
-    return get_typestore(Stores.ROS2_HUMBLE)
+def typestore(distro: str = "humble") -> Typestore:
+    """rosbags' typestore of a ROS 2 distro (built once each; rosbags is imported on first use)."""
+    from rosbags.typesys import Stores, get_typestore
+
+    if distro not in DISTROS:
+        raise MsgError(f"unknown ROS 2 distro {distro!r} (known: {', '.join(DISTROS)})")
+    return get_typestore(getattr(Stores, DISTROS[distro]))
 
 
 def deserialize(data: bytes | memoryview, typename: str) -> Any:

@@ -29,7 +29,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from r2d2_viz.arrays import F64
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.layouts import joint_state_layout, tf_layout
-from r2d2_viz.sources.bag import typestore
+from r2d2_viz.msgs.typestore import typestore
 from r2d2_viz.sources.base import Clock
 
 JOINT_STATE = "sensor_msgs/msg/JointState"

@@ -16,7 +16,6 @@ import re
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from functools import cache
 from itertools import islice
 from pathlib import Path
 from types import TracebackType
@@ -24,9 +23,9 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # rosbags and ruamel.yaml are imported when a bag is opened: not on a run without one
     from rosbags.rosbag2 import Reader
-    from rosbags.typesys.store import Typestore
 
 from r2d2_viz.errors import BagError
+from r2d2_viz.msgs.typestore import typestore
 from r2d2_viz.sources.mcap_scan import McapScan
 
 Warn = Callable[[str], None]
@@ -34,13 +33,6 @@ Warn = Callable[[str], None]
 
 def to_stderr(message: str) -> None:
     print(f"warning: {message}", file=sys.stderr, flush=True)
-
-
-@cache
-def typestore() -> Typestore:
-    from rosbags.typesys import Stores, get_typestore
-
-    return get_typestore(Stores.ROS2_HUMBLE)
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,9 @@
 """Join a live ROS 2 graph with Cyclone DDS and read any message type as the raw CDR bytes a bag would hold.
 
-Raw bytes: cyclonedds-python's sertype keeps every sample serialized (4-byte encapsulation header + body); its
-``DataReader.take`` deserialises them into Python objects, which we skip by calling the binding's own
-``ddspy_take`` (what ``take`` calls) and keeping the bytes. The topic type is still built from rosbags'
-definitions (:mod:`.idl_types`) because Cyclone validates incoming CDR against it.
+Raw bytes: cyclonedds-python's sertype keeps every sample serialized (4-byte encapsulation header + body), and
+its public ``DataReader.take`` hands each to the topic type's ``deserialize`` classmethod — which the types of
+:meth:`~r2d2_viz.sources.live.idl_types.IdlTypes.raw_struct` define to keep the bytes. The topic type is still
+built from rosbags' definitions because Cyclone validates incoming CDR against it.
 
 QoS per topic, from what its writers offer (the built-in DCPSPublication topic): when a writer is reliable and
 transient-local (``/tf_static``, ``/robot_description``, ``/map``) the reader is reliable + transient-local with a
@@ -26,8 +26,9 @@ from dataclasses import dataclass
 from types import ModuleType, TracebackType
 from typing import Any, NamedTuple
 
-from .idl_types import IdlTypes, typestore
-from .names import LiveError, RosDiscovery, dds_topic, ros_topic, ros_type
+from r2d2_viz.msgs.typestore import MsgError, typestore
+from r2d2_viz.sources.live.idl_types import IdlTypes, RawSample
+from r2d2_viz.sources.live.names import LiveError, RosDiscovery, dds_topic, ros_topic, ros_type
 
 LATCHED_BY_NAME = frozenset({"/tf_static", "/robot_description", "/map", "/map_metadata", "/semantic_description"})
 """Topics taken as transient-local when no writer has been seen yet to tell."""
@@ -56,7 +57,7 @@ class Publication:
 
 def cyclonedds_modules() -> dict[str, ModuleType]:
     """cyclonedds' modules, imported on first use; LiveError naming ``pip install cyclonedds`` if missing."""
-    names = ("core", "domain", "topic", "sub", "builtin", "idl", "idl.types", "_clayer", "util")
+    names = ("core", "domain", "topic", "sub", "builtin", "idl", "idl.types", "util")
     try:
         return {name: importlib.import_module(f"cyclonedds.{name}") for name in names}
     except ImportError as exc:
@@ -108,7 +109,10 @@ class LiveGraph:
         self._alive = core.ReadCondition(
             self._publications, core.SampleState.Any | core.ViewState.Any | core.InstanceState.Alive
         )
-        self._types = IdlTypes(typestore(distro), self._dds["idl"])
+        try:
+            self._types = IdlTypes(typestore(distro), self._dds["idl"])
+        except MsgError as exc:
+            raise LiveError(str(exc)) from None
         self._queue = queue
         self._latched_depth = latched_depth
         self._readers: dict[str, tuple[str, Any]] = {}
@@ -164,7 +168,8 @@ class LiveGraph:
                 policy.History.KeepLast(min(self._queue, READER_DEPTH)),
             )
         try:
-            dds_topic_entity = self._dds["topic"].Topic(self._participant, name, self._types.struct(ros_type))
+            raw_type = self._types.raw_struct(ros_type)
+            dds_topic_entity = self._dds["topic"].Topic(self._participant, name, raw_type)
             reader = self._dds["sub"].DataReader(self._participant, dds_topic_entity, qos=qos)
         except LiveError:
             raise
@@ -214,19 +219,20 @@ class LiveGraph:
             time.sleep(0.02)
 
     def _drain_loop(self) -> None:
-        take = self._dds["_clayer"].ddspy_take
-        core = self._dds["core"]
-        mask = core.SampleState.Any | core.ViewState.Any | core.InstanceState.Any
         while not self._stop.is_set():
             self._waitset.wait(200_000_000)
             self._wake.set(False)
             with self._lock:
                 readers = list(self._readers.items())
             for topic, (rtype, reader) in readers:
-                got = take(reader._ref, mask, 1024)
-                if isinstance(got, int) or not got:
+                got = reader.take(1024)  # RawSample each (IdlTypes.raw_struct), or InvalidSample for a disposal
+                samples = [
+                    Sample(topic, rtype, s.sample_info.source_timestamp, s.data)
+                    for s in got
+                    if isinstance(s, RawSample)
+                ]
+                if not samples:
                     continue
-                samples = [Sample(topic, rtype, info.source_timestamp, data) for data, info in got if info.valid_data]
                 with self._lock:
                     q = self._queues[topic]
                     overflow = len(q) + len(samples) - (q.maxlen or 0)

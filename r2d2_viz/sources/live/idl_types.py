@@ -11,20 +11,23 @@ from __future__ import annotations
 from typing import Any
 
 from rosbags.interfaces import Nodetype
-from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
-from .names import LiveError, dds_type
-
-_STORES = {"jazzy": Stores.ROS2_JAZZY, "humble": Stores.ROS2_HUMBLE, "kilted": Stores.ROS2_KILTED}
+from r2d2_viz.sources.live.names import LiveError, dds_type
 
 
-def typestore(distro: str = "jazzy") -> Typestore:
-    """rosbags' message definitions of a ROS 2 distro (``jazzy``, ``humble`` or ``kilted``)."""
-    try:
-        return get_typestore(_STORES[distro])
-    except KeyError:
-        raise LiveError(f"unknown ROS 2 distro {distro!r} (known: {', '.join(_STORES)})") from None
+class RawSample:
+    """A sample as it came off the wire (encapsulation header + CDR body); cyclonedds sets ``sample_info``."""
+
+    __slots__ = ("data", "sample_info")
+
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+        self.sample_info: Any = None
+
+
+def _keep_bytes(cls: Any, data: bytes, has_header: bool = True, use_version_2: bool | None = None) -> RawSample:
+    return RawSample(data)
 
 
 class IdlTypes:
@@ -55,15 +58,24 @@ class IdlTypes:
     def struct(self, ros_type: str) -> Any:
         """The ``IdlStruct`` subclass for ``ros_type`` (``pkg/msg/T``); LiveError if rosbags does not know it."""
         found = self._structs.get(ros_type)
-        if found is not None:
-            return found
+        if found is None:
+            found = self._structs[ros_type] = self._make(ros_type)
+        return found
+
+    def raw_struct(self, ros_type: str) -> Any:
+        """The same DDS type for a topic, but read raw: its ``deserialize`` (the classmethod ``DataReader.take``
+        calls on each sample) keeps the bytes in a :class:`RawSample` — Cyclone still checks every sample
+        against the real type, and no Python message is ever built."""
+        raw = self._make(ros_type)
+        raw.deserialize = classmethod(_keep_bytes)
+        return raw
+
+    def _make(self, ros_type: str) -> Any:
         if ros_type not in self._store.fielddefs:
             raise LiveError(f"message type {ros_type} is not known (rosbags' definitions of this ROS 2 distro)")
         fields = {name: self._field(desc) for name, desc in self._store.fielddefs[ros_type][1]}
         name = dds_type(ros_type)
-        made = self._idl.make_idl_struct(name.rsplit("::", 1)[-1], name, fields)
-        self._structs[ros_type] = made
-        return made
+        return self._idl.make_idl_struct(name.rsplit("::", 1)[-1], name, fields)
 
     def _field(self, desc: tuple[Any, Any]) -> Any:
         kind, rest = desc

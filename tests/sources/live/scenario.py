@@ -21,8 +21,8 @@ sys.path.insert(0, str(NODES))
 from publish_robot import joint_state_values  # noqa: E402
 from tf_peer import tf_message  # noqa: E402
 
+from r2d2_viz.msgs.typestore import typestore  # noqa: E402
 from r2d2_viz.sources.live.dds import LiveGraph, Sample  # noqa: E402
-from r2d2_viz.sources.live.idl_types import typestore  # noqa: E402
 
 
 def _percentile(values: list[float], q: float) -> float | None:

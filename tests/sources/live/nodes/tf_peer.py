@@ -42,7 +42,8 @@ def main() -> int:
     from cyclonedds.pub import DataWriter
     from cyclonedds.topic import Topic
 
-    from r2d2_viz.sources.live.idl_types import IdlTypes, typestore
+    from r2d2_viz.msgs.typestore import typestore
+    from r2d2_viz.sources.live.idl_types import IdlTypes
 
     types = IdlTypes(typestore("jazzy"), cyclonedds.idl)
     participant = DomainParticipant(0)
