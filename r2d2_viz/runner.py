@@ -9,26 +9,24 @@ from __future__ import annotations
 import math
 import os
 import sys
-import threading
-import time
 from collections.abc import Callable
-from contextlib import ExitStack, nullcontext
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from r2d2_viz.errors import UsageError
 from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.pacing import Feeds, paced
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
-from r2d2_viz.signals import signals_set, sigterm_raises
+from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.sources.bag import open_bag
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.base import Source
 from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.replay import Replay, open_replay
+from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import plan_view
 from r2d2_viz.viewer.notices import Notices
@@ -45,9 +43,6 @@ LIVE_BLOCK_SECONDS = 5.0
 send each sample when it is due; the sinks are waited for once a block (backpressure)…"""
 LIVE_BLOCK_SAMPLES = 1000
 """…and a block has at most this many samples, so at high rates computing one makes only a sample or two late."""
-PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
-"""Benchmark hook: if set to a path, live runs write one line per sample, ``sample lateness_seconds``
-(when its send returned, minus when it was due). Off by default; costs nothing when unset."""
 LAP_SAMPLES = 1440
 """One lap of the tutorial's odom circle: 360° / (¼° per sample) — 48 s at the default 30 Hz."""
 
@@ -180,16 +175,28 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
             recorded = RecordedTf(rec, clock=clock, skip=plan.skip_edges, axis_length=view.axis_length)
             if plan.static_tf is not None:
                 recorded.log(plan.static_tf)
-            feed = TfFeed(recorded, plan.moving_tf)
+            displays = None
+            if plan.display_messages is not None:
+                displays = DisplayFeed(
+                    notices,
+                    plan.display_messages(),
+                    clock=clock,
+                    fixed_frame=plan.fixed_frame,
+                    header_time=config.time == "header",
+                    styles=view.display_styles,
+                    source_name=str(config.bag),
+                )
+            feeds = Feeds(TfFeed(recorded, plan.moving_tf), displays)
             if streamer is not None:
                 streamer.log_static()
             if config.live:
-                samples, interrupted = _paced(streamer, source, feed, block=_live_block(config), speed=config.speed)
+                samples, interrupted = paced(streamer, source, feeds, block=_live_block(config), speed=config.speed)
             else:
                 with sigterm_raises():
-                    samples = _batch(streamer, source, feed, rec.flush, n_moving=len(tree.moving) if tree else 0)
-                    if plan.mcap_files:
-                        _other_topics(plan, config, notices)
+                    samples = _batch(streamer, source, feeds, rec.flush, n_moving=len(tree.moving) if tree else 0)
+            _other_topics(plan, config, notices)
+            if displays is not None:
+                displays.finish()
             if streamer is not None:
                 streamer.finish()
         finally:
@@ -204,7 +211,7 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
 
 
 def _batch(
-    streamer: RobotStream | None, source: Source | None, feed: TfFeed, flush: Callable[[], None], *, n_moving: int
+    streamer: RobotStream | None, source: Source | None, feed: Feeds, flush: Callable[[], None], *, n_moving: int
 ) -> int:
     """Every sample as fast as the sinks take them, one chunk in flight (memory stays flat)."""
     samples = 0
@@ -218,16 +225,22 @@ def _batch(
                 feed.until(int(chunk.times_ns[-1]))
             samples += len(chunk)
     feed.until(None)
-    return samples or feed.recorded.rows
+    return samples or feed.sent
 
 
 def _other_topics(plan: Replay, config: RunConfig, notices: Notices) -> None:
-    """What Rerun's own MCAP decoders show of the bag's other topics (batch runs; .mcap storage only)."""
-    from r2d2_viz.viewer.bag_topics import log_other_topics
+    """The bag's topics no display of ours draws: what Rerun's own MCAP decoders show of them (batch runs, .mcap
+    storage), and one line naming the rest."""
+    skipped = dict(plan.undisplayed)
+    if plan.mcap_files and skipped and not config.live:
+        from r2d2_viz.viewer.bag_topics import OURS, log_other_topics
 
-    result = log_other_topics(notices.rec, plan.mcap_files, time=config.time)
-    if result.skipped:
-        notices.report(f"{config.bag}: {result.summary()}")
+        result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=(*OURS, *plan.displays))
+        for topic in result.logged:
+            skipped.pop(topic, None)
+    if skipped:
+        listed = ", ".join(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
+        notices.report(f"{config.bag}: topics with no display, not shown: {listed}")
 
 
 def _live_block(config: RunConfig) -> int:
@@ -259,78 +272,6 @@ def _temp_path(save: Path) -> Path:
 def batch_chunk_samples(n_moving: int) -> int:
     """Samples per chunk of a batch run for a robot with ``n_moving`` moving joints."""
     return max(1, min(BATCH_CHUNK_SAMPLES, BATCH_CHUNK_CELLS // max(1, n_moving)))
-
-
-def _paced(
-    streamer: RobotStream | None, source: Source | None, feed: TfFeed, *, block: int, speed: float = 1.0
-) -> tuple[int, bool]:
-    """Send each sample at ``start + (t - t₀) / speed`` of the wall clock (an absolute schedule: no drift;
-    ``start`` is when the first block is ready, ``t₀`` the first sample's time) until done or signalled.
-
-    Samples are computed ``block`` at a time (:meth:`RobotStream.prepare`); each is sent on its own when due,
-    after the recorded transforms up to its time. If the process falls behind, every sample already due goes
-    out in one send, so a late sample does not push the next ones later.
-    """
-    if streamer is None or source is None:
-        return _paced_tf(feed, speed=speed)
-    stop = threading.Event()
-    sent = 0
-    log_path = os.environ.get(PACING_LOG_ENV)
-    with signals_set(stop), open(log_path, "w") if log_path else nullcontext() as log:
-        start = math.nan
-        t0 = 0
-        for chunk in source.chunks(block):
-            prepared = streamer.prepare(chunk)
-            n = len(chunk)
-            if n == 0:
-                continue
-            if math.isnan(start):  # the schedule starts when the first sample is ready to go
-                start, t0 = time.monotonic(), int(chunk.times_ns[0])
-            due = start + (chunk.times_ns - t0) * (1e-9 / speed)
-            i = 0
-            while i < n:
-                delay = due[i] - time.monotonic()
-                if delay > 0:  # at most one sample period: a signal's handler sets `stop`, seen right after
-                    time.sleep(delay)
-                if stop.is_set():
-                    break
-                j = i + 1 + int(np.searchsorted(due[i + 1 :], time.monotonic(), side="right"))
-                feed.until(int(chunk.times_ns[j - 1]))
-                streamer.send(prepared, i, j)
-                if log is not None:
-                    now = time.monotonic()
-                    log.writelines(f"{sent + k - i} {now - due[k]:.6f}\n" for k in range(i, j))
-                sent += j - i
-                i = j
-            if i < n:
-                break
-            # Backpressure, once a block (five seconds): wait until the sinks have taken what was sent, so a
-            # sink slower than the sample rate makes samples late instead of piling them up in memory.
-            streamer.rec.flush()
-        if not stop.is_set():
-            feed.until(None)
-    return sent, stop.is_set()
-
-
-def _paced_tf(feed: TfFeed, *, speed: float) -> tuple[int, bool]:
-    """A TF-only replay: the recorded transforms, each at its time on the wall clock."""
-    stop = threading.Event()
-    times = feed.times_ns
-    with signals_set(stop):
-        if len(times) == 0:
-            return 0, False
-        start = time.monotonic()
-        due = start + (times - times[0]) * (1e-9 / speed)
-        i = 0
-        while i < len(times) and not stop.is_set():
-            delay = due[i] - time.monotonic()
-            if delay > 0:
-                time.sleep(min(delay, 0.1))
-                continue
-            j = int(np.searchsorted(due, time.monotonic(), side="right"))
-            feed.until(int(times[j - 1]))
-            i = j
-    return i, stop.is_set()
 
 
 def print_summary(result: RunResult, config: RunConfig) -> None:

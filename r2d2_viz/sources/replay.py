@@ -5,7 +5,7 @@ TF-only replay), its ``/joint_states`` as a source, its ``/tf`` and ``/tf_static
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -15,6 +15,7 @@ from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.sources.bag import Bag
+from r2d2_viz.sources.bag_displays import TopicMessage, bag_messages, display_frames, display_topics
 from r2d2_viz.sources.bag_joints import BagSource, TimeSource, read_robot_description
 from r2d2_viz.sources.bag_tf import read_tf
 from r2d2_viz.sources.base import JointState, Source, TfRecords, tf_root
@@ -36,9 +37,15 @@ class Replay:
     """Recorded edges the URDF defines: drawn by the kinematics instead."""
     notes: list[str] = field(default_factory=list)
     mcap_files: list[Path] = field(default_factory=list)
+    """The bag's MCAP storage files, for the topics Rerun's own decoders show."""
     description: str | None = None
     """The URDF text from the bag's /robot_description, when that is where the robot came from."""
-    """The bag's MCAP storage files, for the topics Rerun's own decoders show."""
+    displays: dict[str, str] = field(default_factory=dict)
+    """Display topics (topic → type): scans, clouds, markers, maps… (:mod:`r2d2_viz.sources.bag_displays`)."""
+    undisplayed: dict[str, str] = field(default_factory=dict)
+    """The bag's other topics: no display draws their types."""
+    display_messages: Callable[[], Iterator[TopicMessage]] | None = None
+    """A fresh stream of the display topics' messages, in receive-time order."""
 
     @property
     def root_placed(self) -> bool:
@@ -74,8 +81,12 @@ def open_replay(
     if robot is None:
         notes.append(f"{bag.path}: no --urdf and no /robot_description: a TF-only replay (frames, axes, arrows)")
     tree = compile_tree(robot) if robot is not None else None
-    frame = fixed_frame or tf_root(records) or ODOM
+    shown, undisplayed = display_topics(bag)
+    frame = fixed_frame or tf_root(records) or _one_display_frame(bag, shown, records, robot) or ODOM
     replay = Replay(tree, None, static_tf, moving_tf, frame, notes=notes, description=text)
+    replay.displays, replay.undisplayed = shown, undisplayed
+    if shown:
+        replay.display_messages = lambda: bag_messages(bag, shown)
     if tree is not None:
         replay.skip_edges = {e for r in records for e in r.edges() if e in urdf_edges(tree)}
         source = BagSource(bag, tree.actuated, time=time)
@@ -84,6 +95,15 @@ def open_replay(
         if message:
             replay.notes.append(f"{bag.path}: {message}")
     return replay
+
+
+def _one_display_frame(bag: Bag, shown: dict[str, str], records: list[TfRecords], robot: Robot | None) -> str | None:
+    """A bag without TF and without a robot whose displays are all in one frame opens in that frame (in ``odom``,
+    where nothing of it could be placed, it would show nothing)."""
+    if records or robot is not None or not shown:
+        return None
+    frames = display_frames(bag, shown)
+    return frames.pop() if len(frames) == 1 else None
 
 
 def _check(tree: KinematicTree, source: BagSource, records: list[TfRecords]) -> str | None:

@@ -138,6 +138,16 @@ class TfFeed:
     def times_ns(self) -> np.ndarray:
         return self._records.times_ns if self._records is not None else np.zeros(0, dtype=np.int64)
 
+    @property
+    def next_time_ns(self) -> int | None:
+        """The time of the next record not logged yet (None: none left)."""
+        r = self._records
+        return int(r.times_ns[self._next]) if r is not None and self._next < len(r) else None
+
+    @property
+    def logged(self) -> int:
+        return self._next if self._records is not None else 0
+
     def until(self, time_ns: int | None = None) -> None:
         """Log the records up to ``time_ns`` (inclusive; all of them when None) not logged yet."""
         r = self._records

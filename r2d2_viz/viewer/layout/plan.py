@@ -4,7 +4,7 @@ once, before anything is logged."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +14,7 @@ from r2d2_viz.rviz.spec import Camera, ViewSpec, missing_fixed_frame, orbit_eye
 from r2d2_viz.sources.base import JointState, SampleChunk
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.replay import Replay
+from r2d2_viz.viewer.display_feed import DisplayStyle
 from r2d2_viz.viewer.layout.blueprint import Layout
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, fit_view
 
@@ -29,6 +30,8 @@ class ViewPlan:
     show_names: bool
     notes: tuple[str, ...]
     """Lines for the user: what the config has no counterpart for, a fixed frame that does not exist."""
+    display_styles: dict[str, DisplayStyle] = field(default_factory=dict)
+    """Display topic → how the config's display draws it (absent: RViz's defaults)."""
 
 
 def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> ViewPlan:

@@ -1,0 +1,150 @@
+"""Live runs paced to the wall clock: robot samples, recorded transforms and display messages, each sent when due.
+
+An absolute schedule, ``start + (t − t₀) / speed`` (no drift; ``start`` is when the first sample is ready, ``t₀``
+its time); what falls behind goes out at once, so a late sample does not push the next ones later. Between two
+robot samples the recorded transforms and display messages due in between go out at their own times, and after
+the robot's last sample the rest keep the same schedule.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+import time
+from contextlib import nullcontext
+from dataclasses import dataclass
+from typing import TextIO
+
+import numpy as np
+
+from r2d2_viz.signals import signals_set
+from r2d2_viz.sources.base import Source
+from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.tf_recorded import TfFeed
+
+PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
+"""Benchmark hook: if set to a path, live runs write one line per sample, ``sample lateness_seconds``
+(when its send returned, minus when it was due). Off by default; costs nothing when unset."""
+MAX_SLEEP = 0.1
+"""Sleep at most this long at a time, so a signal (which sets the stop event) is seen soon."""
+
+
+@dataclass
+class Feeds:
+    """Recorded transforms and display messages, handed on in time order as far as a replay has got."""
+
+    tf: TfFeed
+    displays: DisplayFeed | None = None
+
+    @property
+    def next_time_ns(self) -> int | None:
+        tf = self.tf.next_time_ns
+        shown = self.displays.next_time_ns if self.displays is not None else None
+        return shown if tf is None else tf if shown is None else min(tf, shown)
+
+    def until(self, time_ns: int | None = None) -> None:
+        self.tf.until(time_ns)
+        if self.displays is not None:
+            self.displays.until(time_ns)
+
+    @property
+    def sent(self) -> int:
+        """Transforms and messages handed on so far."""
+        return self.tf.logged + (sum(s.messages for s in self.displays.topics.values()) if self.displays else 0)
+
+
+@dataclass
+class _Clock:
+    """The schedule: a time ``t`` (ns) is due at ``start + (t - t0) / speed`` seconds of ``time.monotonic``."""
+
+    start: float
+    t0: int
+    speed: float
+
+    def due(self, t_ns: int) -> float:
+        return self.start + (t_ns - self.t0) * (1e-9 / self.speed)
+
+    def now_ns(self) -> int:
+        return self.t0 + int((time.monotonic() - self.start) * self.speed * 1e9)
+
+
+def _feed_until(clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Event) -> None:
+    """Until ``deadline`` (monotonic seconds), send the feeds' items as each falls due."""
+    while not stop.is_set():
+        t = feeds.next_time_ns
+        now = time.monotonic()
+        if t is None and math.isinf(deadline):
+            return  # nothing left to wait for
+        if t is None or clock.due(t) > deadline:
+            if deadline > now:
+                time.sleep(min(deadline - now, MAX_SLEEP))
+                continue
+            return
+        if clock.due(t) > now:
+            time.sleep(min(clock.due(t) - now, MAX_SLEEP))
+            continue
+        feeds.until(clock.now_ns())
+
+
+def paced(
+    streamer: RobotStream | None, source: Source | None, feeds: Feeds, *, block: int, speed: float = 1.0
+) -> tuple[int, bool]:
+    """Send each robot sample (computed ``block`` at a time) and every feed item when due, until done or
+    signalled; returns the samples sent (or, without a robot, the items) and whether a signal stopped it."""
+    stop = threading.Event()
+    sent = 0
+    log_path = os.environ.get(PACING_LOG_ENV)
+    clock: _Clock | None = None
+    with signals_set(stop), open(log_path, "w") if log_path else nullcontext() as log:
+        if streamer is not None and source is not None:
+            sent, clock = _paced_samples(streamer, source, feeds, block, speed, stop, log)
+        if not stop.is_set():
+            if clock is None:
+                first = feeds.next_time_ns
+                clock = _Clock(time.monotonic(), first if first is not None else 0, speed)
+            _feed_until(clock, feeds, math.inf, stop)
+    return (sent if streamer is not None and source is not None else feeds.sent), stop.is_set()
+
+
+def _paced_samples(
+    streamer: RobotStream,
+    source: Source,
+    feeds: Feeds,
+    block: int,
+    speed: float,
+    stop: threading.Event,
+    log: TextIO | None,
+) -> tuple[int, _Clock | None]:
+    sent = 0
+    clock: _Clock | None = None
+    for chunk in source.chunks(block):
+        prepared = streamer.prepare(chunk)
+        n = len(chunk)
+        if n == 0:
+            continue
+        if clock is None:  # the schedule starts when the first sample is ready to go
+            first = feeds.next_time_ns
+            t0 = int(chunk.times_ns[0]) if first is None else min(first, int(chunk.times_ns[0]))
+            clock = _Clock(time.monotonic(), t0, speed)
+        due = clock.start + (chunk.times_ns - clock.t0) * (1e-9 / speed)
+        i = 0
+        while i < n:
+            _feed_until(clock, feeds, float(due[i]), stop)
+            if stop.is_set():
+                break
+            j = i + 1 + int(np.searchsorted(due[i + 1 :], time.monotonic(), side="right"))
+            feeds.until(int(chunk.times_ns[j - 1]))
+            streamer.send(prepared, i, j)
+            if log is not None:
+                now = time.monotonic()
+                log.writelines(f"{sent + k - i} {now - due[k]:.6f}\n" for k in range(i, j))
+            sent += j - i
+            i = j
+        if i < n:
+            break
+        # Backpressure, once a block (five seconds): wait until the sinks have taken what was sent, so a
+        # sink slower than the sample rate makes samples late instead of piling them up in memory.
+        streamer.rec.flush()
+    return sent, clock

@@ -1,0 +1,164 @@
+"""Display topics into the recording, in time order, as far as a replay has got (like :class:`TfFeed` for
+recorded transforms): each message decoded (:mod:`r2d2_viz.msgs`) and logged in its TF frame at its time.
+
+An empty frame id is drawn in the fixed frame (said once per topic); a message that cannot be decoded is said once
+per topic and counted (the count is said at the end). Odometry keeps RViz's history (Keep, default 100): its poses
+go round ``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+
+from r2d2_viz.msgs.registry import decode
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
+from r2d2_viz.msgs.typestore import MsgError
+from r2d2_viz.sources.bag_displays import TopicMessage
+from r2d2_viz.sources.base import Clock
+from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded
+from r2d2_viz.viewer.entities import TIMELINE
+from r2d2_viz.viewer.notices import Notices
+
+_FOREVER = 2**63 - 1
+FLUSH_BYTES = 64 << 20
+"""Wait for the sinks after this many bytes of messages (clouds and images are megabytes each)."""
+KEEP = {"nav_msgs/msg/Odometry": 100}
+"""RViz's default history (its display's Keep) per type; every other display shows its latest message."""
+
+
+@dataclass(frozen=True)
+class DisplayStyle:
+    """How one topic is drawn: RViz's defaults, or what an RViz config's display says."""
+
+    options: DecodeOptions = field(default_factory=DecodeOptions)
+    keep: int | None = None
+    """History length (Odometry's Keep); None: the type's default."""
+
+
+@dataclass
+class _TopicState:
+    messages: int = 0
+    problems: int = 0
+    markers: MarkerBook = field(default_factory=MarkerBook)
+
+
+class DisplayFeed:
+    """Decode and log display messages; :meth:`until` pulls them from ``messages`` up to a time."""
+
+    def __init__(
+        self,
+        notices: Notices,
+        messages: Iterator[TopicMessage] | None = None,
+        *,
+        clock: Clock,
+        fixed_frame: str,
+        header_time: bool = False,
+        styles: Mapping[str, DisplayStyle] | None = None,
+        load_mesh: MeshLoader | None = None,
+        source_name: str = "",
+        timeline: str = TIMELINE,
+    ) -> None:
+        self.notices, self.rec = notices, notices.rec
+        self._messages = messages
+        self._next: TopicMessage | None = None
+        self.clock, self.fixed_frame, self.header_time = clock, fixed_frame, header_time
+        self.styles = dict(styles or {})
+        self.load_mesh, self.source_name, self.timeline = load_mesh, source_name, timeline
+        self.topics: dict[str, _TopicState] = {}
+        self._unflushed = 0
+        self._pull()
+
+    def _pull(self) -> None:
+        self._next = next(self._messages, None) if self._messages is not None else None
+
+    @property
+    def next_time_ns(self) -> int | None:
+        """The receive time of the next message not logged yet (None: none left)."""
+        return self._next.time_ns if self._next is not None else None
+
+    def until(self, time_ns: int | None = None) -> int:
+        """Log the messages received up to ``time_ns`` (inclusive; all when None); how many were logged."""
+        logged = 0
+        while self._next is not None and (time_ns is None or self._next.time_ns <= time_ns):
+            self.log(self._next)
+            logged += 1
+            self._pull()
+        for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
+            if state.markers.live:
+                expire_markers(
+                    self.rec, state.markers, self.timeline, _FOREVER if time_ns is None else time_ns, self.clock
+                )
+        return logged
+
+    def log(self, message: TopicMessage) -> None:
+        """Decode and log one message (a live source calls this as messages arrive)."""
+        state = self.topics.setdefault(message.topic, _TopicState())
+        state.messages += 1
+        self._unflushed += len(message.data)
+        if self._unflushed > FLUSH_BYTES:  # backpressure: big messages must not pile up ahead of the sinks
+            self.rec.flush()
+            self._unflushed = 0
+        style = self.styles.get(message.topic) or DisplayStyle()
+        try:
+            decoded = decode(message.msgtype, message.data, style.options)
+        except MsgError as exc:
+            state.problems += 1
+            self.notices.report(
+                f"{self._where(message.topic)}: a {message.msgtype} message cannot be shown: {exc} "
+                "(further problems on this topic are counted)",
+                key=f"display problem {message.topic}",
+            )
+            return
+        decoded = self._placed(message.topic, decoded)
+        time_ns = message.time_ns
+        if self.header_time:
+            stamp = decoded.stamp_ns if isinstance(decoded, Decoded) else _first_stamp(decoded)
+            time_ns = stamp if stamp else time_ns
+        entity = message.topic
+        keep = style.keep if style.keep is not None else KEEP.get(message.msgtype, 1)
+        if keep > 1 and isinstance(decoded, Decoded):
+            entity = f"{message.topic}/{(state.messages - 1) % keep}"
+        log_decoded(
+            self.rec,
+            entity,
+            decoded,
+            timeline=self.timeline,
+            time_ns=time_ns,
+            clock=self.clock,
+            markers=state.markers,
+            load_mesh=self.load_mesh,
+        )
+
+    def _where(self, topic: str) -> str:
+        return f"{self.source_name}: {topic}" if self.source_name else topic
+
+    def _placed(self, topic: str, decoded: Decoded | list[MarkerOp]) -> Decoded | list[MarkerOp]:
+        """An empty frame id → the fixed frame (said once per topic)."""
+
+        def fix(d: Decoded) -> Decoded:
+            if d.frame_id:
+                return d
+            self.notices.report(
+                f"{self._where(topic)}: messages with an empty frame_id are drawn in the fixed frame "
+                f"[{self.fixed_frame}]",
+                key=f"empty frame {topic}",
+            )
+            return dataclasses.replace(d, frame_id=self.fixed_frame)
+
+        if isinstance(decoded, Decoded):
+            return fix(decoded)
+        return [dataclasses.replace(op, decoded=fix(op.decoded)) if op.decoded else op for op in decoded]
+
+    def finish(self) -> None:
+        """Say, per topic, how many messages could not be shown (when more than the one already said)."""
+        for topic, state in self.topics.items():
+            if state.problems > 1:
+                self.notices.report(
+                    f"{self._where(topic)}: {state.problems} of {state.messages} messages could not be shown"
+                )
+
+
+def _first_stamp(ops: list[MarkerOp]) -> int:
+    return next((op.decoded.stamp_ns for op in ops if op.decoded is not None and op.decoded.stamp_ns), 0)

@@ -1,0 +1,93 @@
+"""Live pacing on the wall clock: robot samples and feed items (recorded TF, display messages) each sent when due,
+in time order, never early; checked with the monotonic clock and stand-ins that note when each send happened."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from r2d2_viz.pacing import paced
+from r2d2_viz.sources.base import ArraySource
+
+
+class _Recorder:
+    """A stand-in for RobotStream that notes when each run of samples was sent."""
+
+    class _Rec:
+        def flush(self) -> None:
+            pass
+
+    def __init__(self) -> None:
+        self.rec = self._Rec()
+        self.sent: list[tuple[float, int, int]] = []
+
+    def prepare(self, chunk):
+        return chunk
+
+    def send(self, chunk, start: int, stop: int) -> None:
+        self.sent.append((time.monotonic(), int(chunk.times_ns[start]), stop - start))
+
+
+class _NoFeeds:
+    next_time_ns = None
+    sent = 0
+
+    def until(self, time_ns) -> None:
+        pass
+
+
+class _Items:
+    """A stand-in for Feeds: items at given times; notes the wall clock when each is handed on."""
+
+    def __init__(self, times_ns: list[int]) -> None:
+        self.times, self.at = sorted(times_ns), []
+
+    @property
+    def next_time_ns(self):
+        return self.times[len(self.at)] if len(self.at) < len(self.times) else None
+
+    @property
+    def sent(self) -> int:
+        return len(self.at)
+
+    def until(self, time_ns) -> None:
+        while self.next_time_ns is not None and (time_ns is None or self.next_time_ns <= time_ns):
+            self.at.append((time.monotonic(), self.next_time_ns))
+
+
+def test_paced_samples_go_out_in_order_and_not_before_they_are_due() -> None:
+    n, period = 12, 0.02
+    times = (np.arange(n) * period * 1e9).astype(np.int64)
+    source = ArraySource(times, ["j"], np.zeros((n, 1)))
+    streamer = _Recorder()
+    start = time.monotonic()
+    sent, stopped = paced(streamer, source, _NoFeeds(), block=5, speed=2.0)  # twice as fast: 10 ms apart
+    assert sent == n and not stopped
+    assert sum(k for _, _, k in streamer.sent) == n
+    assert [t for _, t, _ in streamer.sent] == sorted(t for _, t, _ in streamer.sent)
+    first = streamer.sent[0][0]
+    for wall, t_ns, _ in streamer.sent:
+        assert wall - first >= t_ns * 1e-9 / 2.0 - 1e-3  # never early (1 ms of clock granularity)
+    assert time.monotonic() - start >= (n - 1) * period / 2.0 - 1e-3
+
+
+def test_feed_items_between_samples_go_out_at_their_own_time_and_after_the_last_sample() -> None:
+    # samples at 0, 100, 200 ms; items at 30, 60, 130 ms and 350 ms (after the robot's last sample)
+    times = np.array([0, 100, 200], dtype=np.int64) * 1_000_000
+    source = ArraySource(times, ["j"], np.zeros((3, 1)))
+    streamer, items = _Recorder(), _Items([30_000_000, 60_000_000, 130_000_000, 350_000_000])
+    sent, stopped = paced(streamer, source, items, block=10)
+    assert sent == 3 and not stopped and items.sent == 4
+    first = streamer.sent[0][0]
+    for wall, t_ns in items.at:
+        offset = wall - first
+        assert t_ns * 1e-9 - 1e-3 <= offset < t_ns * 1e-9 + 0.05, (t_ns, offset)  # due, not batched with a sample
+
+
+def test_without_a_robot_the_items_keep_their_schedule() -> None:
+    items = _Items([0, 40_000_000, 80_000_000])
+    sent, stopped = paced(None, None, items, block=10, speed=2.0)  # twice as fast: 0, 20, 40 ms
+    assert sent == 3 and not stopped
+    first = items.at[0][0]
+    assert [round((wall - first) * 1000 / 10) for wall, _ in items.at] == [0, 2, 4]  # in 10 ms steps
