@@ -1,5 +1,5 @@
 """Bags for the tests, written by ``rosbags`` itself (its own serializer and writer: independent of
-:mod:`r2d2_viz.ros_out.bag_write`), in either storage and in metadata versions 4 to 9."""
+:mod:`r2d2_viz.ros_out.bag_write`), in either storage and in metadata versions 1 to 9."""
 
 from __future__ import annotations
 
@@ -73,8 +73,10 @@ class BagSpec:
 
 
 def write_bag(path: Path, spec: BagSpec, *, storage: str = "mcap", version: int = 9) -> Path:
-    """A rosbag2 directory at ``path``; versions 4..7 are version 8 bags whose metadata.yaml is rewritten
-    the way those versions wrote it (rosbags writes 8 and 9 only)."""
+    """A rosbag2 directory at ``path``; versions 1..7 are version 8 bags whose metadata.yaml is rewritten
+    the way those versions wrote it (rosbags writes 8 and 9 only): the keys rosbag2 added in each version dropped
+    (ros_distro in 8, type_description_hash in 7, custom_data in 6, files in 5, offered_qos_profiles in 4, the
+    compression keys in 3), and before 4 the file paths written with the bag's folder in front."""
     with Writer(path, version=9 if version == 9 else 8, storage_plugin=STORAGES[storage]) as writer:
         connections = {}
         for topic, _, _ in spec.messages:
@@ -96,6 +98,13 @@ def write_bag(path: Path, spec: BagSpec, *, storage: str = "mcap", version: int 
             top.pop("custom_data", None)
         if version < 5:
             top.pop("files", None)
+        if version < 4:
+            top["relative_file_paths"] = [f"{path.name}/{name}" for name in top["relative_file_paths"]]
+            for topic in top["topics_with_message_count"]:
+                topic["topic_metadata"].pop("offered_qos_profiles", None)
+        if version < 3:
+            top.pop("compression_format", None)
+            top.pop("compression_mode", None)
         with meta.open("w") as f:
             yaml.dump(info, f)
     return path

@@ -313,3 +313,12 @@ def _quote(value: str, limit: int = 200) -> str:
     if len(value) > limit:
         value = value[: limit // 2] + "…" + value[-(limit // 2) :]
     return repr(value)
+
+
+def uri_package(uri: str) -> str | None:
+    """The package a ``package://pkg/rel`` (or ``package:///pkg/rel``) URI names; None for other URIs."""
+    parts = urlsplit(uri)
+    if parts.scheme.lower() != "package":
+        return None
+    package = unquote(parts.netloc) or unquote(parts.path).lstrip("/").partition("/")[0]
+    return package or None

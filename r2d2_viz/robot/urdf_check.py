@@ -19,7 +19,7 @@ from urllib.parse import unquote, urlsplit
 
 from lxml import etree
 
-from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.packages import PackageIndex, uri_package
 from r2d2_viz.robot.urdf_xml import MAX_FILE_BYTES, _fail, _one_line, _q, parse_urdf_xml, read_urdf_xml
 
 __all__ = ["JOINT_TYPES", "MAX_FILE_BYTES", "check_robot", "parse_urdf_xml", "read_urdf_xml", "resolve_mesh_path"]
@@ -60,6 +60,8 @@ class _Checker:
         self.warnings: list[str] = []
         self.materials: set[str] = set()
         self.meshes: dict[str, tuple[Path | None, str]] = {}
+        self.missing_packages: dict[str, dict[str, list[str]]] = {}
+        """Package not found -> kind ("visual", "collision") -> the mesh files it would have given, once a shape."""
 
     def fail(self, where: str, problem: str) -> NoReturn:
         _fail(self.source, where, problem)
@@ -145,7 +147,28 @@ class _Checker:
                 self.meshes[filename] = self.packages.explain(filename, base_dir=self.base_dir)
             found, reason = self.meshes[filename]
             if found is None:
-                self.warn(where, f"{reason}; {kind} skipped")
+                package = uri_package(filename)
+                if package is not None and self.packages.lookup(package, near=self.base_dir) is None:
+                    file = filename.partition("://")[2].lstrip("/")  # package:// and package:/// alike
+                    self.missing_packages.setdefault(package, {}).setdefault(kind, []).append(file)
+                else:
+                    self.warn(where, f"{reason}; {kind} skipped")
+
+    def package_warnings(self) -> None:
+        """One line per ROS package not found: how many meshes it would have given (a Husky's description named 35
+        meshes in two packages: 35 lines before)."""
+        for package, kinds in self.missing_packages.items():
+            shapes = sum(len(files) for files in kinds.values())
+            files = len({f for names in kinds.values() for f in names})
+            split = ", ".join(f"{len(kinds[k])} {k}" for k in ("visual", "collision") if k in kinds)
+            self.warnings.append(
+                _one_line(
+                    f"{self.source}: package {_q(package)} not found: {shapes} mesh{'es' if shapes > 1 else ''} "
+                    f"skipped ({split}; {files} file{'s' if files > 1 else ''}); give its folder with "
+                    f"--package-path DIR or --package-path {package}=DIR "
+                    f"(looked in {self.packages.where(near=self.base_dir)})"
+                )
+            )
 
     def link(self, where: str, link: etree._Element) -> list[tuple[str, str]]:
         """Check a <link>; return its (where, material name) references to resolve later."""
@@ -327,4 +350,5 @@ def check_robot(
             chain[current] = None
             current = mimics[current]
         acyclic.update(chain)
+    checker.package_warnings()
     return checker.warnings

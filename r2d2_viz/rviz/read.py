@@ -134,16 +134,26 @@ class Reader:
                     )
             else:
                 self.note(f"display {display.get('Class')}: no counterpart in Rerun; skipped")
-        for tool in manager.get("Tools") or []:
-            if isinstance(tool, dict) and tool.get("Class"):
-                self.note(f"tool {tool['Class']}: no counterpart (Rerun's viewer has its own camera and selection)")
-        for panel in data.get("Panels") or []:
-            if isinstance(panel, dict) and panel.get("Class"):
-                self.note(f"panel {panel['Class']}: no counterpart (Rerun's blueprint and selection panels)")
+        self.tools_and_panels(manager.get("Tools"), data.get("Panels"))
         views = manager.get("Views") or {}
         current = views.get("Current") if isinstance(views, dict) else None
         camera = read_camera(self, current, fixed) if isinstance(current, dict) else None
         return ViewSpec(self.source, fixed, background, grid, tf, robot, camera, tuple(topics), tuple(self.notes))
+
+    def tools_and_panels(self, tools: Any, panels: Any) -> None:
+        """One note naming every tool and panel (none has a counterpart: Rerun's viewer has its own camera,
+        selection, blueprint and selection panels), rather than a line each."""
+        named: dict[str, list[str]] = {"tools": [], "panels": []}
+        for kind, items in (("tools", tools), ("panels", panels)):
+            for item in items if isinstance(items, list) else []:
+                if isinstance(item, dict) and item.get("Class") and str(item["Class"]) not in named[kind]:
+                    named[kind].append(str(item["Class"]))
+        parts = [f"{len(names)} {kind} ({', '.join(names)})" for kind, names in named.items() if names]
+        if parts:
+            self.note(
+                f"{' and '.join(parts)}: no counterpart (Rerun's viewer has its own camera and selection tools, "
+                "blueprint and selection panels)"
+            )
 
     def displays(self, items: Any, where: str) -> Iterator[tuple[Mapping[str, Any], str]]:
         """Every display, those inside Groups included (a disabled group disables what it holds)."""

@@ -1,6 +1,10 @@
-"""Open a ROS 2 bag with ``rosbags`` (pure Python, no ROS): a rosbag2 directory (``metadata.yaml`` with ``.db3``
-or ``.mcap`` storage, metadata versions 4..9, i.e. what Foxy to Rolling write), a single ``.mcap`` or a single
-``.db3``; hand out the raw CDR messages of a topic, in time order, with their receive times.
+"""Open a ROS 2 bag without ROS: a rosbag2 directory (``metadata.yaml`` with ``.db3`` or ``.mcap`` storage, metadata
+versions 1..9, i.e. up to what Rolling writes), a directory of ``.db3`` or ``.mcap`` files whose metadata.yaml
+is missing (what ``ros2 bag reindex`` repairs), a single ``.mcap`` or a single ``.db3``; hand out the raw CDR messages
+of a topic, in time order, with their receive times.
+
+Nothing is ever written beside the bag: ``.db3`` files are opened read-only and immutable (:mod:`.db3`), so a bag in
+a read-only folder opens, and SQLite leaves no ``-journal``, ``-wal`` or ``-shm`` file behind.
 
 Every problem is one :class:`~r2d2_viz.errors.BagError` line naming the file; a bag that breaks off part-way
 (truncated, corrupt pages) gives what could be read and one warning, "recovered N of M messages".
@@ -23,6 +27,8 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # rosbags and ruamel.yaml are imported when a bag is opened: not on a run without one
     from rosbags.rosbag2 import Reader
+
+    from r2d2_viz.sources.db3 import Db3
 
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.typestore import typestore
@@ -49,7 +55,8 @@ def _problem(exc: BaseException) -> str:
 
 
 class _File:
-    """One storage file. ``rosbags`` opens it and says what it holds; an MCAP file's messages are then read by
+    """One storage file. A ``.db3`` is read by :class:`Db3` (read-only, immutable: nothing written beside it). An
+    MCAP file is opened by ``rosbags``, which says what it holds, and its messages are then read by
     :class:`McapScan` (several times faster than rosbags' reader), which also reads one that breaks off."""
 
     def __init__(self, path: Path) -> None:
@@ -57,7 +64,15 @@ class _File:
         self.note = ""
         """Why the file was read without its index (it breaks off), if it was."""
         self.reader: Reader | None = None
-        self.scan = McapScan(path) if path.suffix == ".mcap" else None
+        self.db3: Db3 | None = None
+        if path.suffix == ".db3":
+            from r2d2_viz.sources.db3 import Db3
+
+            self.db3 = Db3(path)
+            self.topics = self.db3.topics
+            self.scan = None
+            return
+        self.scan = McapScan(path)
         from rosbags.rosbag2 import Reader
 
         try:
@@ -75,6 +90,8 @@ class _File:
             self.note = f"{path}: the file breaks off ({_problem(exc)}): recovered {count} messages"
 
     def messages(self, topic: str) -> Iterator[tuple[int, bytes | memoryview]]:
+        if self.db3 is not None:
+            return self.db3.messages(topic)
         if self.scan is not None:
             return self.scan.messages(topic)
         assert self.reader is not None
@@ -82,6 +99,8 @@ class _File:
         return ((time_ns, data) for _, time_ns, data in self.reader.messages(connections)) if connections else iter(())
 
     def close(self) -> None:
+        if self.db3 is not None:
+            self.db3.close()
         if self.reader is not None:
             self.reader.close()
 
@@ -119,6 +138,8 @@ class Bag:
             self._files.append(_File(file))
             if self._files[-1].note and not expected:
                 self.warn(self._files[-1].note)
+            if (db3 := self._files[-1].db3) is not None and db3.note:
+                self.warn(db3.note)
         topics: dict[str, TopicInfo] = {}
         for f in self._files:
             for topic, (msgtype, count) in f.topics.items():
@@ -206,10 +227,7 @@ def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:
     Foxy bags in rosbag2's own tests), so it would yield no messages at all."""
     meta = path / "metadata.yaml"
     if not meta.is_file():
-        raise BagError(
-            f"{path}: no metadata.yaml in this directory (a rosbag2 directory needs one; "
-            "give the .db3 or .mcap file itself to read it without)"
-        )
+        return _storage_files(path), {}
     from ruamel.yaml import YAML
 
     try:
@@ -235,6 +253,27 @@ def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:
     if missing := [f.name for f in files if not f.is_file()]:
         raise BagError(f"{path}: storage files named in metadata.yaml are missing: {', '.join(missing)}")
     return files, counts
+
+
+def _natural(name: str) -> list[tuple[int, str]]:
+    """Sort key putting ``bag_2.mcap`` before ``bag_10.mcap``."""
+    return [(int(part), "") if part.isdigit() else (-1, part) for part in re.split(r"(\d+)", name)]
+
+
+def _storage_files(path: Path) -> list[Path]:
+    """The storage files of a directory without metadata.yaml (what ``ros2 bag reindex`` would index): its
+    ``.db3`` or ``.mcap`` files, split files in the order of their numbers."""
+    files = sorted(
+        (f for f in path.iterdir() if f.suffix in (".db3", ".mcap") and f.is_file()), key=lambda f: _natural(f.name)
+    )
+    if not files:
+        raise BagError(f"{path}: not a ROS 2 bag (no metadata.yaml, no .db3 or .mcap file in this directory)")
+    if len({f.suffix for f in files}) > 1:
+        raise BagError(
+            f"{path}: no metadata.yaml, and both .db3 and .mcap files in this directory: give one file, "
+            "or run ros2 bag reindex"
+        )
+    return files
 
 
 def open_bag(path: str | Path, *, warn: Warn = to_stderr) -> Bag:

@@ -8,7 +8,7 @@ import pytest
 from conftest import REPO
 
 from r2d2_viz.errors import PackageError, UrdfError, UsageError
-from r2d2_viz.robot.packages import PackageIndex, package_xml_name, scan_packages
+from r2d2_viz.robot.packages import PackageIndex, package_xml_name, scan_packages, uri_package
 
 XACRO = REPO / "tests" / "data" / "xacro"
 
@@ -165,3 +165,12 @@ def test_scanning_is_bounded(tmp_path: Path) -> None:
     deep = make_package(tmp_path / "a" / "b" / "c" / "d" / "e", "too_deep")
     assert package_xml_name(deep) == "too_deep"
     assert scan_packages(tmp_path) == {}  # deeper than SCAN_DEPTH
+
+
+def test_uri_package() -> None:
+    assert uri_package("package://ur_description/meshes/a.dae") == "ur_description"
+    assert uri_package("package:///ur_description/meshes/a.dae") == "ur_description"
+    assert uri_package("PACKAGE://a%20b/x.stl") == "a b"
+    assert uri_package("file:///a/b.stl") is None
+    assert uri_package("meshes/b.stl") is None
+    assert uri_package("package://") is None

@@ -26,8 +26,8 @@ GOOD_MANIFEST: dict[str, list[str]] = {
     "utf8_bom_doctype.urdf": [],
     "mesh_missing.urdf": ["link 'base': visual #1: mesh file 'meshes/missing.stl' not found; visual skipped"],
     "mesh_package.urdf": [
-        "link 'head': visual #1: mesh 'package://r2d2_description/meshes/dome.dae': package 'r2d2_description' "
-        "not found (looked in the folders above "
+        "package 'r2d2_description' not found: 1 mesh skipped (1 visual; 1 file); give its folder with "
+        "--package-path DIR or --package-path r2d2_description=DIR (looked in the folders above "
     ],
     "mesh_package_empty.urdf": [],
     # urdfdom: "joint limit: no lower, defaults to 0" (logDebug); robot_state_publisher accepts it.
@@ -365,3 +365,58 @@ def test_package_uri_with_empty_package_part_resolves() -> None:
     robot = load_urdf(GOOD / "mesh_package_empty.urdf")
     (shape,) = robot.links[0].visuals
     assert isinstance(shape.geometry, MeshFile) and shape.geometry.path == GOOD / "meshes" / "cube.stl"
+
+
+TWO_MISSING_PACKAGES = """<robot name="two">
+  <link name="base">
+    <visual><geometry><mesh filename="package://ghost_description/meshes/base.stl"/></geometry></visual>
+    <collision><geometry><mesh filename="package://ghost_description/meshes/base_collision.stl"/></geometry></collision>
+  </link>
+  <link name="wheel_l">
+    <visual><geometry><mesh filename="package://ghost_description/meshes/wheel.dae"/></geometry></visual>
+    <collision><geometry><mesh filename="package://ghost_description/meshes/wheel.dae"/></geometry></collision>
+  </link>
+  <link name="wheel_r">
+    <visual><geometry><mesh filename="package:///ghost_description/meshes/wheel.dae"/></geometry></visual>
+  </link>
+  <link name="lidar">
+    <visual><geometry><mesh filename="package://phantom_sensors/meshes/lidar.stl"/></geometry></visual>
+    <visual><geometry><mesh filename="meshes/not_here.stl"/></geometry></visual>
+  </link>
+  <joint name="l" type="continuous"><parent link="base"/><child link="wheel_l"/></joint>
+  <joint name="r" type="continuous"><parent link="base"/><child link="wheel_r"/></joint>
+  <joint name="s" type="fixed"><parent link="base"/><child link="lidar"/></joint>
+</robot>
+"""
+
+
+def test_meshes_of_a_missing_package_are_one_line_per_package(tmp_path: Path) -> None:
+    """Counted by hand from the URDF above: ghost_description names 5 mesh shapes (3 visual, 2 collision) in 3
+    files (wheel.dae three times, once as package:///); phantom_sensors 1. A missing file outside a package keeps
+    its own line."""
+    warnings = load(write(tmp_path, TWO_MISSING_PACKAGES, "two.urdf"))
+    assert len(warnings) == 3, warnings
+    assert warnings[0] == "two.urdf: link 'lidar': visual #2: mesh file 'meshes/not_here.stl' not found; visual skipped"
+    assert warnings[1].startswith(
+        "two.urdf: package 'ghost_description' not found: 5 meshes skipped (3 visual, 2 collision; 3 files); "
+        "give its folder with --package-path DIR or --package-path ghost_description=DIR (looked in the folders above "
+    )
+    assert warnings[2].startswith(
+        "two.urdf: package 'phantom_sensors' not found: 1 mesh skipped (1 visual; 1 file); give its folder with "
+        "--package-path DIR or --package-path phantom_sensors=DIR (looked in "
+    )
+    assert all("\n" not in w for w in warnings)
+
+
+def test_a_missing_package_is_one_line_on_the_command_line(tmp_path: Path) -> None:
+    from conftest import cli
+
+    urdf = write(tmp_path, TWO_MISSING_PACKAGES, "two.urdf")
+    result = cli("--urdf", str(urdf), "--save", str(tmp_path / "two.rrd"), "--duration", "0.1", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stderr.splitlines() if line.startswith("warning: ")]
+    assert [line.split(" not found")[0] for line in lines] == [
+        "warning: two.urdf: link 'lidar': visual #2: mesh file 'meshes/not_here.stl'",
+        "warning: two.urdf: package 'ghost_description'",
+        "warning: two.urdf: package 'phantom_sensors'",
+    ]

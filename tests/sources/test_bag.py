@@ -41,16 +41,30 @@ def test_real_ros2_bags_directory_and_single_file(real: str) -> None:
         assert times == sorted(times) and times[0] == 1585866235112609068  # the file's own first timestamp
 
 
-@pytest.mark.parametrize("version", [4, 5, 6, 7, 8, 9])
+def _listing(folder: Path) -> dict[str, tuple[int, int]]:
+    return {p.name: (p.stat().st_size, p.stat().st_mtime_ns) for p in folder.iterdir()}
+
+
+@pytest.mark.parametrize("version", [1, 2, 3, 4, 5, 6, 7, 8, 9])
 @pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
 def test_every_metadata_version_and_storage(tmp_path: Path, storage: str, version: int) -> None:
     path = write_bag(tmp_path / "b", _spec(), storage=storage, version=version)
+    before = _listing(path)
     for form in (path, storage_file(path)):
         with open_bag(form) as bag:
             assert bag.files == (storage_file(path),)
             assert bag.topics["/joint_states"].count == 20
             assert [t for t, _ in bag.raw("/joint_states")] == [T0 + k * 10**7 for k in range(20)]
             assert _strings(bag, "/robot_description") == ["<robot name='r'/>"]
+    assert _listing(path) == before  # nothing written beside the bag, nothing touched
+
+
+@pytest.mark.parametrize("real", ["talker_db3", "talker_mcap"])
+def test_reading_a_real_bag_changes_nothing_in_its_folder(real: str) -> None:
+    before = _listing(REAL / real)
+    with open_bag(REAL / real) as bag:
+        assert len(list(bag.raw("/topic"))) == 10
+    assert _listing(REAL / real) == before
 
 
 def test_split_bag_reads_every_file_in_order(tmp_path: Path) -> None:
@@ -81,15 +95,56 @@ def test_missing_and_wrong_paths(tmp_path: Path) -> None:
     (tmp_path / "notes.txt").write_text("hi")
     assert "not a ROS 2 bag" in _error(tmp_path / "notes.txt")
     (tmp_path / "dir").mkdir()
-    assert "no metadata.yaml" in _error(tmp_path / "dir")
+    (tmp_path / "dir" / "notes.txt").write_text("hi")
+    assert "not a ROS 2 bag (no metadata.yaml, no .db3 or .mcap file" in _error(tmp_path / "dir")
 
 
-def test_directory_without_metadata_but_with_storage(tmp_path: Path) -> None:
-    path = write_bag(tmp_path / "b", _spec())
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_directory_without_metadata_reads_like_a_bag(tmp_path: Path, storage: str) -> None:
+    """What ``ros2 bag reindex`` repairs: the storage files are there, metadata.yaml is not."""
+    path = write_bag(tmp_path / "b", _spec(), storage=storage)
     (path / "metadata.yaml").unlink()
-    assert "no metadata.yaml" in _error(path)
-    with open_bag(storage_file(path)) as bag:  # the hint works: the storage file alone reads
+    before = _listing(path)
+    warnings: list[str] = []
+    with open_bag(path, warn=warnings.append) as bag:
+        assert bag.files == (storage_file(path),)
         assert bag.topics["/joint_states"].count == 20
+        assert [t for t, _ in bag.raw("/joint_states")] == [T0 + k * 10**7 for k in range(20)]
+        assert _strings(bag, "/robot_description") == ["<robot name='r'/>"]
+    assert warnings == [] and _listing(path) == before
+
+
+@pytest.mark.parametrize("suffix", [".mcap", ".db3"])
+def test_split_bag_without_metadata_reads_its_files_in_number_order(tmp_path: Path, suffix: str) -> None:
+    """Eleven split files: ``bag_10`` comes after ``bag_9``, not after ``bag_1``."""
+    storage = "mcap" if suffix == ".mcap" else "sqlite3"
+    bag_dir = tmp_path / "split"
+    bag_dir.mkdir()
+    for k in range(11):
+        t = T0 + k * 10**9
+        one = write_bag(
+            tmp_path / f"part{k}", BagSpec().add("/joint_states", t, joint_state(t, ["a"], [k])), storage=storage
+        )
+        shutil.copy(storage_file(one), bag_dir / f"bag_{k}{suffix}")
+    with open_bag(bag_dir) as bag:
+        assert [f.name for f in bag.files] == [f"bag_{k}{suffix}" for k in range(11)]
+        assert bag.topics["/joint_states"].count == 11
+        assert [t for t, _ in bag.raw("/joint_states")] == [T0 + k * 10**9 for k in range(11)]
+
+
+def test_directory_without_metadata_and_two_storages(tmp_path: Path) -> None:
+    bag_dir = tmp_path / "mixed"
+    bag_dir.mkdir()
+    for storage in ("mcap", "sqlite3"):
+        shutil.copy(storage_file(write_bag(tmp_path / storage, _spec(), storage=storage)), bag_dir)
+    assert "both .db3 and .mcap" in _error(bag_dir)
+
+
+def test_directory_without_metadata_and_a_junk_file(tmp_path: Path) -> None:
+    bag_dir = tmp_path / "junk"
+    bag_dir.mkdir()
+    (bag_dir / "junk_0.db3").write_bytes(os.urandom(4096))
+    assert "cannot read this bag" in _error(bag_dir)
 
 
 @pytest.mark.parametrize("suffix", [".mcap", ".db3"])

@@ -107,6 +107,7 @@ def test_recorded_tf_that_disagrees_with_the_kinematics_is_reported_once(tmp_pat
     ("make", "problem"),
     [
         (lambda p: p.mkdir(), "metadata.yaml"),
+        (lambda p: (p.mkdir(), (p / "bag_0.db3").write_bytes(b"junk" * 1024)), "cannot read this bag"),
         (lambda p: p.with_suffix(".mcap").write_bytes(b"not a bag at all"), ""),
         (lambda p: None, "no such file or directory"),
     ],
