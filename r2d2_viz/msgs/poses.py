@@ -33,12 +33,16 @@ def _arrows(poses: list[Pose], length: float, radius: float) -> Arrows:
     return Arrows(origins, vectors, one_color(POSE_COLOR), radius)
 
 
-def _with_covariance(msg: Any, pose_msg: Any, options: DecodeOptions) -> Decoded:
-    """A pose arrow and its position covariance ellipsoid (an empty one when the covariance is not finite)."""
+def _with_covariance(msg: Any, pose_msg: Any, options: DecodeOptions, *, covariance: bool = True) -> Decoded:
+    """A pose arrow and (``covariance``) its position covariance ellipsoid (an empty one when the covariance is
+    not finite)."""
     frame, stamp = header_of(msg)
     pose = pose_of(pose_msg.pose)
+    arrow = _arrows([pose], POSE_LENGTH, POSE_RADIUS)
+    if not covariance:
+        return Decoded(frame, stamp, (arrow,))
     ellipsoid: Ellipsoids = covariance_ellipsoid(pose_msg.covariance, pose, options.covariance_scale, COVARIANCE_COLOR)
-    return Decoded(frame, stamp, (_arrows([pose], POSE_LENGTH, POSE_RADIUS), ellipsoid))
+    return Decoded(frame, stamp, (arrow, ellipsoid))
 
 
 def decode_pose_stamped(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
@@ -63,9 +67,10 @@ def decode_pose_with_covariance(data: bytes | memoryview, options: DecodeOptions
 
 
 def decode_odometry(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
-    """An Odometry's pose (in the header frame): arrow and position covariance ellipsoid."""
+    """An Odometry's pose (in the header frame): an arrow, and its position covariance ellipsoid when asked
+    (``options.odometry_covariance``: RViz's Covariance property)."""
     msg = deserialize(data, "nav_msgs/msg/Odometry")
-    return _with_covariance(msg, msg.pose, options)
+    return _with_covariance(msg, msg.pose, options, covariance=options.odometry_covariance)
 
 
 def decode_point_stamped(data: bytes | memoryview, options: DecodeOptions) -> Decoded:

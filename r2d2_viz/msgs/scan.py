@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from r2d2_viz.msgs.colormaps import intensity_colors
@@ -44,8 +46,16 @@ def cone_strips(length: float, fov: float) -> tuple[F32, ...]:
 
 
 def decode_range(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
-    """A Range as RViz draws it: a cone along +x of length ``range`` and angle ``field_of_view``."""
+    """A Range as RViz draws it (RangeDisplay::processMessage): a cone along +x of angle ``field_of_view``, as
+    long as ``range`` when it lies in ``[min_range, max_range]``; a fixed-distance ranger (min = max) reading -inf
+    shows ``min_range``; any other reading draws nothing (an empty drawing replaces the last cone)."""
     msg = deserialize(data, "sensor_msgs/msg/Range")
     frame, stamp = header_of(msg)
-    strips = cone_strips(float(msg.range), float(msg.field_of_view))
+    reading, low, high = float(msg.range), float(msg.min_range), float(msg.max_range)
+    length = 0.0
+    if low <= reading <= high:
+        length = reading
+    elif low == high and reading == -math.inf:
+        length = low
+    strips = cone_strips(length, float(msg.field_of_view)) if length > 0 else ()
     return Decoded(frame, stamp, (LineStrips(strips, one_color(RANGE_COLOR), 0.0),))

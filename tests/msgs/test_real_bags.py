@@ -47,13 +47,7 @@ BAGS: dict[str, dict[str, tuple[str, int]]] = {
 }
 
 # Topics where r2d2_viz and RViz disagree, kept as strict xfails (they pass once the decoder is fixed).
-KNOWN_BUGS = {
-    **{
-        ("webots_epuck", f"/ps{i}"): "decode_range draws a cone of length `range` when range > max_range; RViz's "
-        "RangeDisplay shows such a reading as a 0-length cone (nothing)"
-        for i in range(8)
-    },
-}
+KNOWN_BUGS: dict[tuple[str, str], str] = {}
 
 # Hand-read from the first message of a topic (`ros2 bag` era metadata has no frames): frame id and a size.
 FIRST: dict[tuple[str, str], dict[str, Any]] = {

@@ -93,3 +93,28 @@ def test_range_is_a_cone_along_x() -> None:
     np.testing.assert_allclose(circle[:, 0], 2.0)
     np.testing.assert_allclose(np.hypot(circle[:, 1], circle[:, 2]), 2.0, rtol=1e-6)
     assert len(sides) == 4 and all(np.allclose(s[0], 0.0) for s in sides)
+
+
+@pytest.mark.parametrize(
+    ("reading", "low", "high", "length"),
+    [
+        (5.0, 0.1, 4.0, 0.0),  # beyond max_range: RViz draws nothing (RangeDisplay::processMessage)
+        (0.05, 0.1, 4.0, 0.0),  # below min_range: nothing
+        (float("nan"), 0.1, 4.0, 0.0),
+        (-math.inf, 0.3, 0.3, 0.3),  # a fixed-distance ranger (min = max) reading -inf: min_range
+        (math.inf, 0.3, 0.3, 0.0),
+        (4.0, 0.1, 4.0, 4.0),  # the bounds themselves are in range
+    ],
+)
+def test_range_readings_outside_their_limits_as_rviz_shows_them(
+    reading: float, low: float, high: float, length: float
+) -> None:
+    msg = T("sensor_msgs/msg/Range")(
+        header=header("sonar"), radiation_type=0, field_of_view=0.2, min_range=low, max_range=high, range=reading
+    )
+    (strips,) = decode_range(cdr(msg), OPTIONS).items
+    assert isinstance(strips, LineStrips)
+    if length == 0.0:
+        assert strips.strips == ()
+    else:
+        assert max(float(s[:, 0].max()) for s in strips.strips) == pytest.approx(length)

@@ -1,0 +1,39 @@
+"""A bag's display topics as one stream of raw messages (sources/bag_displays), on bags rosbags wrote."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from displaybags import MAP_TIME, SCAN_TIMES, T0, write_display_bag
+from rosbags.rosbag2 import Reader
+
+from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bag_displays import bag_messages, display_frames, display_topics
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_the_display_topics_merged_by_receive_time_as_rosbags_reads_them(tmp_path: Path, storage: str) -> None:
+    path = write_display_bag(tmp_path / "bag", storage=storage)
+    with Reader(path) as reader:  # rosbags' own reader: what the bag holds, in receive-time order
+        expected = [
+            (t, c.topic, bytes(data))
+            for c, t, data in sorted(reader.messages(), key=lambda m: m[1])
+            if c.topic in ("/scan", "/markers", "/map", "/odom")
+        ]
+    with open_bag(path) as bag:
+        shown, other = display_topics(bag)
+        assert shown == {
+            "/map": "nav_msgs/msg/OccupancyGrid",
+            "/markers": "visualization_msgs/msg/MarkerArray",
+            "/odom": "nav_msgs/msg/Odometry",
+            "/scan": "sensor_msgs/msg/LaserScan",
+        }
+        assert other == {"/chatter": "std_msgs/msg/String"}  # /tf and /tf_static are the robot pipeline's
+        got = [(m.time_ns, m.topic, bytes(m.data)) for m in bag_messages(bag, shown)]
+        assert [t for t, _, _ in got] == sorted(t for t, _, _ in got)  # in receive-time order
+        assert sorted(got) == sorted(expected)  # (messages received at the same time: any order)
+        assert got[0][0] == T0 and (MAP_TIME, "/map") in [(t, topic) for t, topic, _ in got]
+        assert sum(topic == "/scan" for _, topic, _ in got) == len(SCAN_TIMES) + 2  # + empty frame, garbage
+        # the first messages' frames: a leading '/' is stripped as tf2 does, an empty id left out
+        assert display_frames(bag, shown) == {"base_laser", "odom"}
