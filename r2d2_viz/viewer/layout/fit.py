@@ -35,6 +35,9 @@ class ViewFit:
     """Half the diagonal of that box, plus the largest shape's size."""
     frames: int
     """TF frames drawn (links plus the fixed frame)."""
+    robot_radius: float | None = None
+    """The robot's own size, when the view also frames where it went and what it saw (TF axes follow the
+    robot, not the scene)."""
 
     def distance(self) -> float:
         """Orbit distance at which a sphere of :attr:`radius` fills the view's height (with a margin)."""
@@ -43,7 +46,8 @@ class ViewFit:
     def marker_scale(self) -> float:
         """RViz's TF marker scale for this robot: 1 for a 2 m robot, in proportion to its size, halved when
         there are many frames."""
-        scale = min(max(self.radius, 0.05), 20.0)
+        size = self.radius if self.robot_radius is None else self.robot_radius
+        scale = min(max(size, 0.05), 20.0)
         return scale / 2 if self.frames > MANY_FRAMES else scale
 
     def axis_length(self) -> float:
@@ -74,6 +78,22 @@ def fit_view(tree: KinematicTree, q: F64, *, root: FrameTrack | None = None) -> 
     radius = max(float(np.linalg.norm(hi - lo)) / 2 + size, 0.05)
     cx, cy, cz = (float(v) for v in center)
     return ViewFit((cx, cy, cz), radius, len(tree.links) + 1)
+
+
+def fit_scene(points: F64, *, robot_radius: float, frames: int) -> ViewFit:
+    """A view of ``points`` (where a robot went, what it saw: most of them — 2 % at either end of each axis are
+    left out, so a few far readings do not shrink the scene) with a robot of ``robot_radius`` among them."""
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    points = points[np.isfinite(points).all(axis=1)]
+    if len(points) == 0:
+        points = np.zeros((1, 3))
+    if len(points) > 100:
+        lo, hi = np.percentile(points, 2, axis=0), np.percentile(points, 98, axis=0)
+    else:
+        lo, hi = points.min(axis=0), points.max(axis=0)
+    cx, cy, cz = (float(v) for v in (lo + hi) / 2)
+    radius = max(float(np.linalg.norm(hi - lo)) / 2 + robot_radius, 0.05)
+    return ViewFit((cx, cy, cz), radius, frames, robot_radius=robot_radius or None)
 
 
 def _shape_size(geometry: object) -> float:

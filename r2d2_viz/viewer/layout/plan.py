@@ -5,19 +5,30 @@ once, before anything is logged."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import islice
 from pathlib import Path
 
 import numpy as np
 
+from r2d2_viz.kinematics.transforms import quat_to_matrix
+from r2d2_viz.msgs.extent import extent_points
+from r2d2_viz.msgs.registry import decode
+from r2d2_viz.msgs.shapes import Decoded
+from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, ViewSpec, missing_fixed_frame, orbit_eye
-from r2d2_viz.sources.base import JointState, SampleChunk
+from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.replay import Replay
+from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
 from r2d2_viz.viewer.display_feed import DisplayStyle
 from r2d2_viz.viewer.layout.blueprint import Layout
-from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, fit_view
+from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
 
+PREVIEW_TIMES = 256
+"""A bag's view follows its recorded TF at this many times spread over the whole bag…"""
+PREVIEW_MESSAGES = 64
+"""…and frames what its first this many display messages draw."""
 PREVIEW_SAMPLES = 3000
 """The stretch of a generated motion the view is fitted to (100 s at 30 Hz), sampled at 256 points."""
 
@@ -43,14 +54,13 @@ def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> Vi
     n_continuous = len(tree.moving) - n_limited if tree is not None else 0
     scale = spec.tf.marker_scale if spec.tf is not None else 1.0
     axis_length, camera, arrows = AXIS_LENGTH * scale, None, True
-    fitted = (
-        rviz is None
-        and tree is not None
-        and not isinstance(source, TutorialMotion)
-        and not (plan.root_placed and plan.moving_tf is not None)
-    )
-    if fitted and tree is not None:
+    recorded = plan.moving_tf is not None or plan.display_messages is not None
+    fit = None
+    if rviz is None and recorded:
+        fit = _recorded_fit(plan)
+    elif rviz is None and tree is not None and not isinstance(source, TutorialMotion):
         fit = fit_view(tree, _preview(plan))
+    if fit is not None:
         axis_length, arrows = fit.axis_length(), fit.show_arrows
         yaw, pitch = _orbit_angles(spec)
         camera = Camera("Orbit", orbit_eye(fit.center, fit.distance(), yaw, pitch), fit.center)
@@ -81,6 +91,50 @@ def _orbit_angles(spec: ViewSpec) -> tuple[float, float]:
     dx, dy, dz = (e - t for e, t in zip(camera.eye, camera.target, strict=True))
     distance = float(np.sqrt(dx * dx + dy * dy + dz * dz)) or 1.0
     return float(np.arctan2(dy, dx)), float(np.arcsin(dz / distance))
+
+
+def _recorded_fit(plan: Replay) -> ViewFit | None:
+    """A bag's view: the robot (its size) along the trajectory its recorded TF gives its root, the TF frames of
+    a replay without a robot, and what the first display messages draw, all in the fixed frame."""
+    records = [r for r in (plan.static_tf, plan.moving_tf) if r is not None]
+    moving = plan.moving_tf.times_ns if plan.moving_tf is not None else np.zeros(0, dtype=np.int64)
+    times = np.sort(moving)[np.linspace(0, len(moving) - 1, PREVIEW_TIMES).astype(np.int64)] if len(moving) else None
+    times = times if times is not None else np.zeros(1, dtype=np.int64)
+    points: list[np.ndarray] = []
+    robot_radius, frames = 0.0, 1 + len({c for r in records for c in r.children})
+    if plan.tree is not None:
+        own = fit_view(plan.tree, _preview(plan))
+        robot_radius, frames = own.radius, max(frames, own.frames)
+        root = plan.tree.robot.root
+        points.append(frame_positions(records, plan.fixed_frame, [root], times).get(root, np.zeros((1, 3))))
+    else:
+        children = sorted({c for r in records for c in r.children})
+        points += list(frame_positions(records, plan.fixed_frame, children, times).values())
+    if plan.display_messages is not None:
+        for message in islice(plan.display_messages(), PREVIEW_MESSAGES):
+            points.append(_drawn(message.msgtype, message.data, message.time_ns, records, plan.fixed_frame))
+    if not any(len(p) for p in points):
+        return None
+    return fit_scene(np.concatenate(points), robot_radius=robot_radius, frames=frames)
+
+
+def _drawn(msgtype: str, data: bytes | memoryview, t_ns: int, records: list[TfRecords], fixed: str) -> np.ndarray:
+    """What one display message draws, as points in the fixed frame (none when it cannot be placed)."""
+    try:
+        decoded = decode(msgtype, data)
+    except MsgError:
+        return np.zeros((0, 3))
+    parts = [decoded] if isinstance(decoded, Decoded) else [op.decoded for op in decoded if op.decoded is not None]
+    frame = parts[0].frame_id if parts else ""
+    local = extent_points(decoded)
+    if not frame or frame == fixed or len(local) == 0:
+        return local
+    pose = frame_pose(records, fixed, frame, np.array([t_ns], dtype=np.int64))
+    if pose is None:
+        return np.zeros((0, 3))
+    translation, quat = pose
+    placed: np.ndarray = local @ quat_to_matrix(quat[0]).T + translation[0]
+    return placed
 
 
 def _preview(plan: Replay) -> np.ndarray:
