@@ -95,7 +95,8 @@ def decode_pointcloud2(data: bytes | memoryview, options: DecodeOptions) -> Deco
     with np.errstate(over="ignore", invalid="ignore"):
         xyz: F32 = np.stack([points["x"], points["y"], points["z"]], axis=1).astype(np.float32)
     keep = np.isfinite(xyz).all(axis=1)
-    colors = cloud_colors(points, options.flat_color)
+    flat = options.color_transformer == "FlatColor"
+    colors = one_color(options.flat_color) if flat else cloud_colors(points, options.flat_color)
     if colors.shape[0] > 1:
         colors = colors[keep]
     return Decoded(frame, stamp, (Points(xyz[keep], colors, options.point_radius),))

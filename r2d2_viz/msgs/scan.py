@@ -30,7 +30,8 @@ def decode_laserscan(data: bytes | memoryview, options: DecodeOptions) -> Decode
         r = ranges[keep].astype(np.float64)
         a = angles[keep]
         xyz: F32 = np.stack([r * np.cos(a), r * np.sin(a), np.zeros_like(r)], axis=1).astype(np.float32)
-    colors = intensity_colors(intensities[keep]) if intensities.size else one_color(options.flat_color)
+    by_intensity = intensities.size and options.color_transformer != "FlatColor"
+    colors = intensity_colors(intensities[keep]) if by_intensity else one_color(options.flat_color)
     return Decoded(frame, stamp, (Points(xyz, colors, options.point_radius),))
 
 

@@ -208,4 +208,5 @@ class DecodeOptions:
     point_radius: float = 0.005  # RViz's Size (m) 0.01 is a diameter
     flat_color: Rgba8 = (255, 255, 255, 255)
     covariance_scale: float = 1.0  # half sizes = scale x sqrt(eigenvalue): 1 sigma, RViz's default
+    color_transformer: Literal["auto", "FlatColor"] = "auto"  # auto: RGB8, else Intensity, else flat (RViz's)
     odometry_covariance: bool = False  # an Odometry's covariance ellipsoid (off unless a config asks for it)

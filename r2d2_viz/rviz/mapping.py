@@ -45,11 +45,21 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "none: r2d2-viz reads the URDF itself (`--urdf`, or a bag's `/robot_description`)",
     ),
     (
-        "LaserScan, PointCloud2, Marker, MarkerArray, Path, Odometry, Pose, PoseArray, Map, Polygon, Range",
+        "LaserScan, PointCloud2, PointCloud, Marker, MarkerArray, Path, Odometry, Pose, PoseWithCovariance, "
+        "PoseArray, Map, Polygon, PointStamped, Range, GridCells, Wrench, Twist",
         "Topic, Enabled",
-        "the entity a bag replay logs for that topic (its name, e.g. `/scan`), hidden when "
-        "disabled; the classes Rerun 0.41's MCAP decoders cannot draw are noted",
+        "the topic's messages, decoded by r2d2-viz from either storage, in their TF frame on the entity of the "
+        "topic's name (`/scan`), hidden when disabled (the table below says what each message becomes)",
     ),
+    (
+        "LaserScan, PointCloud2, PointCloud",
+        "Color, Alpha, Size (m), Color Transformer",
+        "flat colour and point radius; FlatColor forces the flat colour, any other transformer keeps RViz's "
+        "default choice (packed RGB8, else Intensity's rainbow, else flat)",
+    ),
+    ("LaserScan, PointCloud2", "Decay Time", "not mapped: the latest message shows (noted here, not per config)"),
+    ("Map", "Color Scheme", "map, costmap or raw colours (RViz's palettes)"),
+    ("Odometry", "Keep, Covariance", "the last Keep poses stay drawn (`/odom/<k>`); the covariance ellipsoid"),
     ("Image, Camera", "Topic / Image Topic, Enabled", "a 2D view of that topic's entity beside the plots"),
     (
         "moveit_rviz_plugin/MotionPlanning, PlanningScene",

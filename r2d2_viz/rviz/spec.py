@@ -51,10 +51,11 @@ TOPIC_DISPLAYS = (
     "Range",
     "Polygon",
     "PointStamped",
+    "PoseWithCovariance",
+    "GridCells",
+    "Wrench",
+    "Twist",
 )
-UNSHOWN_BY_RERUN = ("LaserScan", "Marker", "MarkerArray", "Path", "Odometry", "Map", "Range", "Polygon", "PoseArray")
-"""Topic displays whose messages Rerun 0.41's MCAP decoders cannot draw (the entity is still mapped)."""
-
 
 SCENE_ROBOT_DISPLAYS = ("MotionPlanning", "PlanningScene")
 """MoveIt's displays (``moveit_rviz_plugin/…``) that draw the robot as their "Scene Robot"."""
@@ -111,11 +112,27 @@ class RobotModel:
 
 
 @dataclass(frozen=True)
+class DisplayStyleSpec:
+    """What a topic display's properties say about how it draws (None: the display's default)."""
+
+    color: tuple[int, int, int] | None = None
+    alpha: float | None = None
+    size: float | None = None
+    """``Size (m)`` of points, or a line width."""
+    color_transformer: str | None = None
+    decay_time: float | None = None
+    keep: int | None = None
+    color_scheme: str | None = None
+    covariance: bool | None = None
+
+
+@dataclass(frozen=True)
 class TopicDisplay:
     kind: str
     name: str
     topic: str
     enabled: bool
+    style: DisplayStyleSpec = field(default_factory=DisplayStyleSpec)
 
 
 @dataclass(frozen=True)

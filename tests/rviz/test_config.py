@@ -96,7 +96,12 @@ def test_turtlebot3_model_ros2_orbit(tmp_path: Path) -> None:
         ("LaserScan", "/scan", True),
         ("Odometry", "/odom", True),
     ]
-    assert any("LaserScan" in n and "cannot draw" in n for n in spec.notes)
+    # the displays' style, as the file says (read by hand from tests/data/rviz/turtlebot3_model.rviz)
+    scan, odom = (t.style for t in spec.topics)
+    assert (scan.color, scan.color_transformer, scan.decay_time) == ((255, 255, 255), "Intensity", 0)
+    assert scan.size == pytest.approx(0.01)
+    assert (odom.keep, odom.covariance) == (100, False)
+    assert not any("cannot draw" in n for n in spec.notes)  # every topic display is drawn now
     components = _blueprint(spec, tmp_path)
     view = _scene(components)
     assert components[f"{view}/SpatialInformation"]["SpatialInformation:target_frame"] == ["odom"]

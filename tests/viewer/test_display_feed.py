@@ -30,7 +30,7 @@ from r2d2_viz.viewer.display_feed import DisplayFeed
 
 
 def _replay(tmp_path: Path, storage: str, *extra: str) -> tuple[dict, str]:
-    name = f"{storage}{'_'.join(extra)}"
+    name = f"{storage}_{len(list(tmp_path.iterdir()))}"
     bag = write_display_bag(tmp_path / f"bag_{name}", storage=storage)
     out = tmp_path / f"{name}.rrd"
     result = cli("--bag", str(bag), "--save", str(out), *extra)
@@ -112,3 +112,39 @@ def test_the_feed_pulls_messages_up_to_a_time_and_odometry_goes_round_its_keep()
         feed_module.log_decoded = original
     assert sent == [("/odom/0", 1), ("/odom/1", 2), ("/odom/0", 3)]
     assert isinstance(decode("nav_msgs/msg/Odometry", odometry(1, 0.0)), object)
+
+
+STYLED_CONFIG = """Visualization Manager:
+  Global Options:
+    Fixed Frame: odom
+  Displays:
+    - Class: rviz_default_plugins/LaserScan
+      Name: LaserScan
+      Enabled: true
+      Topic:
+        Value: /scan
+      Color: 255; 0; 0
+      Alpha: 0.5
+      Color Transformer: FlatColor
+      Size (m): 0.1
+    - Class: rviz_default_plugins/Odometry
+      Name: Odometry
+      Enabled: false
+      Topic:
+        Value: /odom
+      Keep: 2
+"""
+
+
+def test_an_rviz_configs_displays_style_the_topics(tmp_path: Path) -> None:
+    config = tmp_path / "styled.rviz"
+    config.write_text(STYLED_CONFIG)
+    recording, _ = _replay(tmp_path, "mcap", "--rviz", str(config))
+    scan = recording["/scan"]
+    drawn = [i for i, p in enumerate(scan.temporal["Points3D:positions"]) if p is not None]
+    # Color 255; 0; 0 with Alpha 0.5 as RGBA 0xFF000080, Size (m) 0.1 a diameter: radius 0.05
+    assert {tuple(scan.temporal["Points3D:colors"][i]) for i in drawn} == {(0xFF000080,)}
+    assert {tuple(np.round(scan.temporal["Points3D:radii"][i], 6)) for i in drawn} == {(0.05,)}
+    # Odometry's Keep 2: its poses go round two entities
+    assert sorted(k for k in recording if k.startswith("/odom/")) == ["/odom/0", "/odom/1"]
+    assert recording["/odom/0"].times == [T0, T0 + 2 * S]

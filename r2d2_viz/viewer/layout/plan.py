@@ -4,16 +4,18 @@ once, before anything is logged."""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from itertools import islice
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from r2d2_viz.kinematics.transforms import quat_to_matrix
 from r2d2_viz.msgs.extent import extent_points
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import Decoded
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, ViewSpec, missing_fixed_frame, orbit_eye
@@ -80,7 +82,34 @@ def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> Vi
         fixed_frame=frame,
     )
     show_names = spec.tf.show_names if spec.tf is not None else False
-    return ViewPlan(spec, layout, axis_length, show_names, tuple(notes))
+    styles = _styles(spec) if rviz is not None else {}
+    return ViewPlan(spec, layout, axis_length, show_names, tuple(notes), styles)
+
+
+MAP_SCHEMES = ("map", "costmap", "raw")
+
+
+def _styles(spec: ViewSpec) -> dict[str, DisplayStyle]:
+    """How the config's topic displays draw: colour and alpha, point size, the flat-colour transformer, a
+    map's colour scheme, Odometry's Keep and Covariance (what a display leaves unset keeps RViz's default)."""
+    styles = {}
+    for display in spec.topics:
+        s = display.style
+        changes: dict[str, Any] = {}
+        if s.color is not None:
+            alpha = 1.0 if s.alpha is None else min(max(s.alpha, 0.0), 1.0)
+            changes["flat_color"] = (*s.color, round(255 * alpha))
+        if s.size is not None and s.size > 0:
+            changes["point_radius"] = s.size / 2  # RViz's Size (m) is a diameter
+        if s.color_transformer == "FlatColor":
+            changes["color_transformer"] = "FlatColor"
+        if s.color_scheme in MAP_SCHEMES:
+            changes["map_scheme"] = s.color_scheme
+        if s.covariance is not None:
+            changes["odometry_covariance"] = s.covariance
+        keep = s.keep if s.keep and s.keep > 0 else None
+        styles[display.topic] = DisplayStyle(dataclasses.replace(DecodeOptions(), **changes), keep=keep)
+    return styles
 
 
 def _orbit_angles(spec: ViewSpec) -> tuple[float, float]:
