@@ -16,6 +16,7 @@ from pathlib import Path
 
 from r2d2_viz.errors import UsageError
 from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.pacing import Feeds, paced
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
@@ -185,6 +186,7 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
                     header_time=config.time == "header",
                     styles=view.display_styles,
                     source_name=str(config.bag),
+                    load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
             feeds = Feeds(TfFeed(recorded, plan.moving_tf), displays)
             if streamer is not None:

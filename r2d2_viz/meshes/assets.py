@@ -16,6 +16,7 @@ import io
 import os
 import re
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,7 @@ from r2d2_viz.meshes.collada_glb import collada_to_glb
 from r2d2_viz.meshes.disk_cache import DiskCache, sha256
 from r2d2_viz.meshes.gltf_write import colour_parts, paint_bare_primitives
 from r2d2_viz.robot.model import Box, Cylinder, MeshFile, Shape, Sphere
+from r2d2_viz.robot.packages import PackageIndex
 
 CYLINDER_SECTIONS = 48
 SPHERE_SUBDIVISIONS = 3
@@ -339,3 +341,26 @@ def _frozen(vertices: Any, normals: Any, faces: Any) -> Arrays:
     for a in arrays:
         a.flags.writeable = False
     return arrays
+
+
+def uri_loader(
+    packages: PackageIndex, base_dir: Path, cache: MeshCache | None = None
+) -> Callable[[str], tuple[bytes, str] | None]:
+    """``uri`` (``package://``, ``file://`` or a path) → the viewer's (bytes, media type) of that mesh file, or None
+    when it cannot be found or read: what a MESH_RESOURCE marker draws. Each file is read once."""
+    meshes = cache or MeshCache()
+
+    def load(uri: str) -> tuple[bytes, str] | None:
+        try:
+            path = packages.resolve_uri(uri, base_dir=base_dir)
+        except Exception:  # a malformed uri from a message: nothing to draw
+            return None
+        if path is None:
+            return None
+        try:
+            asset = meshes.asset(path, uri)
+        except ValueError:
+            return None
+        return asset.data, asset.media_type
+
+    return load

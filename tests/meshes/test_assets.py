@@ -222,3 +222,20 @@ def test_device_files_are_never_read(tmp_path: Path) -> None:
     mtl = (LAIKAGO / "trunk.mtl").read_text().replace("Kd 1.0", "map_Kd /dev/zero\nKd 1.0", 1)
     (tmp_path / "trunk.mtl").write_text(mtl)
     assert MeshCache(disk=None).asset(tmp_path / "trunk.obj").media_type == "model/gltf-binary"
+
+
+def test_a_marker_mesh_resource_uri_loads_through_the_package_resolver(tmp_path: Path) -> None:
+    from r2d2_viz.meshes.assets import uri_loader
+    from r2d2_viz.robot.packages import PackageIndex
+
+    # --package-path NAME=DIR, as a user names a package without a package.xml: package://panda_description/…
+    packages = PackageIndex.from_args(
+        [f"panda_description={ROBOTS / 'panda_description'}"], description=None, environ={}
+    )
+    load = uri_loader(packages, tmp_path)
+    found = load("package://panda_description/meshes/visual/finger.dae")
+    assert found is not None
+    data, media_type = found
+    assert media_type == "model/gltf-binary" and data[:4] == b"glTF"  # COLLADA reaches the viewer as GLB
+    assert load("package://no_such_package/x.stl") is None
+    assert load("package://panda_description/meshes/visual/missing.dae") is None
