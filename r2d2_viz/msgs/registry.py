@@ -38,6 +38,59 @@ DECODERS: dict[str, Decoder] = {
 }
 
 
+SHOWN_AS: dict[str, tuple[str, str]] = {
+    "sensor_msgs/msg/LaserScan": (
+        "LaserScan",
+        "`Points3D` in the scan's frame; NaN/inf and ranges outside [range_min, range_max] dropped; intensity "
+        "rainbow (min/max of each scan), else the flat colour",
+    ),
+    "sensor_msgs/msg/PointCloud2": (
+        "PointCloud2",
+        "`Points3D`, any field layout (padding, big-endian, organised with NaN); packed rgb/rgba, else intensity, "
+        "else flat",
+    ),
+    "sensor_msgs/msg/PointCloud": ("PointCloud", "`Points3D`; its `intensity` channel as the rainbow"),
+    "sensor_msgs/msg/Range": ("Range", "`LineStrips3D` cone of its field of view; nothing outside its limits"),
+    "sensor_msgs/msg/Image": ("Image", "`Image` in a 2D view (mono, rgb, bgr, 16-bit, with row padding)"),
+    "sensor_msgs/msg/CompressedImage": ("Image", "`EncodedImage` (JPEG, PNG)"),
+    "sensor_msgs/msg/CameraInfo": ("Camera", "`Pinhole` from K, so images also show in 3D"),
+    "visualization_msgs/msg/Marker": (
+        "Marker",
+        "all eleven types on `<topic>/<ns>/<id>` (arrows, boxes, spheres, cylinders, lines, points, text, "
+        "meshes through the package resolver, triangle lists); DELETE, DELETEALL and lifetime as `Clear`",
+    ),
+    "visualization_msgs/msg/MarkerArray": ("MarkerArray", "as Marker, each marker on its own entity"),
+    "nav_msgs/msg/Path": ("Path", "`LineStrips3D` through the poses"),
+    "nav_msgs/msg/Odometry": (
+        "Odometry",
+        "`Arrows3D` along the pose's x, the last Keep (100) poses kept; covariance ellipsoid when asked",
+    ),
+    "nav_msgs/msg/OccupancyGrid": (
+        "Map",
+        "a textured `Mesh3D` quad at its origin and resolution; RViz's map, costmap or raw palette",
+    ),
+    "nav_msgs/msg/GridCells": ("GridCells", "`Boxes3D`, one per cell"),
+    "geometry_msgs/msg/PoseStamped": ("Pose", "`Arrows3D` along the pose's x"),
+    "geometry_msgs/msg/PoseArray": ("PoseArray", "`Arrows3D`, one per pose"),
+    "geometry_msgs/msg/PoseWithCovarianceStamped": (
+        "PoseWithCovariance",
+        "`Arrows3D` and the 1-sigma `Ellipsoids3D` of the position covariance",
+    ),
+    "geometry_msgs/msg/PointStamped": ("PointStamped", "a small `Ellipsoids3D` sphere"),
+    "geometry_msgs/msg/PolygonStamped": ("Polygon", "a closed `LineStrips3D`"),
+    "geometry_msgs/msg/WrenchStamped": ("Wrench", "`Arrows3D`: force, and torque"),
+    "geometry_msgs/msg/TwistStamped": ("Twist", "`Arrows3D`: linear and angular velocity"),
+}
+"""What each decoded type becomes: the RViz display that draws it, and the Rerun archetypes r2d2-viz logs."""
+
+
+def displays_markdown() -> str:
+    """The README's "From RViz's displays to r2d2-viz" table."""
+    lines = ["| message type | RViz display | in Rerun |", "|---|---|---|"]
+    lines += [f"| `{msgtype}` | {display} | {shown} |" for msgtype, (display, shown) in SHOWN_AS.items()]
+    return "\n".join(lines)
+
+
 def decode(typename: str, data: bytes | memoryview, options: DecodeOptions | None = None) -> Decoded | list[MarkerOp]:
     """Decode one message of ``typename``; unknown types and every failure raise ``MsgError``. Hostile values
     (huge doubles cast to float32 and the like) turn into inf / NaN silently: numpy prints nothing."""
@@ -51,3 +104,7 @@ def decode(typename: str, data: bytes | memoryview, options: DecodeOptions | Non
         raise
     except (IndexError, KeyError, TypeError, OverflowError, AttributeError, struct.error) as exc:
         raise MsgError(f"{typename}: {one_line(exc)}") from None
+
+
+if __name__ == "__main__":  # python -m r2d2_viz.msgs.registry: the README's table
+    print(displays_markdown())

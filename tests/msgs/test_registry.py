@@ -46,3 +46,12 @@ def test_mangled_bytes_raise_only_value_error(typename: str) -> None:
             decode(typename, variant)
         except ValueError:
             pass
+
+
+def test_the_readme_table_covers_every_decoder_and_is_in_the_readme() -> None:
+    from conftest import REPO
+
+    from r2d2_viz.msgs.registry import DECODERS, SHOWN_AS, displays_markdown
+
+    assert list(SHOWN_AS) == list(DECODERS)  # one row per decoder, in the table's order
+    assert displays_markdown() in (REPO / "README.md").read_text()
