@@ -53,5 +53,5 @@ def test_the_readme_table_covers_every_decoder_and_is_in_the_readme() -> None:
 
     from r2d2_viz.msgs.registry import DECODERS, SHOWN_AS, displays_markdown
 
-    assert list(SHOWN_AS) == list(DECODERS)  # one row per decoder, in the table's order
+    assert sorted(SHOWN_AS) == sorted(DECODERS)  # one row per decoder
     assert displays_markdown() in (REPO / "README.md").read_text()
