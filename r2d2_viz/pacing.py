@@ -26,7 +26,8 @@ from r2d2_viz.viewer.tf_recorded import TfFeed
 
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
 """Benchmark hook: if set to a path, live runs write one line per sample, ``sample lateness_seconds``
-(when its send returned, minus when it was due). Off by default; costs nothing when unset."""
+(when its send returned, minus when it was due), and one per hand-over of feed items (recorded TF, display
+messages), ``f lateness_seconds`` of the earliest item handed over. Off by default; costs nothing when unset."""
 MAX_SLEEP = 0.1
 """Sleep at most this long at a time, so a signal (which sets the stop event) is seen soon."""
 
@@ -70,7 +71,9 @@ class _Clock:
         return self.t0 + int((time.monotonic() - self.start) * self.speed * 1e9)
 
 
-def _feed_until(clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Event) -> None:
+def _feed_until(
+    clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Event, log: TextIO | None = None
+) -> None:
     """Until ``deadline`` (monotonic seconds), send the feeds' items as each falls due."""
     while not stop.is_set():
         t = feeds.next_time_ns
@@ -86,6 +89,8 @@ def _feed_until(clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Ev
             time.sleep(min(clock.due(t) - now, MAX_SLEEP))
             continue
         feeds.until(clock.now_ns())
+        if log is not None:
+            log.write(f"f {time.monotonic() - clock.due(t):.6f}\n")
 
 
 def paced(
@@ -104,7 +109,7 @@ def paced(
             if clock is None:
                 first = feeds.next_time_ns
                 clock = _Clock(time.monotonic(), first if first is not None else 0, speed)
-            _feed_until(clock, feeds, math.inf, stop)
+            _feed_until(clock, feeds, math.inf, stop, log)
     return (sent if streamer is not None and source is not None else feeds.sent), stop.is_set()
 
 
@@ -131,7 +136,7 @@ def _paced_samples(
         due = clock.start + (chunk.times_ns - clock.t0) * (1e-9 / speed)
         i = 0
         while i < n:
-            _feed_until(clock, feeds, float(due[i]), stop)
+            _feed_until(clock, feeds, float(due[i]), stop, log)
             if stop.is_set():
                 break
             j = i + 1 + int(np.searchsorted(due[i + 1 :], time.monotonic(), side="right"))
