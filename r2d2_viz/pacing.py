@@ -71,9 +71,7 @@ class _Clock:
         return self.t0 + int((time.monotonic() - self.start) * self.speed * 1e9)
 
 
-def _feed_until(
-    clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Event, log: TextIO | None = None
-) -> None:
+def _feed_until(clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Event, log: TextIO | None = None) -> None:
     """Until ``deadline`` (monotonic seconds), send the feeds' items as each falls due."""
     while not stop.is_set():
         t = feeds.next_time_ns

@@ -186,6 +186,7 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
                     header_time=config.time == "header",
                     styles=view.display_styles,
                     source_name=str(config.bag),
+                    topics=plan.displays,
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
             feeds = Feeds(TfFeed(recorded, plan.moving_tf), displays)

@@ -59,6 +59,7 @@ class DisplayFeed:
         load_mesh: MeshLoader | None = None,
         source_name: str = "",
         timeline: str = TIMELINE,
+        topics: Mapping[str, str] | None = None,
     ) -> None:
         self.notices, self.rec = notices, notices.rec
         self._messages = messages
@@ -67,6 +68,8 @@ class DisplayFeed:
         self.styles = dict(styles or {})
         self.load_mesh, self.source_name, self.timeline = load_mesh, source_name, timeline
         self.topics: dict[str, _TopicState] = {}
+        self.cameras = camera_images(topics or {})
+        """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
         self._pull()
 
@@ -120,16 +123,17 @@ class DisplayFeed:
         keep = style.keep if style.keep is not None else KEEP.get(message.msgtype, 1)
         if keep > 1 and isinstance(decoded, Decoded):
             entity = f"{message.topic}/{(state.messages - 1) % keep}"
-        log_decoded(
-            self.rec,
-            entity,
-            decoded,
-            timeline=self.timeline,
-            time_ns=time_ns,
-            clock=self.clock,
-            markers=state.markers,
-            load_mesh=self.load_mesh,
-        )
+        for target in (entity, *self.cameras.get(message.topic, ())):
+            log_decoded(
+                self.rec,
+                target,
+                decoded,
+                timeline=self.timeline,
+                time_ns=time_ns,
+                clock=self.clock,
+                markers=state.markers,
+                load_mesh=self.load_mesh,
+            )
 
     def _where(self, topic: str) -> str:
         return f"{self.source_name}: {topic}" if self.source_name else topic
@@ -158,6 +162,23 @@ class DisplayFeed:
                 self.notices.report(
                     f"{self._where(topic)}: {state.problems} of {state.messages} messages could not be shown"
                 )
+
+
+IMAGES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
+
+
+def camera_images(topics: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
+    """Each CameraInfo topic's image topics: those under its namespace (``/cam/camera_info`` →
+    ``/cam/image_raw``, ``/cam/image_raw/compressed``), as RViz's Camera display pairs them."""
+    out = {}
+    for info, msgtype in topics.items():
+        if msgtype != "sensor_msgs/msg/CameraInfo":
+            continue
+        namespace = info.rsplit("/", 1)[0] + "/"
+        images = tuple(t for t, m in sorted(topics.items()) if m in IMAGES and t.startswith(namespace))
+        if images:
+            out[info] = images
+    return out
 
 
 def _first_stamp(ops: list[MarkerOp]) -> int:

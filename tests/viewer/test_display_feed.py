@@ -148,3 +148,31 @@ def test_an_rviz_configs_displays_style_the_topics(tmp_path: Path) -> None:
     # Odometry's Keep 2: its poses go round two entities
     assert sorted(k for k in recording if k.startswith("/odom/")) == ["/odom/0", "/odom/1"]
     assert recording["/odom/0"].times == [T0, T0 + 2 * S]
+
+
+def test_a_cameras_images_get_its_pinhole_and_a_2d_view(tmp_path: Path) -> None:
+    from bagmaker import BagSpec, write_bag
+    from msgs_build import T, cdr, header
+
+    image = T("sensor_msgs/msg/Image")(
+        header=header("cam_optical"), height=2, width=2, encoding="rgb8", is_bigendian=0, step=6,
+        data=np.arange(12, dtype=np.uint8),
+    )  # fmt: skip
+    K = [100.0, 0, 1, 0, 100.0, 1, 0, 0, 1]
+    info = T("sensor_msgs/msg/CameraInfo")(
+        header=header("cam_optical"), height=2, width=2, distortion_model="plumb_bob", d=np.zeros(5),
+        k=np.array(K), r=np.eye(3).reshape(-1), p=np.zeros(12), binning_x=0, binning_y=0,
+        roi=T("sensor_msgs/msg/RegionOfInterest")(x_offset=0, y_offset=0, height=0, width=0, do_rectify=False),
+    )  # fmt: skip
+    spec = BagSpec(types={"/cam/image_raw": "sensor_msgs/msg/Image", "/cam/camera_info": "sensor_msgs/msg/CameraInfo"})
+    spec.add("/cam/camera_info", T0, cdr(info)).add("/cam/image_raw", T0 + 1, cdr(image))
+    bag = write_bag(tmp_path / "cam", spec)
+    out = tmp_path / "cam.rrd"
+    result = cli("--bag", str(bag), "--save", str(out))
+    assert result.returncode == 0, result.stderr
+    recording = read_recording(out)
+    pinned = recording["/cam/image_raw"]
+    # the CameraInfo's K on the image's entity (so the image shows in 3D, in its frame) beside the image itself
+    k = next(v for v in pinned.temporal["Pinhole:image_from_camera"] if v is not None)
+    assert np.allclose(np.reshape(k, (3, 3)).T, np.reshape(K, (3, 3)))  # Rerun stores the matrix column-major
+    assert any(v is not None for v in pinned.temporal["Image:buffer"])

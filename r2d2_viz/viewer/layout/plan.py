@@ -18,12 +18,12 @@ from r2d2_viz.msgs.registry import decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
-from r2d2_viz.rviz.spec import Camera, ViewSpec, missing_fixed_frame, orbit_eye
+from r2d2_viz.rviz.spec import Camera, TopicDisplay, ViewSpec, missing_fixed_frame, orbit_eye
 from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.replay import Replay
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
-from r2d2_viz.viewer.display_feed import DisplayStyle
+from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle
 from r2d2_viz.viewer.layout.blueprint import Layout
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
 
@@ -49,6 +49,9 @@ class ViewPlan:
 
 def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> ViewPlan:
     spec = load_rviz(rviz) if rviz is not None else tutorial_spec()
+    if rviz is None:  # without a config, every image topic gets its 2D view, as an Image display would
+        images = [TopicDisplay("Image", t, t, True) for t, m in sorted(plan.displays.items()) if m in IMAGES]
+        spec = dataclasses.replace(spec, topics=(*spec.topics, *images))
     notes = list(spec.notes) if rviz is not None else []
     tree, source = plan.tree, plan.source
     limits = tree.limits if tree is not None else {}

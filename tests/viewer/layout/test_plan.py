@@ -51,3 +51,11 @@ def test_an_rviz_config_wins_and_a_missing_fixed_frame_is_said(tmp_path: Path) -
     assert any("Fixed Frame [map] does not exist" in n for n in view.notes)
     override = plan_view(_plan(ARM), rviz=config, fixed_frame="odom")
     assert override.layout.fixed_frame == "odom" and not any("Fixed Frame" in n for n in override.notes)
+
+
+def test_without_a_config_every_image_topic_gets_a_2d_view() -> None:
+    from r2d2_viz.sources.replay import Replay
+
+    plan = Replay(None, None, None, None, "odom", displays={"/cam/image_raw": "sensor_msgs/msg/Image", "/scan": "x"})
+    topics = plan_view(plan, rviz=None, fixed_frame=None).spec.topics
+    assert [(t.kind, t.topic) for t in topics] == [("Image", "/cam/image_raw")]
