@@ -69,8 +69,8 @@ def write_cloud_bag(folder: Path, seconds: float, points: int, rate: float = 10.
             data["z"] = rng.uniform(0, 3, points)
             data["rgb"] = rng.integers(0, 1 << 24, points, dtype=np.uint32)
             body = bytearray(template)
-            body[8:12] = int(t // 1_000_000_000).to_bytes(4, "little", signed=True)
-            body[12:16] = int(t % 1_000_000_000).to_bytes(4, "little")
+            body[4:8] = int(t // 1_000_000_000).to_bytes(4, "little", signed=True)  # header.stamp, after the
+            body[8:12] = int(t % 1_000_000_000).to_bytes(4, "little")  # 4-byte encapsulation header
             body[offset : offset + 16 * points] = data.view(np.uint8).tobytes()
             writer.write(connection, t, bytes(body))
     return path

@@ -92,14 +92,27 @@ def decode_pointcloud2(data: bytes | memoryview, options: DecodeOptions) -> Deco
     if points.shape[0] == 0:
         empty = Points(np.zeros((0, 3), np.float32), one_color(options.flat_color), options.point_radius)
         return Decoded(frame, stamp, (empty,))
-    with np.errstate(over="ignore", invalid="ignore"):
-        xyz: F32 = np.stack([points["x"], points["y"], points["z"]], axis=1).astype(np.float32)
+    xyz = _xyz(points)
     keep = np.isfinite(xyz).all(axis=1)
+    everything = bool(keep.all())
     flat = options.color_transformer == "FlatColor"
     colors = one_color(options.flat_color) if flat else cloud_colors(points, options.flat_color)
-    if colors.shape[0] > 1:
+    if colors.shape[0] > 1 and not everything:
         colors = colors[keep]
-    return Decoded(frame, stamp, (Points(xyz[keep], colors, options.point_radius),))
+    return Decoded(frame, stamp, (Points(xyz if everything else xyz[keep], colors, options.point_radius),))
+
+
+def _xyz(points: np.ndarray) -> F32:
+    """``(N, 3)`` float32 positions: one strided copy when x, y, z are consecutive little-endian float32 (the
+    common layout), else field by field."""
+    fields: dict[str, Any] = dict(points.dtype.fields or {})
+    x, y, z = (fields[name] for name in ("x", "y", "z"))
+    consecutive = y[1] == x[1] + 4 and z[1] == x[1] + 8
+    if consecutive and all(f[0] == np.dtype("<f4") for f in (x, y, z)) and points.strides[0] > 0:
+        view = np.ndarray((points.shape[0], 3), "<f4", buffer=points, offset=x[1], strides=(points.strides[0], 4))
+        return np.ascontiguousarray(view)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.stack([points["x"], points["y"], points["z"]], axis=1).astype(np.float32)
 
 
 def decode_pointcloud(data: bytes | memoryview, options: DecodeOptions) -> Decoded:

@@ -78,10 +78,11 @@ def open_replay(
     records = read_tf(bag, time=time)
     static_tf = next((r for r in records if r.static), None)
     moving_tf = next((r for r in records if not r.static), None)
-    if robot is None:
-        notes.append(f"{bag.path}: no --urdf and no /robot_description: a TF-only replay (frames, axes, arrows)")
-    tree = compile_tree(robot) if robot is not None else None
     shown, undisplayed = display_topics(bag)
+    if robot is None:
+        what = "its transforms and display topics" if shown else "a TF-only replay (frames, axes, arrows)"
+        notes.append(f"{bag.path}: no --urdf and no /robot_description: no robot, {what}")
+    tree = compile_tree(robot) if robot is not None else None
     frame = fixed_frame or tf_root(records) or _one_display_frame(bag, shown, records, robot) or ODOM
     replay = Replay(tree, None, static_tf, moving_tf, frame, notes=notes, description=text)
     replay.displays, replay.undisplayed = shown, undisplayed

@@ -29,8 +29,8 @@ from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
 
 PREVIEW_TIMES = 256
 """A bag's view follows its recorded TF at this many times spread over the whole bag…"""
-PREVIEW_MESSAGES = 64
-"""…and frames what its first this many display messages draw."""
+PREVIEW_MESSAGES = 16
+"""…and frames what its first this many display messages draw (a cloud is milliseconds to decode)."""
 PREVIEW_SAMPLES = 3000
 """The stretch of a generated motion the view is fitted to (100 s at 30 Hz), sampled at 256 points."""
 
