@@ -82,6 +82,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FRAME",
         help="the 3D view's frame (default: the TF tree's root, or odom)",
     )
+    ros = parser.add_argument_group("joining a running ROS 2 graph (Cyclone DDS; ROS_DOMAIN_ID and friends apply)")
+    ros.add_argument(
+        "--ros",
+        action="store_true",
+        help="show the live graph: /robot_description (or --urdf), /joint_states, /tf, /tf_static and display "
+        "topics; --duration is then seconds of wall time",
+    )
+    ros.add_argument("--list", action="store_true", help="with --ros: print the topics, types and publishers; exit")
     parser.add_argument(
         "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
     )
@@ -141,7 +149,14 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError("--headless shows nothing; it cannot be combined with a sink")
     if args.bag is not None and args.motion is not None:
         raise UsageError("--motion and --bag both say what moves the robot; choose one")
-    if args.save is not None and args.save.suffix == ".mcap" and (live or args.realtime):
+    if args.list and not args.ros:
+        raise UsageError("--list lists a live ROS 2 graph's topics: use it with --ros")
+    if args.ros:
+        if args.bag is not None or args.motion is not None:
+            raise UsageError("--ros shows the live graph; it cannot be combined with --bag or --motion")
+        if args.list:
+            return _list_topics()
+    elif args.save is not None and args.save.suffix == ".mcap" and (live or args.realtime):
         raise UsageError(f"--save {args.save}: a bag is written as fast as it can, not with a live sink or --realtime")
     if not (math.isfinite(args.speed) and args.speed > 0):
         raise UsageError(f"--speed must be a positive factor, got {args.speed:g}")
@@ -176,7 +191,17 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         time=args.time,
         fixed_frame=args.fixed_frame,
         rviz=args.rviz,
+        ros=args.ros,
     )
     result = run(config, on_ready=lambda message: print(message, file=sys.stderr, flush=True))
     print_summary(result, config)
+    return EXIT_OK
+
+
+def _list_topics() -> int:
+    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts."""
+    from r2d2_viz.sources.live.dds import list_topics
+
+    for topic, msgtype, publishers in list_topics():
+        print(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}", flush=True)
     return EXIT_OK

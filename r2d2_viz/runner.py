@@ -72,6 +72,8 @@ class RunConfig:
     fixed_frame: str | None = None
     rviz: Path | None = None
     """Lay the viewer out as this RViz config does (default: the tutorial's r2d2.rviz, fitted to the robot)."""
+    ros: bool = False
+    """Join the live ROS 2 graph (:mod:`r2d2_viz.live_run`); ``duration`` is then seconds of wall time."""
 
     @property
     def live(self) -> bool:
@@ -98,6 +100,10 @@ class RunResult:
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
     """Run the whole pipeline. Raises R2d2VizError for bad input; never leaves a half-written file."""
     _check_numbers(config)
+    if config.ros:
+        from r2d2_viz.live_run import run_live
+
+        return RunResult(*run_live(config, on_ready=on_ready))
     with ExitStack() as inputs:
         plan = _plan(config, inputs)
         save = config.sink.save
@@ -281,4 +287,5 @@ def print_summary(result: RunResult, config: RunConfig) -> None:
     where = f" to {result.saved}" if result.saved else ""
     how = " (stopped by signal)" if result.interrupted else ""
     what = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
+    what = "of joint states from the ROS 2 graph" if config.ros else what
     print(f"r2d2-viz: {result.samples} samples {what}{where}{how}", file=sys.stderr)

@@ -37,7 +37,7 @@ TF_MESSAGE = "tf2_msgs/msg/TFMessage"
 STRING = "std_msgs/msg/String"
 
 
-def _qos(depth: int, durability: QosDurability) -> Qos:
+def qos_profile(depth: int, durability: QosDurability) -> Qos:
     zero = QosTime(0, 0)
     return Qos(
         QosHistory.KEEP_LAST,
@@ -52,9 +52,9 @@ def _qos(depth: int, durability: QosDurability) -> Qos:
     )
 
 
-LATCHED = _qos(1, QosDurability.TRANSIENT_LOCAL)
+LATCHED = qos_profile(1, QosDurability.TRANSIENT_LOCAL)
 """What robot_state_publisher offers on /robot_description and /tf_static: reliable, transient local, depth 1."""
-STREAM = {"/joint_states": _qos(10, QosDurability.VOLATILE), "/tf": _qos(100, QosDurability.VOLATILE)}
+STREAM = {"/joint_states": qos_profile(10, QosDurability.VOLATILE), "/tf": qos_profile(100, QosDurability.VOLATILE)}
 
 
 class StaticTransform(NamedTuple):

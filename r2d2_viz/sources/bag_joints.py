@@ -12,15 +12,16 @@ message whose name and position lengths differ is skipped, and the skipped ones 
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from r2d2_viz.arrays import F64, I64
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.layouts import STAMP, JointStateLayout, joint_state_layout
+from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag import Bag, Warn
 from r2d2_viz.sources.base import Clock, SampleChunk
 
@@ -28,6 +29,10 @@ JOINT_STATE = "sensor_msgs/msg/JointState"
 STRING = "std_msgs/msg/String"
 TimeSource = Literal["receive", "header"]
 _STAMP = np.dtype([("sec", "<i4"), ("nsec", "<u4")])
+MAX_LAYOUTS = 64
+"""Byte layouts remembered (one per set of joint names); a publisher whose names change every message evicts."""
+MAX_UNKNOWN = 1000
+"""Unknown joint names remembered for the warning (a 10,000-name message must not grow it without end)."""
 
 
 def stamps_ns(stamps: bytes) -> I64:
@@ -66,36 +71,62 @@ class BagSource:
         self.bag, self.topic, self.time = bag, topic, time
         self.warn = warn or bag.warn
         self.joints = tuple(actuated)
-        self._column = {name: i for i, name in enumerate(self.joints)}
         self.present = bag.require_type(topic, JOINT_STATE)
-        self.skipped = self.undecodable = 0
-        self.unknown: set[str] = set()
-        self._layouts: list[JointStateLayout] = []
+        self.decoder = JointStateDecoder(self.joints, time=time, deserialize=bag.deserialize)
 
     def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
         if not self.present:
             return
         last_ns = np.iinfo(np.int64).min
         moved = 0
-        self.skipped, self.undecodable, self.unknown = 0, 0, set()
+        self.decoder = JointStateDecoder(self.joints, time=self.time, deserialize=self.bag.deserialize)
         for batch in self.bag.batches(self.topic, max_samples):
-            chunk = self._decode(batch)
+            chunk = self.decoder.decode(batch)
             if chunk is not None:
-                chunk, last_ns, moved = _monotonic(chunk, last_ns, moved)
+                chunk, last_ns, moved = monotonic(chunk, last_ns, moved)
                 yield chunk
-        self._report(moved)
+        for problem in self.decoder.problems():
+            self.warn(f"{self.bag.path}: {self.topic}: {problem}")
+        if moved:
+            self.warn(
+                f"{self.bag.path}: {self.topic}: {moved} header stamps went back in time; "
+                "they are shown at the previous stamp"
+            )
 
-    def _report(self, moved: int) -> None:
-        where = f"{self.bag.path}: {self.topic}"
+
+class JointStateDecoder:
+    """JointState messages (CDR bytes) to :class:`SampleChunk` s of the robot's ``actuated`` joints, in bulk;
+    ``deserialize(data, msgtype)`` (raising BagError or MsgError) decodes what no byte layout fits. Counts what it
+    skips: :meth:`problems` says it (a bag's source and a live graph's share this)."""
+
+    def __init__(
+        self,
+        actuated: Sequence[str],
+        *,
+        time: TimeSource = "receive",
+        deserialize: Callable[[bytes | memoryview, str], Any],
+    ) -> None:
+        self.joints = tuple(actuated)
+        self.time = time
+        self._deserialize = deserialize
+        self._column = {name: i for i, name in enumerate(self.joints)}
+        self.skipped = self.undecodable = self.nonfinite = 0
+        self.unknown: set[str] = set()
+        self._layouts: list[JointStateLayout] = []
+
+    def problems(self) -> list[str]:
+        """One line per kind of message skipped or joint ignored so far."""
+        out = []
         if self.unknown:
             names = ", ".join(sorted(self.unknown)[:10]) + (", ..." if len(self.unknown) > 10 else "")
-            self.warn(f"{where}: ignored joints that are not actuated joints of the robot: {names}")
+            out.append(f"ignored joints that are not actuated joints of the robot: {names}")
         if self.skipped:
-            self.warn(f"{where}: skipped {self.skipped} messages whose name and position lengths differ")
+            out.append(f"skipped {self.skipped} messages whose name and position lengths differ")
         if self.undecodable:
-            self.warn(f"{where}: skipped {self.undecodable} messages that cannot be decoded")
-        if moved:
-            self.warn(f"{where}: {moved} header stamps went back in time; they are shown at the previous stamp")
+            out.append(f"skipped {self.undecodable} messages that cannot be decoded")
+        if self.nonfinite:
+            out.append(f"{self.nonfinite} messages had NaN or infinite positions (those joints kept their last value)")
+        return out
 
     def _layout_of(self, data: bytes | memoryview) -> JointStateLayout | None:
         for layout in self._layouts:
@@ -105,13 +136,15 @@ class BagSource:
             layout = joint_state_layout(data)
         except ValueError:
             return None
+        if len(self._layouts) >= MAX_LAYOUTS:  # names that change every message: memory stays bounded
+            self._layouts.pop(0)
         self._layouts.append(layout)
-        for name in layout.names:
-            if name not in self._column:
-                self.unknown.add(name)
+        if len(self.unknown) < MAX_UNKNOWN:
+            self.unknown.update(name for name in layout.names if name not in self._column)
         return layout
 
-    def _decode(self, messages: list[tuple[int, bytes | memoryview]]) -> SampleChunk | None:
+    def decode(self, messages: Sequence[tuple[int, bytes | memoryview]]) -> SampleChunk | None:
+        """``(receive time ns, CDR bytes)`` pairs to one chunk (None: no message could be used)."""
         groups: dict[tuple[int, int], _Group] = {}  # (layout, message length) → its messages: one matrix
         times: list[int] = []
         singles: list[tuple[int, tuple[str, ...], F64, int]] = []  # messages rosbags had to decode
@@ -128,7 +161,7 @@ class BagSource:
             if layout is None:
                 try:
                     names, positions, stamp_ns = self._generic(data)
-                except BagError:
+                except (BagError, MsgError):
                     self.undecodable += 1
                     continue
                 if len(names) != len(positions):
@@ -159,25 +192,30 @@ class BagSource:
             names = g.layout.names
             keep = [i for i, name in enumerate(names) if name in column]
             if keep:
-                block = raw[:, g.layout.positions : g.layout.end].copy().view("<f8")
-                positions[rows[:, None], [column[names[i]] for i in keep]] = block[:, keep]
+                block = raw[:, g.layout.positions : g.layout.end].copy().view("<f8")[:, keep]
+                bad = ~np.isfinite(block)
+                if bad.any():
+                    self.nonfinite += int(np.count_nonzero(bad.any(axis=1)))
+                    block[bad] = np.nan
+                positions[rows[:, None], [column[names[i]] for i in keep]] = block
         for row, names, values, stamp_ns in singles:
             header[row] = stamp_ns
+            self.nonfinite += int(not np.isfinite(values).all())
             for name, value in zip(names, values, strict=True):
                 if name in column:
-                    positions[row, column[name]] = value
-                elif name not in self._column:
+                    positions[row, column[name]] = value if np.isfinite(value) else np.nan
+                elif name not in self._column and len(self.unknown) < MAX_UNKNOWN:
                     self.unknown.add(name)
         times_ns: I64 = np.asarray(times, dtype=np.int64) if self.time == "receive" else header
         return SampleChunk(times_ns, joints, positions)
 
     def _generic(self, data: bytes | memoryview) -> tuple[tuple[str, ...], F64, int]:
-        msg = self.bag.deserialize(data, JOINT_STATE)
+        msg = self._deserialize(data, JOINT_STATE)
         stamp = msg.header.stamp
         return tuple(msg.name), np.asarray(msg.position, dtype=np.float64), int(stamp.sec) * 10**9 + int(stamp.nanosec)
 
 
-def _monotonic(chunk: SampleChunk, last_ns: int, moved: int) -> tuple[SampleChunk, int, int]:
+def monotonic(chunk: SampleChunk, last_ns: int, moved: int) -> tuple[SampleChunk, int, int]:
     """Times made non-decreasing (header stamps of several publishers may interleave out of order)."""
     t = chunk.times_ns
     fixed = np.maximum.accumulate(np.concatenate([[last_ns], t]))[1:]

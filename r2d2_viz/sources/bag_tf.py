@@ -8,14 +8,16 @@ go through rosbags' deserializer; ones that cannot be decoded are skipped and co
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.layouts import TfLayout, tf_layout
+from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag import Bag
-from r2d2_viz.sources.bag_joints import TimeSource, stamps_ns
+from r2d2_viz.sources.bag_joints import MAX_LAYOUTS, TimeSource, stamps_ns
 from r2d2_viz.sources.base import TfRecords
 
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
@@ -36,7 +38,7 @@ def tf_chunks(bag: Bag, topic: str, *, time: TimeSource = "receive", max_message
     """The transforms of ``topic`` (static when it is ``/tf_static``), a TfRecords per ``max_messages``."""
     if not bag.require_type(topic, TF_MESSAGE):
         return
-    reader = _TfReader(bag, topic, static=topic == "/tf_static", time=time)
+    reader = TfDecoder(bag.deserialize, static=topic == "/tf_static", time=time)
     for batch in bag.batches(topic, max_messages):
         records = reader.decode(batch)
         if len(records):
@@ -58,13 +60,19 @@ def _concatenate(parts: list[TfRecords]) -> TfRecords:
     )
 
 
-class _TfReader:
-    def __init__(self, bag: Bag, topic: str, *, static: bool, time: TimeSource) -> None:
-        self.bag, self.topic, self.static, self.time = bag, topic, static, time
+class TfDecoder:
+    """TFMessage CDR bytes to :class:`TfRecords`, in bulk; ``deserialize(data, msgtype)`` (raising BagError or
+    MsgError) decodes what no byte layout fits; :attr:`bad` counts the messages that could not be decoded."""
+
+    def __init__(
+        self, deserialize: Callable[[bytes | memoryview, str], Any], *, static: bool, time: TimeSource
+    ) -> None:
+        self._deserialize, self.static, self.time = deserialize, static, time
         self.layouts: list[TfLayout] = []
         self.bad = 0
 
-    def decode(self, messages: list[tuple[int, bytes | memoryview]]) -> TfRecords:
+    def decode(self, messages: Sequence[tuple[int, bytes | memoryview]]) -> TfRecords:
+        """``(receive time ns, CDR bytes)`` pairs to transform rows (a message's transforms in order)."""
         receive: list[int] = []
         stamps: list[bytes | memoryview] = []
         numbers: list[bytes | memoryview] = []
@@ -77,8 +85,8 @@ class _TfReader:
                     layout = tf_layout(data)
                 except ValueError:
                     try:
-                        msg = self.bag.deserialize(data, TF_MESSAGE)
-                    except BagError:
+                        msg = self._deserialize(data, TF_MESSAGE)
+                    except (BagError, MsgError):
                         self.bad += 1
                         continue
                     for t in msg.transforms:
@@ -89,6 +97,8 @@ class _TfReader:
                         parents.append(t.header.frame_id)
                         children.append(t.child_frame_id)
                     continue
+                if len(self.layouts) >= MAX_LAYOUTS:  # frames that change every message: memory stays bounded
+                    self.layouts.pop(0)
                 self.layouts.append(layout)
             for stamp, translation in zip(layout.stamps, layout.translations, strict=True):
                 stamps.append(data[stamp : stamp + 8])

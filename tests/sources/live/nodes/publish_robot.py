@@ -28,6 +28,30 @@ def joint_state_values(k: int, count: int) -> tuple[int, int, list[float], list[
     return 1000 + k // 1000, (k % 1000) * 1_000_000, [0.001 * k + i for i in range(count)], [float(k)] * count
 
 
+def bad_samples(names: list[str]) -> list[bytes]:
+    """Raw serialized /joint_states that a robot should survive: bad CDR, an absurd sequence length, NaN positions,
+    name/position lengths that differ, 10,000 names (the last three are valid CDR and reach a reader)."""
+    import struct
+
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import JointState
+
+    def message(names: list[str], position: list[float]) -> bytes:
+        msg = JointState()
+        msg.name, msg.position = names, position
+        msg.header.stamp.sec = 999  # before the good stream's stamps
+        return bytes(serialize_message(msg))
+
+    absurd = b"\x00\x01\x00\x00" + struct.pack("<iI", 999, 0) + struct.pack("<I", 0x7FFFFFF0) + b"x" * 16
+    return [
+        b"\x00\x01\x00\x00\xff\xff",
+        absurd,
+        message(names, [float("nan")] * len(names)),
+        message(names, [0.0]),
+        message([f"n{i}" for i in range(10_000)], [0.0] * 10_000),
+    ]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--urdf", required=True)
@@ -36,6 +60,8 @@ def main() -> int:
     parser.add_argument("--joints", type=int, default=0)
     parser.add_argument("--wait", type=float, default=20.0)
     parser.add_argument("--linger", type=float, default=2.0)
+    parser.add_argument("--subscribers", type=int, default=1, help="wait for this many /joint_states readers")
+    parser.add_argument("--bad", action="store_true", help="first publish the malformed samples of bad_samples()")
     args = parser.parse_args()
 
     import rclpy
@@ -52,10 +78,14 @@ def main() -> int:
     states = node.create_publisher(JointState, "/joint_states", 10)
     description.publish(String(data=urdf))
     deadline = time.monotonic() + args.wait
-    while states.get_subscription_count() == 0 and time.monotonic() < deadline:
+    while states.get_subscription_count() < args.subscribers and time.monotonic() < deadline:
         time.sleep(0.01)
-    matched = states.get_subscription_count() > 0
+    matched = states.get_subscription_count() >= args.subscribers
     time.sleep(0.2)  # the reader's side of the match settles too
+    if args.bad:
+        for data in bad_samples(names):
+            states.publish(data)  # bytes: rclpy publishes them as an already serialized message
+            time.sleep(0.01)
     msg = JointState()
     msg.name = names
     msg.header.frame_id = "base"

@@ -1,0 +1,276 @@
+"""``r2d2-viz --ros``: a live ROS 2 graph into the viewer — the bag replay's pipeline fed by a live source.
+
+The robot comes from ``--urdf`` or the latched ``/robot_description`` (a new description reloads it: the static
+scene is logged again; one that does not parse is one line and the run goes on with TF only); ``/joint_states``
+goes through the kinematics (:class:`~r2d2_viz.viewer.stream.RobotStream`), ``/tf`` and ``/tf_static`` are
+recorded transforms (:class:`~r2d2_viz.viewer.tf_recorded.RecordedTf`), display topics go through
+:class:`~r2d2_viz.viewer.display_feed.DisplayFeed` — all as a bag replay does them, on the same ``timestamp``
+clock (the writers' source timestamps, or header stamps with ``--time header``). ``--save out.rrd`` is finalised
+when ``--duration`` (seconds of wall time) runs out or on Ctrl-C / SIGTERM; ``--save out.mcap`` records what was
+received (:mod:`r2d2_viz.ros_out.live_record`). Only subscribes: nothing is ever published.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Protocol
+
+from r2d2_viz.errors import R2d2VizError
+from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.robot.model import Robot, parse_urdf
+from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.xacro_load import load_robot
+from r2d2_viz.ros_out.live_record import LiveBagRecorder
+from r2d2_viz.rviz.config import load_rviz
+from r2d2_viz.signals import signals_set
+from r2d2_viz.sources.bag_joints import TimeSource
+from r2d2_viz.sources.base import TfRecords, tf_root
+from r2d2_viz.sources.live.dds import LiveGraph
+from r2d2_viz.sources.live.source import LiveBatch, LiveSource
+from r2d2_viz.sources.motion import ODOM
+from r2d2_viz.sources.replay import Replay
+from r2d2_viz.sources.tf_check import urdf_edges
+from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.layout.blueprint import generate_blueprint
+from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
+from r2d2_viz.viewer.notices import Notices
+from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
+from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.tf_recorded import RecordedTf
+
+POLL_SECONDS = 0.02
+"""How often what arrived is taken from the graph and logged (each time one chunk per entity)."""
+SETTLE_SECONDS = 1.5
+"""Discovery and the latched topics (``/robot_description``, ``/tf_static``) before the view is planned."""
+FLUSH_SECONDS = 5.0
+"""Wait for the sinks this often (backpressure: a slow sink makes the run lag instead of piling up memory)."""
+
+
+class LiveConfig(Protocol):
+    """What of :class:`r2d2_viz.runner.RunConfig` a live run reads."""
+
+    @property
+    def urdf(self) -> Path | None: ...
+    @property
+    def mappings(self) -> dict[str, str]: ...
+    @property
+    def package_paths(self) -> tuple[str, ...]: ...
+    @property
+    def duration(self) -> float | None: ...
+    @property
+    def sink(self) -> SinkConfig: ...
+    @property
+    def time(self) -> TimeSource: ...
+    @property
+    def fixed_frame(self) -> str | None: ...
+    @property
+    def rviz(self) -> Path | None: ...
+
+
+def run_live(
+    config: LiveConfig,
+    *,
+    on_ready: Callable[[str], None] | None = None,
+    env: Mapping[str, str] | None = None,
+) -> tuple[int, bool, Path | None]:
+    """Run until ``config.duration`` seconds have passed or a signal; returns (joint states shown, whether a
+    signal stopped it, the file saved)."""
+    stop = threading.Event()
+    with signals_set(stop), LiveGraph(env) as graph:
+        return _LiveRun(config, graph, stop).run(on_ready)
+
+
+def wanted_topics(rviz: Path | None) -> set[str] | None:
+    """The enabled displays' topics of an RViz config (None without one: every displayable topic)."""
+    if rviz is None:
+        return None
+    return {t.topic for t in load_rviz(rviz).topics if t.enabled and t.topic}
+
+
+class _LiveRun:
+    def __init__(self, config: LiveConfig, graph: LiveGraph, stop: threading.Event) -> None:
+        self.config, self.stop = config, stop
+        self.end = time.monotonic() + config.duration if config.duration is not None else None
+        self.source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time)
+        self.packages = PackageIndex.from_args(config.package_paths, description=config.urdf, environ=os.environ)
+        self.robot: Robot | None = None
+        if config.urdf is not None:
+            self.robot = load_robot(config.urdf, mappings=config.mappings, packages=self.packages)
+        self.description: str | None = None
+        self.children: set[str] = set()
+        self.streamer: RobotStream | None = None
+        self.samples = 0
+
+    def _done(self) -> bool:
+        return self.stop.is_set() or (self.end is not None and time.monotonic() >= self.end)
+
+    def _settle(self) -> list[LiveBatch]:
+        """Discovery, the latched description and static transforms: what the view is planned from."""
+        batches: list[LiveBatch] = []
+        deadline = time.monotonic() + SETTLE_SECONDS
+        while not self._done() and time.monotonic() < deadline:
+            batches.append(self.source.poll())
+            if self.robot is None and any(b.descriptions for b in batches):
+                text = next(d for b in reversed(batches) for d in reversed(b.descriptions))
+                self.robot = self._parse(text, quiet=True)
+                self.description = text if self.robot is not None else None
+            time.sleep(POLL_SECONDS)
+        return batches
+
+    def _parse(self, text: str, *, quiet: bool = False) -> Robot | None:
+        try:
+            return parse_urdf(text, source="/robot_description", packages=self.packages)
+        except R2d2VizError:
+            if not quiet:
+                raise
+            return None
+
+    def _plan(self, batches: list[LiveBatch]) -> tuple[Replay, ViewPlan]:
+        records = [r for b in batches for r in b.tf]
+        static = next((r for r in records if r.static), None)
+        moving = next((r for r in records if not r.static), None)
+        tree = compile_tree(self.robot) if self.robot is not None else None
+        rviz_frame = load_rviz(self.config.rviz).fixed_frame if self.config.rviz is not None else None
+        root = tree.robot.root if tree is not None else None
+        frame = self.config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
+        plan = Replay(tree, None, static, moving, frame)
+        return plan, plan_view(plan, rviz=self.config.rviz, fixed_frame=self.config.fixed_frame)
+
+    def run(self, on_ready: Callable[[str], None] | None) -> tuple[int, bool, Path | None]:
+        save = self.config.sink.save
+        bag_path = save if save is not None and save.suffix == ".mcap" else None
+        rrd = save if bag_path is None else None
+        sink = self.config.sink
+        if bag_path is not None:
+            sink = dataclasses.replace(sink, save=None, headless=not sink.live)
+        tmp = rrd.with_name(f".{rrd.name}.{os.getpid()}.partial") if rrd is not None else None
+        batches = self._settle()
+        plan, self.view = self._plan(batches)
+        self.fixed_frame = plan.fixed_frame
+        blueprint = generate_blueprint(self.view.spec, layout=self.view.layout)
+        recording: Recording | None = None
+        bag = LiveBagRecorder(bag_path) if bag_path is not None else None
+        try:
+            endless = self.end is None or sink.live  # a file without footer: its manifest would grow in memory
+            recording = open_recording(sink, save_to=tmp, live=endless, on_ready=on_ready, blueprint=blueprint)
+            self._start(recording)
+            for batch in batches:
+                self._handle(batch, bag)
+            flushed = time.monotonic()
+            while not self._done():
+                self._handle(self.source.poll(), bag)
+                if time.monotonic() - flushed > FLUSH_SECONDS:
+                    recording.rec.flush()
+                    flushed = time.monotonic()
+                time.sleep(POLL_SECONDS)
+            self._finish()
+            close_recording(recording)
+            recording = None
+            if bag is not None:
+                bag.close()
+            if tmp is not None and rrd is not None:
+                os.replace(tmp, rrd)
+        except BaseException:
+            if recording is not None:
+                close_recording(recording)
+            if bag is not None:
+                bag.abort()
+            if tmp is not None:
+                tmp.unlink(missing_ok=True)
+            raise
+        return self.samples, self.stop.is_set(), save
+
+    def _start(self, recording: Recording) -> None:
+        rec = recording.rec
+        self.notices = Notices(rec)
+        for note in self.view.notes:
+            self.notices.report(note)
+        self.recorded = RecordedTf(rec, clock="timestamp", axis_length=self.view.axis_length)
+        self.feed = DisplayFeed(
+            self.notices,
+            None,
+            clock="timestamp",
+            fixed_frame=self.fixed_frame,
+            header_time=self.config.time == "header",
+            styles=self.view.display_styles,
+        )
+        self.rec = rec
+        if self.robot is not None:
+            self._load(self.robot)
+        else:
+            self.notices.report("no --urdf and no /robot_description yet: transforms only until one is published")
+
+    def _load(self, robot: Robot) -> None:
+        tree = compile_tree(robot)
+        root_placed = tree.robot.root == self.fixed_frame or tree.robot.root in self.children
+        if self.streamer is not None:
+            self.streamer.finish()
+        self.streamer = RobotStream(
+            self.rec,
+            tree,
+            clock="timestamp",
+            fixed_frame=self.fixed_frame,
+            root_placed=root_placed,
+            axis_length=self.view.axis_length,
+            show_names=self.view.show_names,
+        )
+        self.streamer.notices = self.notices
+        self.streamer.log_static()
+        self.recorded.skip = set(urdf_edges(tree))
+        self.source.set_joints(tree.actuated)
+
+    def _describe(self, text: str) -> None:
+        """A (new) ``/robot_description``: the robot reloaded, or TF only when it does not parse."""
+        first = self.description is None
+        self.description = text
+        try:
+            robot = self._parse(text)
+        except R2d2VizError as exc:
+            self.notices.report(f"{exc} (showing transforms only)", key=f"description {hash(text)}")
+            if self.streamer is not None:
+                self.streamer.finish()
+            self.streamer = None
+            self.source.set_joints(None)
+            return
+        assert robot is not None
+        if not first:
+            line = f"/robot_description changed: robot {robot.name!r} reloaded"
+            self.notices.report(line, key=f"loaded {hash(text)}")
+        self.robot = robot
+        self._load(robot)
+
+    def _handle(self, batch: LiveBatch, bag: LiveBagRecorder | None) -> None:
+        if bag is not None:
+            bag.write(batch.samples)
+        for key, line in batch.notes:
+            self.notices.report(line, key=key)
+        if batch.descriptions and self.config.urdf is None:
+            text = batch.descriptions[-1]
+            if text != self.description:
+                self._describe(text)
+        for records in batch.tf:
+            self._tf(records)
+        if batch.joints is not None and self.streamer is not None:
+            self.streamer.send(self.streamer.prepare(batch.joints))
+            self.samples += len(batch.joints)
+        for message in batch.displays:
+            self.feed.log(message)
+
+    def _tf(self, records: TfRecords) -> None:
+        self.children.update(records.children)
+        self.recorded.log(records)
+
+    def _finish(self) -> None:
+        for topic, line in self.source.problems():
+            self.notices.report(f"{topic}: {line}")
+        self.feed.finish()
+        if self.streamer is not None:
+            self.streamer.finish()
+        received = ", ".join(f"{t} {n}" for t, n in sorted(self.source.received.items())) or "nothing"
+        print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)

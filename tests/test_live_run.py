@@ -1,0 +1,175 @@
+"""``r2d2-viz --ros`` against real Jazzy and Kilted rclpy nodes publishing the panda of example-robot-data, started
+before us (late joiners): link poses in the recording against yourdfpy's FK of the published values, the share
+of messages received, ``--save out.mcap`` read back by rosbags, ``--list``; malformed samples published as raw
+bytes by the real node and a wrong type on /joint_states from a cyclonedds peer — the run survives, says each kind
+once, and the good messages still land. Plus the CLI's refusals (no DDS needed)."""
+
+from __future__ import annotations
+
+import builtins
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yourdfpy
+from conftest import cli, example_robots
+from rrd import frame_edges_at, pose_in, read_recording, tf_by_child
+from sources.live import ros_node
+from sources.live.nodes.publish_robot import joint_names, joint_state_values
+
+from r2d2_viz.cli import main
+from r2d2_viz.msgs.typestore import typestore
+
+PANDA = example_robots() / "panda_description" / "urdf" / "panda.urdf"
+COUNT, RATE = 300, 100
+
+
+def _scenario(distro: str, runs: list[list[str]], *, node: list[str] = (), wrong_type: bool = False) -> Any:
+    python = ros_node.require_live(distro)
+    script = Path(ros_node.__file__).with_name("cli_scenario.py")
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    command = [
+        sys.executable,
+        str(script),
+        "--ros-python",
+        str(python),
+        "--urdf",
+        str(PANDA),
+        "--cli",
+        str(exe),
+        "--runs",
+        json.dumps(runs),
+        "--node",
+        json.dumps([*node, "--rate", str(RATE), "--count", str(COUNT)]),
+    ]
+    if wrong_type:
+        command.append("--wrong-type-peer")
+    done = ros_node.in_netns(command, timeout=120)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _received(stderr: str) -> dict[str, int]:
+    line = next(x for x in stderr.splitlines() if x.startswith("r2d2-viz: received "))
+    return {t: int(n) for t, n in (p.rsplit(" ", 1) for p in line.removeprefix("r2d2-viz: received ").split(", "))}
+
+
+def _check_poses(path: Path, *, header_time: bool) -> int:
+    """Link poses at a few of the recorded joint states against yourdfpy (Rerun keeps float32: 2e-6); returns
+    the joint states recorded."""
+    recording = read_recording(path)
+    names = joint_names(PANDA.read_text(), 0)
+    times = sorted(set(tf_by_child(recording)["panda_link1"].times))
+    urdf = yourdfpy.URDF.load(str(PANDA), load_meshes=False, load_collision_meshes=False)
+    good = [t for t in times if t >= 1000 * 10**9] if header_time else times[-COUNT:]
+    for i in np.linspace(0, len(good) - 1, 6).astype(int):
+        t = good[i]
+        k = (t - 1000 * 10**9) // 1_000_000 if header_time else i + COUNT - len(good)
+        _, _, position, _ = joint_state_values(int(k), len(names))
+        urdf.update_cfg({n: v for n, v in zip(names, position, strict=True) if n in urdf.actuated_joint_names})
+        edges = frame_edges_at(recording, t)
+        for link in ("panda_link3", "panda_link7", "panda_hand", "panda_leftfinger"):
+            theirs = urdf.get_transform(frame_to=link, frame_from="panda_link0")
+            np.testing.assert_allclose(pose_in(edges, link, "panda_link0"), theirs, atol=2e-6, err_msg=f"{link} k={k}")
+    return len(good)
+
+
+@pytest.mark.slow
+def test_jazzy_node_recorded_bagged_and_malformed_samples_survived(tmp_path: Path) -> None:
+    rrd, bag = tmp_path / "out.rrd", tmp_path / "out.mcap"
+    runs = [["--save", str(rrd), "--duration", "9", "--time", "header"], ["--save", str(bag), "--duration", "9"]]
+    result = _scenario("jazzy", runs, node=["--bad"], wrong_type=True)
+    assert result["list_rc"] == 0
+    assert "/joint_states [sensor_msgs/msg/JointState] 1 publisher" in result["list"]
+    assert "/joint_states [std_msgs/msg/String] 1 publisher" in result["list"]
+    assert "/robot_description [std_msgs/msg/String] 1 publisher" in result["list"]
+    assert result["node"]["matched"] and result["node"]["sent"] == COUNT
+    for run in result["runs"]:
+        assert run["rc"] == 0, run["stderr"][-3000:]
+        err = run["stderr"]
+        assert err.count("/joint_states: a publisher of std_msgs/msg/String, not sensor_msgs/msg/JointState") == 1
+        assert err.count("name and position lengths differ") == 2  # said when first seen, counted at the end
+        assert err.count("NaN or infinite positions") == 2
+        assert err.count("ignored joints the robot does not have") == 1  # the 10,000 names: one line
+        assert _received(err)["/joint_states"] >= 0.995 * COUNT + 3  # + the three valid malformed ones
+        assert _received(err)["/robot_description"] == 1
+    assert _check_poses(rrd, header_time=True) >= 0.995 * COUNT
+    from rosbags.highlevel import AnyReader
+
+    store = typestore("jazzy")
+    with AnyReader([bag], default_typestore=store) as reader:
+        types = {c.topic: c.msgtype for c in reader.connections}
+        assert types == {"/joint_states": "sensor_msgs/msg/JointState", "/robot_description": "std_msgs/msg/String"}
+        states = [(c, raw) for c, _, raw in reader.messages() if c.topic == "/joint_states"]
+        description = [raw for c, _, raw in reader.messages() if c.topic == "/robot_description"]
+    assert store.deserialize_cdr(description[0], "std_msgs/msg/String").data == PANDA.read_text()
+    names = joint_names(PANDA.read_text(), 0)
+    same = undecodable = 0
+    for _, raw in states:
+        try:
+            msg = store.deserialize_cdr(raw, "sensor_msgs/msg/JointState")
+        except Exception:
+            undecodable += 1  # a malformed sample, recorded as it came (as ros2 bag record would)
+            continue
+        if msg.header.stamp.sec < 1000:
+            continue
+        k = (msg.header.stamp.sec - 1000) * 1000 + msg.header.stamp.nanosec // 1_000_000
+        sec, nanosec, position, velocity = joint_state_values(k, len(names))
+        expected = store.types["sensor_msgs/msg/JointState"](
+            header=store.types["std_msgs/msg/Header"](
+                stamp=store.types["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec), frame_id="base"
+            ),
+            name=names,
+            position=np.array(position),
+            velocity=np.array(velocity),
+            effort=np.zeros(0),
+        )
+        ours = bytes(store.serialize_cdr(expected, "sensor_msgs/msg/JointState"))
+        # rclpy's bytes, as they came: equal to rosbags' but for alignment padding, which rclpy leaves unzeroed
+        padding = [i for i in range(len(ours)) if raw[i] != ours[i]]
+        same += int(len(raw) == len(ours) and all(ours[i] == 0 for i in padding) and len(padding) <= 12)
+    assert same >= 0.995 * COUNT
+    assert undecodable <= len(["bad CDR", "absurd length", "NaN", "lengths differ", "10,000 names"])
+
+
+@pytest.mark.slow
+def test_kilted_node_recorded_at_source_timestamps(tmp_path: Path) -> None:
+    rrd = tmp_path / "out.rrd"
+    result = _scenario("kilted", [["--save", str(rrd), "--duration", "8"]])
+    assert "/joint_states [sensor_msgs/msg/JointState] 1 publisher" in result["list"]
+    run = result["runs"][0]
+    assert run["rc"] == 0, run["stderr"][-3000:]
+    assert _received(run["stderr"])["/joint_states"] >= 0.995 * COUNT
+    assert _check_poses(rrd, header_time=False) >= 0.995 * COUNT
+
+
+def test_list_needs_ros_and_ros_refuses_a_bag(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--list"]) == 2
+    assert main(["--ros", "--bag", "x.mcap"]) == 2
+    err = capsys.readouterr().err
+    assert "use it with --ros" in err and "cannot be combined with --bag" in err
+
+
+def test_missing_cyclonedds_is_one_line_exit_2(monkeypatch: pytest.MonkeyPatch, capsys: Any) -> None:
+    real_import = builtins.__import__
+
+    def no_cyclone(name: str, *args: Any, **kwargs: Any) -> Any:
+        if name.startswith("cyclonedds"):
+            raise ImportError(f"No module named {name!r}")
+        return real_import(name, *args, **kwargs)
+
+    for name in [m for m in sys.modules if m.startswith("cyclonedds")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setattr(builtins, "__import__", no_cyclone)
+    assert main(["--ros", "--list"]) == 2
+    assert main(["--ros", "--save", "x.rrd", "--duration", "1"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 2 and all("pip install 'cyclonedds" in line for line in lines)
+
+
+def test_help_names_ros() -> None:
+    done = cli("--help")
+    assert done.returncode == 0 and "--ros" in done.stdout and "--list" in done.stdout
