@@ -93,25 +93,6 @@ class Reader:
         x, y, z = (self.number(value, axis, 0.0, f"{where} / {key}") for axis in ("X", "Y", "Z"))
         return (x, y, z)
 
-    def display_style(self, display: Mapping[str, Any], where: str) -> DisplayStyleSpec:
-        """A topic display's style properties (RViz's names; absent ones keep the display's default)."""
-
-        def number(key: str) -> float | None:
-            return self.number(display, key, 0.0, where) if display.get(key) is not None else None
-
-        covariance = display.get("Covariance")
-        keep = number("Keep")
-        return DisplayStyleSpec(
-            color=self.color(display, "Color", (0, 0, 0), where) if display.get("Color") is not None else None,
-            alpha=number("Alpha"),
-            size=number("Size (m)") if display.get("Size (m)") is not None else number("Line Width"),
-            color_transformer=str(display["Color Transformer"]) if display.get("Color Transformer") else None,
-            decay_time=number("Decay Time"),
-            keep=int(keep) if keep is not None and keep >= 0 else None,
-            color_scheme=str(display["Color Scheme"]) if display.get("Color Scheme") else None,
-            covariance=self.flag(covariance, "Value", False, where) if isinstance(covariance, dict) else None,
-        )
-
     # --- the whole file ----------------------------------------------------------------------------
 
     def spec(self, data: Mapping[str, Any], manager: Mapping[str, Any]) -> ViewSpec:
@@ -145,7 +126,7 @@ class Reader:
             elif kind in TOPIC_DISPLAYS:
                 topic = self.text(display, "Topic", "", where) or self.text(display, "Image Topic", "", where)
                 enabled = self.enabled(display, where)
-                style = self.display_style(display, where)
+                style = display_style(self, display, where)
                 topics.append(TopicDisplay(kind, str(display.get("Name", kind)), topic, enabled, style))
             else:
                 self.note(f"display {display.get('Class')}: no counterpart in Rerun; skipped")
@@ -242,6 +223,26 @@ class Reader:
             alpha=alpha,
             hidden_links=hidden,
         )
+
+
+def display_style(self: Reader, display: Mapping[str, Any], where: str) -> DisplayStyleSpec:
+    """A topic display's style properties (RViz's names; absent ones keep the display's default)."""
+
+    def number(key: str) -> float | None:
+        return self.number(display, key, 0.0, where) if display.get(key) is not None else None
+
+    covariance = display.get("Covariance")
+    keep = number("Keep")
+    return DisplayStyleSpec(
+        color=self.color(display, "Color", (0, 0, 0), where) if display.get("Color") is not None else None,
+        alpha=number("Alpha"),
+        size=number("Size (m)") if display.get("Size (m)") is not None else number("Line Width"),
+        color_transformer=str(display["Color Transformer"]) if display.get("Color Transformer") else None,
+        decay_time=number("Decay Time"),
+        keep=int(keep) if keep is not None and keep >= 0 else None,
+        color_scheme=str(display["Color Scheme"]) if display.get("Color Scheme") else None,
+        covariance=self.flag(covariance, "Value", False, where) if isinstance(covariance, dict) else None,
+    )
 
 
 def read_camera(self: Reader, v: Mapping[str, Any], fixed: str) -> Camera:
