@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Make the README's pictures from real renders of the native Rerun viewer.
 
-    python scripts/make_screenshots.py [--out docs] [--frames 144] [--fps 15] [--still-time 30]
+    python scripts/make_screenshots.py [--out docs] [--frames 144] [--fps 15] [--still-time 30] [--bag PATH]
 
 1. records one lap with the installed CLI: ``r2d2-viz --save <tmp>/lap.rrd`` (48 s, 1,440 frames at 30 Hz);
 2. starts ONE native ``rerun`` viewer on a private Xvfb display, rendering with Mesa's lavapipe (software
@@ -15,6 +15,9 @@ The default 144 frames are every 10th recorded frame (1/3 s apart), played at 15
 10 s. Far fewer frames alias the tilt (a 2 s back-and-forth) into jumps: with 36 (every 40th frame) the
 body jerks between three poses.
 
+5. with ``--bag PATH`` (e.g. the Webots e-puck bag of tests/data/bags/real/webots_epuck), also replays that bag
+   (``r2d2-viz --bag PATH --save <tmp>/bag.rrd``), pauses ``--bag-time`` seconds after its first message and
+   saves the whole window as ``real-bag.png``: the robot with its sensor data (scans, ranges, odometry).
 
 Nothing is drawn over the renders: the pictures are what the viewer painted, cropped and scaled.
 The Xvfb / lavapipe / viewer set-up is the one the e2e tests use (``tests/e2e/viewers.py``), imported
@@ -47,6 +50,7 @@ if TYPE_CHECKING:
     from rerun.experimental import ViewerClient
 
 STILL_NAME = "r2d2-viz.png"
+BAG_NAME = "real-bag.png"
 GIF_NAME = "r2d2-viz-lap.gif"
 TIMELINE = "time"
 RATE_HZ = 30.0  # r2d2-viz's default --rate: the lap is frames 0 … 1439 at k / 30 s
@@ -227,6 +231,46 @@ def make_screenshots(args: argparse.Namespace) -> list[Path]:
     return [still_path, gif_path]
 
 
+def make_bag_screenshot(
+    cli: str, bag: Path, out: Path, *, seconds: float, window: tuple[int, int], settle: float
+) -> Path:
+    """``real-bag.png``: the whole window, ``seconds`` after the bag's first message, the time cursor paused."""
+    with tempfile.TemporaryDirectory(prefix="r2d2-bag-screenshot-") as tmp_name:
+        tmp = Path(tmp_name)
+        rrd = tmp / "bag.rrd"
+        subprocess.run([cli, "--bag", str(bag), "--save", str(rrd)], check=True, capture_output=True, timeout=600)
+        log = tmp / "rerun.log"
+        with viewers.xvfb(window[0] + 200, window[1] + 200) as display:
+            try:
+                with viewers.native_viewer(display.display, window, log) as client:
+                    client.open(str(rrd))
+                    deadline = time.monotonic() + 60
+                    while True:
+                        state = client.get_state()
+                        recording = next((r for r in state.recordings if r.store_id == state.active_recording), None)
+                        timeline = None
+                        if recording is not None:
+                            timeline = next((t for t in recording.timelines if t.name == TIMELINE), None)
+                        if timeline is not None:
+                            break
+                        if time.monotonic() > deadline:
+                            raise TimeoutError(f"the viewer did not show {rrd} with a {TIMELINE!r} timeline: {state}")
+                        time.sleep(0.5)
+                    at = timeline.start + round(seconds * 1e9)  # a bag's times are timestamps
+                    client.set_time(TIMELINE, timestamp=np.datetime64(at, "ns"), play_state="paused")
+                    time.sleep(settle)  # the start-up notifications fade out
+                    png = client.take_screenshot()
+            except Exception:
+                print(f"viewer log (last lines):\n{viewers._tail(log)}", file=sys.stderr)
+                raise
+    from PIL import Image
+
+    path = out / BAG_NAME
+    Image.open(io.BytesIO(png)).convert("RGB").save(path, optimize=True)
+    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB; {bag.name} at {seconds:g} s after its first message)")
+    return path
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
     parser.add_argument("--out", type=Path, default=REPO / "docs", help="directory for the images (default: docs)")
@@ -237,6 +281,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--width", type=int, default=1600, help="viewer window width (default 1600)")
     parser.add_argument("--height", type=int, default=1000, help="viewer window height (default 1000)")
     parser.add_argument("--settle", type=float, default=8.0, help="seconds to let start-up notifications fade")
+    parser.add_argument("--bag", type=Path, default=None, help="also make real-bag.png from this ROS 2 bag")
+    parser.add_argument("--bag-time", type=float, default=10.0, help="seconds into the bag for real-bag.png")
+    parser.add_argument("--only-bag", action="store_true", help="make real-bag.png only (needs --bag)")
     return parser
 
 
@@ -246,8 +293,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("error: --frames must be at least 2", file=sys.stderr)
         return 2
     t0 = time.monotonic()
+    if args.only_bag and args.bag is None:
+        print("error: --only-bag needs --bag", file=sys.stderr)
+        return 2
     try:
-        make_screenshots(args)
+        if not args.only_bag:
+            make_screenshots(args)
+        if args.bag is not None:
+            cli = check_prerequisites()
+            args.out.mkdir(parents=True, exist_ok=True)
+            make_bag_screenshot(
+                cli, args.bag, args.out, seconds=args.bag_time, window=(args.width, args.height), settle=args.settle
+            )
     except SetupError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
