@@ -12,12 +12,14 @@ import dataclasses
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 
+import rerun as rr
+
 from r2d2_viz.msgs.registry import decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.sources.base import Clock
-from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded
+from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
 
@@ -72,6 +74,19 @@ class DisplayFeed:
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
         self._pull()
+        if self._next is not None and topics:
+            self._anchor(topics, self._next.time_ns)
+
+    def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
+        """From the first message's time, every display entity (each slot of a history too) sits in the fixed
+        frame until its own first message: the viewer then finds a transform path for each from the start
+        (otherwise it reports "no transform path" for every entity not drawn yet)."""
+        set_time(self.rec, self.timeline, time_ns, self.clock)
+        for topic, msgtype in topics.items():
+            style = self.styles.get(topic) or DisplayStyle()
+            keep = style.keep if style.keep is not None else KEEP.get(msgtype, 1)
+            for entity in [f"{topic}/{k}" for k in range(keep)] if keep > 1 else [topic]:
+                self.rec.log(entity, rr.CoordinateFrame(self.fixed_frame))
 
     def _pull(self) -> None:
         self._next = next(self._messages, None) if self._messages is not None else None

@@ -38,6 +38,11 @@ def _replay(tmp_path: Path, storage: str, *extra: str) -> tuple[dict, str]:
     return read_recording(out), result.stderr
 
 
+def _drawn(rows, column: str) -> list[int]:
+    """The times at which ``column`` was logged (not the frame-only rows every display entity starts with)."""
+    return [t for t, v in zip(rows.times, rows.temporal.get(column, []), strict=False) if v is not None]
+
+
 def _clears(rows) -> list[int]:
     return [t for t, v in zip(rows.times, rows.temporal.get("Clear:is_recursive", []), strict=False) if v == [True]]
 
@@ -56,16 +61,21 @@ def test_a_bags_displays_land_in_their_frames_at_their_times(tmp_path: Path, sto
     assert frames[EMPTY_FRAME_TIME + 1] == ["odom"]  # empty frame id: the fixed frame (the root of /tf)
     # the map: a 4 x 2 grid of 0.5 m cells, a 2 m x 1 m quad at its origin, in odom
     grid = recording["/map"]
-    assert grid.times == [MAP_TIME]
-    assert grid.temporal["Mesh3D:vertex_positions"][0] == [[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]]
-    assert grid.temporal["InstancePoses3D:translations"][0] == [[-1, -0.5, 0]]
+    assert _drawn(grid, "Mesh3D:vertex_positions") == [MAP_TIME]
+    at = grid.times.index(MAP_TIME, 1)  # (row 0: the frame every display entity starts with)
+    assert grid.temporal["Mesh3D:vertex_positions"][at] == [[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]]
+    assert grid.temporal["InstancePoses3D:translations"][at] == [[-1, -0.5, 0]]
     # markers: the cube kept its 1 s lifetime, the sphere was deleted
     cube, ball = recording["/markers/boxes/1"], recording["/markers/balls/7"]
     assert cube.times[0] == MARKER_TIME and cube.temporal["InstancePoses3D:translations"][0] == [[1, 1, 0]]
     assert _clears(cube) == [MARKER_TIME + CUBE_LIFETIME_S * S]
     assert _clears(ball) == [SPHERE_DELETED]
     # odometry keeps RViz's history (Keep 100): three poses on three entities, each still drawn
-    assert [recording[f"/odom/{k}"].times for k in range(3)] == [[T0], [T0 + S], [T0 + 2 * S]]
+    assert [_drawn(recording[f"/odom/{k}"], "Arrows3D:vectors") for k in range(3)] == [[T0], [T0 + S], [T0 + 2 * S]]
+    # every display entity, each slot of the history too, sits in the fixed frame from the first message on
+    # (else the viewer reports "no transform path" for each entity not drawn yet)
+    assert recording["/odom/99"].times == [T0] and recording["/odom/99"].temporal["CoordinateFrame:frame"] == [["odom"]]
+    assert recording["/map"].temporal["CoordinateFrame:frame"][0] == ["odom"] and recording["/map"].times[0] == T0
     # said once each: the empty frame id, the garbage message, the topic no display draws
     lines = [line for line in stderr.splitlines() if line.startswith("warning:")]
     assert sum("/scan: messages with an empty frame_id are drawn in the fixed frame [odom]" in x for x in lines) == 1
@@ -83,7 +93,8 @@ def test_a_live_replay_shows_the_same_displays_at_the_same_times(tmp_path: Path)
     live, _ = _replay(tmp_path, "mcap", "--realtime", "--speed", "4")  # paced on the wall clock, 4x
     for entity in ("/scan", "/map", "/markers/boxes/1", "/markers/balls/7", "/odom/2"):
         assert live[entity].times == saved[entity].times, entity
-    assert live["/scan"].temporal["Points3D:positions"] == saved["/scan"].temporal["Points3D:positions"]
+    drawn = [[p for p in r["/scan"].temporal["Points3D:positions"] if p is not None] for r in (live, saved)]
+    assert drawn[0] == drawn[1] and len(drawn[0]) == len(SCAN_TIMES) + 1
 
 
 def test_the_feed_pulls_messages_up_to_a_time_and_odometry_goes_round_its_keep() -> None:
@@ -147,7 +158,7 @@ def test_an_rviz_configs_displays_style_the_topics(tmp_path: Path) -> None:
     assert {tuple(np.round(scan.temporal["Points3D:radii"][i], 6)) for i in drawn} == {(0.05,)}
     # Odometry's Keep 2: its poses go round two entities
     assert sorted(k for k in recording if k.startswith("/odom/")) == ["/odom/0", "/odom/1"]
-    assert recording["/odom/0"].times == [T0, T0 + 2 * S]
+    assert _drawn(recording["/odom/0"], "Arrows3D:vectors") == [T0, T0 + 2 * S]
 
 
 def test_a_cameras_images_get_its_pinhole_and_a_2d_view(tmp_path: Path) -> None:

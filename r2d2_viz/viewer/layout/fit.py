@@ -80,17 +80,24 @@ def fit_view(tree: KinematicTree, q: F64, *, root: FrameTrack | None = None) -> 
     return ViewFit((cx, cy, cz), radius, len(tree.links) + 1)
 
 
-def fit_scene(points: F64, *, robot_radius: float, frames: int) -> ViewFit:
-    """A view of ``points`` (where a robot went, what it saw: most of them — 2 % at either end of each axis are
-    left out, so a few far readings do not shrink the scene) with a robot of ``robot_radius`` among them."""
-    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    points = points[np.isfinite(points).all(axis=1)]
-    if len(points) == 0:
-        points = np.zeros((1, 3))
-    if len(points) > 100:
-        lo, hi = np.percentile(points, 2, axis=0), np.percentile(points, 98, axis=0)
-    else:
-        lo, hi = points.min(axis=0), points.max(axis=0)
+def fit_scene(groups: list[F64], *, robot_radius: float, frames: int) -> ViewFit:
+    """A view of point ``groups`` (where a robot went; what each display message draws) with a robot of
+    ``robot_radius`` among them. Of a group of more than 100 points, 2 % at either end of each axis are left out,
+    so a few far readings of one scan do not shrink the scene; a small group (a marker) counts whole."""
+    lows, highs = [], []
+    for group in groups:
+        points = np.asarray(group, dtype=np.float64).reshape(-1, 3)
+        points = points[np.isfinite(points).all(axis=1)]
+        if len(points) == 0:
+            continue
+        if len(points) > 100:
+            lows.append(np.percentile(points, 2, axis=0))
+            highs.append(np.percentile(points, 98, axis=0))
+        else:
+            lows.append(points.min(axis=0))
+            highs.append(points.max(axis=0))
+    lo = np.min(lows, axis=0) if lows else np.zeros(3)
+    hi = np.max(highs, axis=0) if highs else np.zeros(3)
     cx, cy, cz = (float(v) for v in (lo + hi) / 2)
     radius = max(float(np.linalg.norm(hi - lo)) / 2 + robot_radius, 0.05)
     return ViewFit((cx, cy, cz), radius, frames, robot_radius=robot_radius or None)

@@ -147,7 +147,7 @@ def _recorded_fit(plan: Replay) -> ViewFit | None:
             points.append(_drawn(message.msgtype, message.data, message.time_ns, records, plan.fixed_frame))
     if not any(len(p) for p in points):
         return None
-    return fit_scene(np.concatenate(points), robot_radius=robot_radius, frames=frames)
+    return fit_scene(points, robot_radius=robot_radius, frames=frames)
 
 
 def _drawn(msgtype: str, data: bytes | memoryview, t_ns: int, records: list[TfRecords], fixed: str) -> np.ndarray:

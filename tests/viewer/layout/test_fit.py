@@ -6,13 +6,14 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yourdfpy
 
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.robot.model import load_urdf
 from r2d2_viz.robot.synth import random_urdf
 from r2d2_viz.sources.base import FrameTrack
-from r2d2_viz.viewer.layout.fit import MANY_FRAMES, fit_view
+from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, MANY_FRAMES, fit_view
 
 
 def _box(tmp_path: Path, n_links: int, seed: int) -> tuple[Path, np.ndarray, np.ndarray]:
@@ -61,3 +62,17 @@ def test_a_moving_root_moves_the_box_and_big_robots_get_smaller_axes_and_no_arro
     big = fit_view(compile_tree(load_urdf(chain)), np.zeros((1, 0)))
     assert not big.show_arrows
     assert math.isclose(big.axis_length(), 0.1 * min(max(big.radius, 0.05), 20) / 2)
+
+
+def test_a_scene_fit_keeps_small_groups_whole_and_trims_a_dense_groups_outliers() -> None:
+    from r2d2_viz.viewer.layout.fit import fit_scene
+
+    rng = np.random.default_rng(1)
+    scan = np.column_stack([rng.uniform(0, 2, 1000), rng.uniform(0, 2, 1000), np.zeros(1000)])
+    scan[0] = [500.0, 0.0, 0.0]  # one far reading: trimmed with the 2 % at either end
+    marker = np.array([[-3.0, 0.0, 0.0]])  # one point: kept whole however small
+    fit = fit_scene([scan, marker], robot_radius=0.1, frames=3)
+    # the box is about x in [-3, 2], y in [0, 2]: centre (-0.5, 1, 0), half diagonal about sqrt(5² + 2²) / 2
+    assert fit.center[0] == pytest.approx(-0.5, abs=0.1) and fit.center[1] == pytest.approx(1.0, abs=0.1)
+    assert fit.radius == pytest.approx(np.hypot(5, 2) / 2 + 0.1, abs=0.1)
+    assert fit.axis_length() == pytest.approx(AXIS_LENGTH * 0.1)  # TF axes follow the robot, not the scene
