@@ -38,12 +38,15 @@ def _local(item: shapes.Shape) -> F64 | None:
     return None  # images, camera models: no place in 3D of their own
 
 
-def extent_points(decoded: Decoded | list[MarkerOp]) -> F64:
-    """Points ``(K, 3)`` in the message frame spanning what ``decoded`` draws (finite ones only)."""
+def extent_points(decoded: Decoded | list[MarkerOp], *, maps: bool = True) -> F64:
+    """Points ``(K, 3)`` in the message frame spanning what ``decoded`` draws (finite ones only); without the
+    corners of occupancy maps when not ``maps`` (a map is the background: it can be far bigger than the scene)."""
     parts = [decoded] if isinstance(decoded, Decoded) else [op.decoded for op in decoded if op.decoded is not None]
     out = []
     for part in parts:
         for item in part.items:
+            if not maps and isinstance(item, shapes.GridMap):
+                continue
             local = _local(item)
             if local is None or len(local) == 0:
                 continue

@@ -34,3 +34,9 @@ def test_points_markers_and_non_finite_values() -> None:
     assert extent_points(ops).tolist() == [[0, 0, 1]]
     image = shapes.CompressedImage(b"", "image/jpeg")
     assert extent_points(Decoded("camera", 0, (image,))).shape == (0, 3)  # no place in 3D
+
+
+def test_maps_can_be_left_out() -> None:
+    grid = shapes.GridMap(np.zeros((2, 2, 4), np.uint8), 1.0)
+    assert extent_points(Decoded("map", 0, (grid,)), maps=False).shape == (0, 3)
+    assert extent_points(Decoded("map", 0, (grid,))).shape == (4, 3)

@@ -142,31 +142,44 @@ def _recorded_fit(plan: Replay) -> ViewFit | None:
     else:
         children = sorted({c for r in records for c in r.children})
         points += list(frame_positions(records, plan.fixed_frame, children, times).values())
+    backgrounds: list[np.ndarray] = []
     if plan.display_messages is not None:
         for message in islice(plan.display_messages(), PREVIEW_MESSAGES):
-            points.append(_drawn(message.msgtype, message.data, message.time_ns, records, plan.fixed_frame))
+            drawn, background = _drawn(message.msgtype, message.data, message.time_ns, records, plan.fixed_frame)
+            points.append(drawn)
+            backgrounds.append(background)
+    if not any(len(p) for p in points):  # only maps (RViz does not frame a map; here it is all there is)
+        points = backgrounds
     if not any(len(p) for p in points):
         return None
     return fit_scene(points, robot_radius=robot_radius, frames=frames)
 
 
-def _drawn(msgtype: str, data: bytes | memoryview, t_ns: int, records: list[TfRecords], fixed: str) -> np.ndarray:
-    """What one display message draws, as points in the fixed frame (none when it cannot be placed)."""
+def _drawn(
+    msgtype: str, data: bytes | memoryview, t_ns: int, records: list[TfRecords], fixed: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """What one display message draws, as points in the fixed frame (none when it cannot be placed): without
+    and with maps' corners."""
+    nothing = np.zeros((0, 3))
     try:
         decoded = decode(msgtype, data)
     except MsgError:
-        return np.zeros((0, 3))
+        return nothing, nothing
     parts = [decoded] if isinstance(decoded, Decoded) else [op.decoded for op in decoded if op.decoded is not None]
     frame = parts[0].frame_id if parts else ""
-    local = extent_points(decoded)
-    if not frame or frame == fixed or len(local) == 0:
-        return local
-    pose = frame_pose(records, fixed, frame, np.array([t_ns], dtype=np.int64))
-    if pose is None:
-        return np.zeros((0, 3))
-    translation, quat = pose
-    placed: np.ndarray = local @ quat_to_matrix(quat[0]).T + translation[0]
-    return placed
+    out = []
+    for local in (extent_points(decoded, maps=False), extent_points(decoded, maps=True)):
+        if not frame or frame == fixed or len(local) == 0:
+            out.append(local)
+            continue
+        pose = frame_pose(records, fixed, frame, np.array([t_ns], dtype=np.int64))
+        if pose is None:
+            out.append(nothing)
+            continue
+        translation, quat = pose
+        placed: np.ndarray = local @ quat_to_matrix(quat[0]).T + translation[0]
+        out.append(placed)
+    return out[0], out[1]
 
 
 def _preview(plan: Replay) -> np.ndarray:
