@@ -17,12 +17,13 @@ import os
 import sys
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import Protocol
+from typing import Protocol, TextIO
 
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.pacing import PACING_LOG_ENV
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import load_robot
@@ -48,8 +49,34 @@ POLL_SECONDS = 0.02
 """How often what arrived is taken from the graph and logged (each time one chunk per entity)."""
 SETTLE_SECONDS = 1.5
 """Discovery and the latched topics (``/robot_description``, ``/tf_static``) before the view is planned."""
+TF_TOPICS = ("/tf", "/tf_static")
 FLUSH_SECONDS = 5.0
 """Wait for the sinks this often (backpressure: a slow sink makes the run lag instead of piling up memory)."""
+
+
+class LatenessLog:
+    """The benchmark hook (``benchmarks/live_app.py``): when ``R2D2_VIZ_PACING_LOG`` names a file, one line per
+    message handed to Rerun, ``topic lateness_seconds`` — the wall time (``time.time()``) when its send returned
+    minus its DDS source timestamp (for ``/joint_states`` the chunk's times: header stamps with ``--time header``).
+    """
+
+    def __init__(self, file: TextIO | None) -> None:
+        self.file = file
+
+    @classmethod
+    def from_env(cls) -> LatenessLog:
+        path = os.environ.get(PACING_LOG_ENV)
+        return cls(open(path, "w", buffering=1 << 16) if path else None)
+
+    def sent(self, topic: str, stamps_ns: Iterable[int]) -> None:
+        """``stamps_ns``' messages were just handed to Rerun."""
+        if self.file is not None:
+            now = time.time()
+            self.file.write("".join(f"{topic} {now - int(t) * 1e-9:.6f}\n" for t in stamps_ns))
+
+    def close(self) -> None:
+        if self.file is not None:
+            self.file.close()
 
 
 class LiveConfig(Protocol):
@@ -106,6 +133,7 @@ class _LiveRun:
         self.children: set[str] = set()
         self.streamer: RobotStream | None = None
         self.samples = 0
+        self.lateness = LatenessLog(None)
 
     def _done(self) -> bool:
         return self.stop.is_set() or (self.end is not None and time.monotonic() >= self.end)
@@ -156,6 +184,7 @@ class _LiveRun:
         blueprint = generate_blueprint(self.view.spec, layout=self.view.layout)
         recording: Recording | None = None
         bag = LiveBagRecorder(bag_path) if bag_path is not None else None
+        self.lateness = LatenessLog.from_env()
         try:
             endless = self.end is None or sink.live  # a file without footer: its manifest would grow in memory
             recording = open_recording(sink, save_to=tmp, live=endless, on_ready=on_ready, blueprint=blueprint)
@@ -184,6 +213,8 @@ class _LiveRun:
             if tmp is not None:
                 tmp.unlink(missing_ok=True)
             raise
+        finally:
+            self.lateness.close()
         return self.samples, self.stop.is_set(), save
 
     def _start(self, recording: Recording) -> None:
@@ -256,11 +287,15 @@ class _LiveRun:
                 self._describe(text)
         for records in batch.tf:
             self._tf(records)
+        for topic in TF_TOPICS if batch.tf else ():
+            self.lateness.sent(topic, (s.source_timestamp_ns for s in batch.samples if s.topic == topic))
         if batch.joints is not None and self.streamer is not None:
             self.streamer.send(self.streamer.prepare(batch.joints))
             self.samples += len(batch.joints)
+            self.lateness.sent("/joint_states", batch.joints.times_ns)
         for message in batch.displays:
             self.feed.log(message)
+            self.lateness.sent(message.topic, (message.time_ns,))
 
     def _tf(self, records: TfRecords) -> None:
         self.children.update(records.children)

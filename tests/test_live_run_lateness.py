@@ -1,0 +1,76 @@
+"""The live run's benchmark hook (``R2D2_VIZ_PACING_LOG``): one ``topic lateness_seconds`` line per message handed
+to Rerun — joint states and a display message from a stand-in graph (no DDS) — and nothing at all when unset."""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from sources.live.test_source import JS, FakeGraph, _js
+
+import r2d2_viz.live_run as live_run
+from r2d2_viz.msgs.typestore import typestore
+from r2d2_viz.pacing import PACING_LOG_ENV
+from r2d2_viz.sources.live.dds import Publication, Sample
+from r2d2_viz.viewer.sinks import SinkConfig
+
+URDF = """<robot name="one"><link name="a"/><link name="b"/>
+<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>
+<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"""
+IMAGE = "sensor_msgs/msg/Image"
+
+
+@dataclass
+class Config:
+    urdf: Path | None
+    sink: SinkConfig
+    duration: float | None = 0.4
+    mappings: dict[str, str] = field(default_factory=dict)
+    package_paths: tuple[str, ...] = ()
+    time: Any = "receive"
+    fixed_frame: str | None = None
+    rviz: Path | None = None
+
+
+def _image() -> bytes:
+    t = typestore("jazzy").types
+    msg = t[IMAGE](
+        header=t["std_msgs/msg/Header"](stamp=t["builtin_interfaces/msg/Time"](sec=1, nanosec=0), frame_id="cam"),
+        height=2, width=2, encoding="rgb8", is_bigendian=0, step=6, data=np.zeros(12, dtype=np.uint8),
+    )  # fmt: skip
+    return bytes(typestore("jazzy").serialize_cdr(msg, IMAGE))
+
+
+def _run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> int:
+    monkeypatch.setattr(live_run, "SETTLE_SECONDS", 0.1)
+    urdf = tmp_path / "one.urdf"
+    urdf.write_text(URDF)
+    graph = FakeGraph()
+    graph.pubs = [Publication("/joint_states", JS, False, False), Publication("/cam/image", IMAGE, False, False)]
+    sent_ns = time.time_ns() - 2_000_000_000  # written two seconds ago
+    graph.queue = [Sample("/joint_states", JS, sent_ns + k, _js(["j"], [0.1 * k])) for k in range(3)]
+    graph.queue.append(Sample("/cam/image", IMAGE, sent_ns, _image()))
+    config = Config(urdf, SinkConfig(save=tmp_path / "out.rrd"))
+    samples, _, _ = live_run._LiveRun(config, graph, threading.Event()).run(None)  # type: ignore[arg-type]
+    return samples
+
+
+def test_each_message_handed_to_rerun_is_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    log = tmp_path / "lateness.txt"
+    monkeypatch.setenv(PACING_LOG_ENV, str(log))
+    assert _run(tmp_path, monkeypatch) == 3
+    lines = [line.split() for line in log.read_text().splitlines()]
+    assert sorted(topic for topic, _ in lines) == ["/cam/image", "/joint_states", "/joint_states", "/joint_states"]
+    for _, seconds in lines:
+        assert 2.0 <= float(seconds) < 30.0
+
+
+def test_nothing_written_when_unset(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv(PACING_LOG_ENV, raising=False)
+    assert _run(tmp_path, monkeypatch) == 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["one.urdf", "out.rrd"]
