@@ -22,14 +22,14 @@ from live import ros_node  # noqa: E402
 
 
 def run(distro: str, seconds: float) -> dict[str, object]:
-    """One run of ``tests/live/scenario.py`` at 1 kHz, 30 joints; its JSON result."""
+    """One run of ``tests/sources/live/scenario.py`` at 1 kHz, 30 joints; its JSON result."""
     missing = ros_node.netns_missing()
     if missing:
         raise SystemExit(f"live_dds: {missing}")
     python = ros_node.ensure_venv(distro)
     count = int(seconds * 1000)
     command = [
-        sys.executable, str(TESTS / "live" / "scenario.py"), "--ros-python", str(python),
+        sys.executable, str(TESTS / "sources" / "live" / "scenario.py"), "--ros-python", str(python),
         "--urdf", str(TESTS.parent / "assets" / "r2d2.urdf"), "--rate", "1000", "--count", str(count),
         "--joints", "30", "--deadline", str(seconds + 60),
     ]  # fmt: skip

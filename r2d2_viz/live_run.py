@@ -46,7 +46,10 @@ from r2d2_viz.viewer.stream import RobotStream
 from r2d2_viz.viewer.tf_recorded import RecordedTf
 
 POLL_SECONDS = 0.02
-"""How often what arrived is taken from the graph and logged (each time one chunk per entity)."""
+"""At the latest this often, what arrived is taken from the graph and logged (one chunk per entity)…"""
+GATHER_SECONDS = 0.002
+"""…and as soon as samples arrive, after gathering for this long (a 1 kHz stream goes out 2 samples a chunk:
+lateness of a few ms without a send per sample)."""
 SETTLE_SECONDS = 1.5
 """Discovery and the latched topics (``/robot_description``, ``/tf_static``) before the view is planned."""
 TF_TOPICS = ("/tf", "/tf_static")
@@ -197,7 +200,8 @@ class _LiveRun:
                 if time.monotonic() - flushed > FLUSH_SECONDS:
                     recording.rec.flush()
                     flushed = time.monotonic()
-                time.sleep(POLL_SECONDS)
+                if self.source.graph.wait(POLL_SECONDS):
+                    time.sleep(GATHER_SECONDS)
             self._finish()
             close_recording(recording)
             recording = None

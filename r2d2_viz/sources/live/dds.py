@@ -121,6 +121,7 @@ class LiveGraph:
         """Samples dropped per topic because the queue was full (oldest first)."""
         self._lock = threading.Lock()
         self._stop = threading.Event()
+        self._arrived = threading.Event()
         self._waitset = core.WaitSet(self._participant)
         self._wake = core.GuardCondition(self._participant)
         self._waitset.attach(self._wake)
@@ -185,6 +186,12 @@ class LiveGraph:
         self._wake.set(True)
         return Publication(topic, ros_type, durable, durable)
 
+    def wait(self, timeout: float) -> bool:
+        """Block until samples have arrived since the last poll (True), or ``timeout`` seconds (False)."""
+        arrived = self._arrived.wait(timeout)
+        self._arrived.clear()
+        return arrived
+
     def poll(self) -> list[Sample]:
         """Every sample received since the last poll, oldest first per topic; never blocks."""
         with self._lock:
@@ -239,6 +246,7 @@ class LiveGraph:
                     if overflow > 0:
                         self.dropped[topic] += overflow
                     q.extend(samples)
+                self._arrived.set()
             time.sleep(0.001)
 
 

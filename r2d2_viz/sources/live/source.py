@@ -57,6 +57,8 @@ class Graph(Protocol):
 
     def poll(self) -> list[Sample]: ...
 
+    def wait(self, timeout: float) -> bool: ...
+
 
 @dataclass
 class LiveBatch:

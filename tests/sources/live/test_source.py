@@ -4,6 +4,7 @@ malformed joint states, transforms and descriptions counted and said once per ki
 from __future__ import annotations
 
 import struct
+import time
 
 import numpy as np
 
@@ -31,6 +32,10 @@ class FakeGraph:
     def poll(self) -> list[Sample]:
         out, self.queue = self.queue, []
         return out
+
+    def wait(self, timeout: float) -> bool:
+        time.sleep(timeout)
+        return bool(self.queue)
 
 
 def _js(names: list[str], position: list[float], sec: int = 5) -> bytes:
