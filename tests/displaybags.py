@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 from bagmaker import BagSpec, tf_message, write_bag
-from msgs_build import T, cdr, color, header, pose, quat, vec
+from msgs_build import T, cdr, color, duration, header, marker_msg, pose, quat, vec
 
 S = 1_000_000_000
 T0 = 1_700_000_000 * S
@@ -50,26 +50,15 @@ def laser_scan(sec: int, nanosec: int, frame: str = "base_laser") -> bytes:
 
 
 def marker(kind: int, action: int, ns: str, key: int, *, lifetime_s: int = 0, at: tuple[float, float] = (0, 0)):
-    return T("visualization_msgs/msg/Marker")(
-        header=header("odom"),
+    return marker_msg(
+        kind,
+        action=action,
         ns=ns,
         id=key,
-        type=kind,
-        action=action,
         pose=pose(at[0], at[1], 0.0, quat(0, 0, 0, 1)),
         scale=vec(0.4, 0.4, 0.4),
         color=color(0.0, 0.0, 1.0),
-        lifetime=T("builtin_interfaces/msg/Duration")(sec=lifetime_s, nanosec=0),
-        frame_locked=False,
-        points=[],
-        colors=[],
-        texture_resource="",
-        texture=T("sensor_msgs/msg/CompressedImage")(header=header(), format="", data=np.zeros(0, np.uint8)),
-        uv_coordinates=[],
-        text="",
-        mesh_resource="",
-        mesh_file=T("visualization_msgs/msg/MeshFile")(filename="", data=np.zeros(0, np.uint8)),
-        mesh_use_embedded_materials=False,
+        lifetime=duration(lifetime_s),
     )
 
 

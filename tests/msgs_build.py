@@ -71,28 +71,50 @@ def rviz_intensity(values: list[float]) -> list[tuple[int, int, int]]:
     return [rviz_rainbow(1.0 - (v - lo) / diff) for v in values]
 
 
+def marker_msg(kind: int, **fields: Any) -> Any:
+    """A ``visualization_msgs/Marker`` of type ``kind``: ADD, in odom, white, unit scale, forever, nothing extra;
+    ``fields`` set the rest (rosbags' own message class)."""
+    args: dict[str, Any] = {
+        "header": header("odom"),
+        "ns": "",
+        "id": 0,
+        "type": kind,
+        "action": 0,
+        "pose": pose(),
+        "scale": vec(1.0, 1.0, 1.0),
+        "color": color(1.0, 1.0, 1.0),
+        "lifetime": T("builtin_interfaces/msg/Duration")(sec=0, nanosec=0),
+        "frame_locked": False,
+        "points": [],
+        "colors": [],
+        "texture_resource": "",
+        "texture": T("sensor_msgs/msg/CompressedImage")(header=header(), format="", data=np.zeros(0, np.uint8)),
+        "uv_coordinates": [],
+        "text": "",
+        "mesh_resource": "",
+        "mesh_file": T("visualization_msgs/msg/MeshFile")(filename="", data=np.zeros(0, np.uint8)),
+        "mesh_use_embedded_materials": False,
+    }
+    args.update(fields)
+    return T("visualization_msgs/msg/Marker")(**args)
+
+
+def duration(sec: int, nanosec: int = 0) -> Any:
+    return T("builtin_interfaces/msg/Duration")(sec=sec, nanosec=nanosec)
+
+
 def _marker(kind: int) -> Any:
     pts = [vec(0, 0, 0, "Point"), vec(1, 0, 0, "Point"), vec(1, 1, 0, "Point")]
-    return T("visualization_msgs/msg/Marker")(
-        header=header("odom"),
+    return marker_msg(
+        kind,
         ns="ns",
         id=kind,
-        type=kind,
-        action=0,
         pose=pose(1.0, 2.0, 0.0),
         scale=vec(0.2, 0.2, 0.2),
         color=color(1, 0, 0),
-        lifetime=T("builtin_interfaces/msg/Duration")(sec=0, nanosec=0),
-        frame_locked=False,
         points=pts if kind in (4, 5, 6, 7, 8, 11) else [],
-        colors=[],
-        texture_resource="",
-        texture=T("sensor_msgs/msg/CompressedImage")(header=header(), format="", data=np.zeros(0, np.uint8)),
-        uv_coordinates=[],
         text="hi",
         mesh_resource="package://p/m.stl",
-        mesh_file=T("visualization_msgs/msg/MeshFile")(filename="", data=np.zeros(0, np.uint8)),
-        mesh_use_embedded_materials=False,
     )
 
 

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from bagmaker import BagSpec, tf_message, write_bag
-from msgs_build import T, cdr, color, header, pose, quat, vec
+from msgs_build import T, cdr, color, header, marker_msg, pose, quat, vec
 
 from . import viewers
 
@@ -79,26 +79,14 @@ def _scan(t_ns: int) -> bytes:
 
 
 def _marker(kind: int, key: int, at: tuple[float, float, float], rgb: tuple[float, float, float]):
-    return T("visualization_msgs/msg/Marker")(
+    return marker_msg(
+        kind,
         header=header("odom", *divmod(T0, S)),
         ns="shapes",
         id=key,
-        type=kind,
-        action=0,
         pose=pose(*at, quat(0, 0, 0, 1)),
         scale=vec(SIZE, SIZE, SIZE),
         color=color(*rgb),
-        lifetime=T("builtin_interfaces/msg/Duration")(sec=0, nanosec=0),
-        frame_locked=False,
-        points=[],
-        colors=[],
-        texture_resource="",
-        texture=T("sensor_msgs/msg/CompressedImage")(header=header(), format="", data=np.zeros(0, np.uint8)),
-        uv_coordinates=[],
-        text="",
-        mesh_resource="",
-        mesh_file=T("visualization_msgs/msg/MeshFile")(filename="", data=np.zeros(0, np.uint8)),
-        mesh_use_embedded_materials=False,
     )
 
 

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from msgs_build import T, cdr, color, header, pose, quat, vec
+from msgs_build import T, cdr, color, duration, header, marker_msg, pose, quat, vec
 
 from r2d2_viz.msgs import shapes
 from r2d2_viz.msgs.markers import decode_marker, decode_marker_array
@@ -23,25 +23,13 @@ def marker(kind: int, action: int = 0, **kw: object) -> object:
         "header": header("/odom", 3, 0),
         "ns": "demo",
         "id": 7,
-        "type": kind,
-        "action": action,
         "pose": pose(1.0, 2.0, 3.0, Q90Z),
         "scale": vec(0.2, 0.4, 0.6),
         "color": color(1.0, 0.5, 0.0, 1.0),
-        "lifetime": T("builtin_interfaces/msg/Duration")(sec=2, nanosec=500),
-        "frame_locked": False,
-        "points": [],
-        "colors": [],
-        "texture_resource": "",
-        "texture": T("sensor_msgs/msg/CompressedImage")(header=header(), format="", data=np.zeros(0, np.uint8)),
-        "uv_coordinates": [],
-        "text": "",
-        "mesh_resource": "",
-        "mesh_file": T("visualization_msgs/msg/MeshFile")(filename="", data=np.zeros(0, np.uint8)),
-        "mesh_use_embedded_materials": False,
+        "lifetime": duration(2, 500),
     }
     args.update(kw)
-    return T("visualization_msgs/msg/Marker")(**args)
+    return marker_msg(kind, action=action, **args)
 
 
 def one(kind: int, **kw: object) -> MarkerOp:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import rerun as rr
-from msgs_build import T, cdr, color, header, pose, quat, vec
+from msgs_build import T, cdr, color, duration, header, marker_msg, pose, quat, vec
 from rrd import Rows, read_recording
 
 from r2d2_viz.msgs.registry import decode
@@ -44,27 +44,15 @@ def scan_bytes() -> bytes:
 
 
 def marker(action: int, ns: str, key: int, lifetime_s: int = 0) -> object:
-    m = T("visualization_msgs/msg/Marker")
-    return m(
-        header=header("odom"),
+    return marker_msg(
+        1,
+        action=action,
         ns=ns,
         id=key,
-        type=1,
-        action=action,
         pose=pose(1.0, 0.0, 0.0, quat(0, 0, 0, 1)),
         scale=vec(2, 2, 2),
         color=color(0, 0, 1),
-        lifetime=T("builtin_interfaces/msg/Duration")(sec=lifetime_s, nanosec=0),
-        frame_locked=False,
-        points=[],
-        colors=[],
-        texture_resource="",
-        texture=T("sensor_msgs/msg/CompressedImage")(header=header(), format="", data=np.zeros(0, np.uint8)),
-        uv_coordinates=[],
-        text="",
-        mesh_resource="",
-        mesh_file=T("visualization_msgs/msg/MeshFile")(filename="", data=np.zeros(0, np.uint8)),
-        mesh_use_embedded_materials=False,
+        lifetime=duration(lifetime_s),
     )
 
 
