@@ -81,3 +81,20 @@ def listening_addresses(port: int) -> set[str]:
             if state == "0A" and int(hex_port, 16) == port:  # 0A: LISTEN
                 out.add(socket.inet_ntoa(bytes.fromhex(address)[::-1]) if len(address) == 8 else address)
     return out
+
+
+@pytest.fixture
+def without_cyclonedds(monkeypatch: pytest.MonkeyPatch) -> None:
+    """This Python as on a machine where PyPI has no cyclonedds wheel: importing it fails."""
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_cyclone(name: str, *args: object, **kwargs: object) -> object:
+        if name.startswith("cyclonedds"):
+            raise ImportError(f"No module named {name!r}")
+        return real_import(name, *args, **kwargs)  # type: ignore[arg-type]
+
+    for name in [m for m in sys.modules if m.startswith("cyclonedds")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setattr(builtins, "__import__", no_cyclone)

@@ -6,7 +6,6 @@ once, and the good messages still land. Plus the CLI's refusals (no DDS needed).
 
 from __future__ import annotations
 
-import builtins
 import json
 import sys
 from pathlib import Path
@@ -153,17 +152,7 @@ def test_list_needs_ros_and_ros_refuses_a_bag(capsys: pytest.CaptureFixture[str]
     assert "use it with --ros" in err and "cannot be combined with --bag" in err
 
 
-def test_missing_cyclonedds_is_one_line_exit_2(monkeypatch: pytest.MonkeyPatch, capsys: Any) -> None:
-    real_import = builtins.__import__
-
-    def no_cyclone(name: str, *args: Any, **kwargs: Any) -> Any:
-        if name.startswith("cyclonedds"):
-            raise ImportError(f"No module named {name!r}")
-        return real_import(name, *args, **kwargs)
-
-    for name in [m for m in sys.modules if m.startswith("cyclonedds")]:
-        monkeypatch.delitem(sys.modules, name)
-    monkeypatch.setattr(builtins, "__import__", no_cyclone)
+def test_missing_cyclonedds_is_one_line_exit_2(without_cyclonedds: None, capsys: Any) -> None:
     assert main(["--ros", "--list"]) == 2
     assert main(["--ros", "--save", "x.rrd", "--duration", "1"]) == 2
     lines = capsys.readouterr().err.strip().splitlines()

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import builtins
 import json
 import sys
 from pathlib import Path
@@ -19,17 +18,7 @@ from . import ros_node
 URDF = REPO / "assets" / "r2d2.urdf"
 
 
-def test_missing_cyclonedds_names_the_pip_command(monkeypatch: pytest.MonkeyPatch) -> None:
-    real_import = builtins.__import__
-
-    def no_cyclone(name: str, *args: Any, **kwargs: Any) -> Any:
-        if name.startswith("cyclonedds"):
-            raise ImportError(f"No module named {name!r}")
-        return real_import(name, *args, **kwargs)
-
-    for name in [m for m in sys.modules if m.startswith("cyclonedds")]:
-        monkeypatch.delitem(sys.modules, name)
-    monkeypatch.setattr(builtins, "__import__", no_cyclone)
+def test_missing_cyclonedds_names_the_pip_command(without_cyclonedds: None) -> None:
     with pytest.raises(LiveError, match="pip install 'cyclonedds"):
         dds.cyclonedds_modules()
 
