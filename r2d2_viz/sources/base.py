@@ -160,6 +160,17 @@ class TfRecords:
     def edges(self) -> set[tuple[str, str]]:
         return set(zip(self.parents, self.children, strict=True))
 
+    def rows(self, keep: I64) -> TfRecords:
+        """These records' rows at indices ``keep``."""
+        return TfRecords(
+            self.times_ns[keep],
+            tuple(self.parents[i] for i in keep),
+            tuple(self.children[i] for i in keep),
+            self.translation[keep],
+            self.quat_xyzw[keep],
+            self.static,
+        )
+
 
 def tf_root(records: Sequence[TfRecords]) -> str | None:
     """The root of the recorded TF tree (a frame that is some edge's parent and no edge's child), as RViz users

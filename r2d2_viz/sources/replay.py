@@ -125,12 +125,4 @@ def _check(tree: KinematicTree, source: BagSource, records: list[TfRecords]) -> 
 
 
 def _until(r: TfRecords, last_ns: int) -> TfRecords:
-    keep = np.flatnonzero(r.times_ns <= last_ns)
-    return TfRecords(
-        r.times_ns[keep],
-        tuple(r.parents[i] for i in keep),
-        tuple(r.children[i] for i in keep),
-        r.translation[keep],
-        r.quat_xyzw[keep],
-        r.static,
-    )
+    return r.rows(np.flatnonzero(r.times_ns <= last_ns))

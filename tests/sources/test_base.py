@@ -74,3 +74,14 @@ def test_the_tf_root_is_the_frame_with_no_parent_and_most_below() -> None:
     assert tf_root([records([("map", "odom"), ("odom", "base_link")]), records([("base_link", "laser")])]) == "map"
     assert tf_root([records([("world", "a"), ("map", "odom"), ("odom", "base")])]) == "map"  # two trees: the bigger
     assert tf_root([]) is None
+
+
+def test_tf_records_rows_keeps_the_rows_asked_for() -> None:
+    import numpy as np
+
+    from r2d2_viz.sources.base import TfRecords
+
+    r = TfRecords(np.array([1, 2, 3]), ("a", "b", "c"), ("x", "y", "z"), np.eye(3), np.tile([0, 0, 0, 1.0], (3, 1)))
+    kept = r.rows(np.array([0, 2]))
+    assert kept.times_ns.tolist() == [1, 3] and kept.parents == ("a", "c") and kept.children == ("x", "z")
+    assert kept.translation.tolist() == [[1, 0, 0], [0, 0, 1]] and not kept.static

@@ -233,15 +233,7 @@ class LiveSource:
             if not self._tf_nonfinite[topic]:
                 self._note(f"{topic} nonfinite", f"{topic}: transforms with NaN or infinite values are skipped")
             self._tf_nonfinite[topic] += int(np.count_nonzero(~finite))
-            keep = np.flatnonzero(finite)
-            records = TfRecords(
-                records.times_ns[keep],
-                tuple(records.parents[i] for i in keep),
-                tuple(records.children[i] for i in keep),
-                records.translation[keep],
-                records.quat_xyzw[keep],
-                records.static,
-            )
+            records = records.rows(np.flatnonzero(finite))
         return records if len(records) else None
 
     def _check_dropped(self) -> None:
