@@ -192,7 +192,10 @@ class _LiveRun:
             endless = self.end is None or sink.live  # a file without footer: its manifest would grow in memory
             recording = open_recording(sink, save_to=tmp, live=endless, on_ready=on_ready, blueprint=blueprint)
             self._start(recording)
-            for batch in batches:
+            latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
+            for k, batch in enumerate(batches):
+                if k < latest:  # a description the settle's latest one replaced: not worth a word
+                    batch.descriptions.clear()
                 self._handle(batch, bag)
             flushed = time.monotonic()
             while not self._done():

@@ -162,3 +162,49 @@ def test_missing_cyclonedds_is_one_line_exit_2(without_cyclonedds: None, capsys:
 def test_help_names_ros() -> None:
     done = cli("--help")
     assert done.returncode == 0 and "--ros" in done.stdout and "--list" in done.stdout
+
+
+def test_a_description_that_does_not_parse_then_one_that_does(
+    tmp_path: Path, capsys: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No DDS: a stand-in graph hands over a broken /robot_description, then a good one, then joint states. The
+    run says the first once and goes on with transforms only, then loads the robot and moves it."""
+    import threading
+
+    from sources.live.test_source import JS, FakeGraph, _js
+    from test_live_run_lateness import URDF, Config
+
+    import r2d2_viz.live_run as live_run
+    from r2d2_viz.sources.live.dds import Publication, Sample
+    from r2d2_viz.viewer.sinks import SinkConfig
+
+    store = typestore("jazzy")
+
+    def description(text: str) -> bytes:
+        msg = store.types["std_msgs/msg/String"](data=text)
+        return bytes(store.serialize_cdr(msg, "std_msgs/msg/String"))
+
+    class Stepwise(FakeGraph):  # one list of samples per poll
+        def __init__(self, steps: list[list[Sample]]) -> None:
+            super().__init__()
+            self.steps = steps
+
+        def poll(self) -> list[Sample]:
+            return self.steps.pop(0) if self.steps else []
+
+    t = 1_700_000_000_000_000_000
+    string = "std_msgs/msg/String"
+    monkeypatch.setattr(live_run, "SETTLE_SECONDS", 0.1)
+    broken = [Sample("/robot_description", string, t, description("<robot name='broken'><link"))]
+    good = [Sample("/robot_description", string, t + 1, description(URDF))]
+    joints = [Sample("/joint_states", JS, t + 2 + k, _js(["j"], [0.1 * k])) for k in range(3)]
+    graph = Stepwise([broken, *[[]] * 10, good, [], [], joints])  # the broken one within the settle, then a pause
+    graph.pubs = [Publication("/robot_description", string, True, True), Publication("/joint_states", JS, False, False)]
+    config = Config(None, SinkConfig(save=tmp_path / "out.rrd"), duration=1.0)
+    samples, _, _ = live_run._LiveRun(config, graph, threading.Event()).run(None)  # type: ignore[arg-type]
+    err = capsys.readouterr().err
+    assert err.count("(showing transforms only)") == 1
+    assert "/robot_description changed: robot 'one' reloaded" in err
+    assert samples == 3, err
+    recording = read_recording(tmp_path / "out.rrd")
+    assert len(recording["/joints/limited"].times) == 3  # the reloaded robot's joint moved
