@@ -1,3 +1,3 @@
-"""ROS messages without ROS: where the fields of CDR-encoded messages sit, decoded in bulk with numpy.
-Pure (struct, numpy, rosbags); imports nothing of r2d2_viz but ``errors`` and ``arrays``.
+"""ROS messages without ROS: CDR layouts of JointState and TF, and a decoder per RViz display type (one table) into
+rerun-free shapes, bulk numpy where volume matters. Pure (numpy, rosbags); imports only ``errors`` and ``arrays``.
 """
