@@ -26,7 +26,9 @@ PANDA = example_robots() / "panda_description" / "urdf" / "panda.urdf"
 COUNT, RATE = 300, 100
 
 
-def _scenario(distro: str, runs: list[list[str]], *, node: list[str] = (), wrong_type: bool = False) -> Any:
+def _scenario(
+    distro: str, runs: list[list[str]], *, node: list[str] = (), wrong_type: bool = False, server: Path | None = None
+) -> Any:
     python = ros_node.require_live(distro)
     script = Path(ros_node.__file__).with_name("cli_scenario.py")
     exe = Path(sys.executable).parent / "r2d2-viz"
@@ -46,6 +48,8 @@ def _scenario(distro: str, runs: list[list[str]], *, node: list[str] = (), wrong
     ]
     if wrong_type:
         command.append("--wrong-type-peer")
+    if server is not None:  # a rerun gRPC server in the namespace, for --connect runs (port 9877)
+        command += ["--rerun", str(Path(sys.executable).parent / "rerun"), "--server-save", str(server)]
     done = ros_node.in_netns(command, timeout=120)
     assert done.returncode == 0, done.stderr[-3000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -135,14 +139,21 @@ def test_jazzy_node_recorded_bagged_and_malformed_samples_survived(tmp_path: Pat
 
 
 @pytest.mark.slow
-def test_kilted_node_recorded_at_source_timestamps(tmp_path: Path) -> None:
-    rrd = tmp_path / "out.rrd"
-    result = _scenario("kilted", [["--save", str(rrd), "--duration", "8"]])
+def test_kilted_node_recorded_at_source_timestamps_and_streamed_to_a_viewer(tmp_path: Path) -> None:
+    rrd, received = tmp_path / "out.rrd", tmp_path / "received.rrd"
+    runs = [
+        ["--save", str(rrd), "--duration", "8"],
+        ["--connect", "rerun+http://127.0.0.1:9877/proxy", "--duration", "8"],
+    ]
+    result = _scenario("kilted", runs, server=received)
     assert "/joint_states [sensor_msgs/msg/JointState] 1 publisher" in result["list"]
-    run = result["runs"][0]
-    assert run["rc"] == 0, run["stderr"][-3000:]
-    assert _received(run["stderr"])["/joint_states"] >= 0.995 * COUNT
+    for run in result["runs"]:
+        assert run["rc"] == 0, run["stderr"][-3000:]
+        assert _received(run["stderr"])["/joint_states"] >= 0.995 * COUNT
     assert _check_poses(rrd, header_time=False) >= 0.995 * COUNT
+    # --connect: a running viewer (Rerun's gRPC server, which saved what it got) shows the same robot moving
+    assert result["server_rc"] in (0, 130)  # interrupted, as a user closes it: it saves on the way out
+    assert _check_poses(received, header_time=False) >= 0.995 * COUNT
 
 
 def test_list_needs_ros_and_ros_refuses_a_bag(capsys: pytest.CaptureFixture[str]) -> None:

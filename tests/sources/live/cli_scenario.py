@@ -11,12 +11,24 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
+import socket
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 NODES = Path(__file__).resolve().parent / "nodes"
+
+
+def _wait_for_port(port: int, timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with socket.socket() as probe:
+            if probe.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.1)
+    raise SystemExit(f"cli_scenario: the rerun server did not listen on {port}")
 
 
 def main() -> int:
@@ -27,8 +39,18 @@ def main() -> int:
     parser.add_argument("--node", default="[]", help="JSON list of extra arguments of publish_robot.py")
     parser.add_argument("--wrong-type-peer", action="store_true")
     parser.add_argument("--runs", required=True, help="JSON list of argument lists")
+    parser.add_argument("--rerun", default=None, help="start this rerun binary as a gRPC server first (--connect)")
+    parser.add_argument("--server-port", type=int, default=9877)
+    parser.add_argument("--server-save", default=None, help="what the server received, saved here at the end")
     args = parser.parse_args()
     runs = json.loads(args.runs)
+    server = None
+    if args.rerun:
+        server = subprocess.Popen(
+            [args.rerun, "--port", str(args.server_port), "--bind", "127.0.0.1", "--save", args.server_save],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+        )  # fmt: skip
+        _wait_for_port(args.server_port)
     node = subprocess.Popen(
         [args.ros_python, str(NODES / "publish_robot.py"), "--urdf", args.urdf, "--subscribers", str(len(runs)),
          *json.loads(args.node)],
@@ -55,7 +77,13 @@ def main() -> int:
         for proc in procs:
             stdout, stderr = proc.communicate(timeout=60)
             out["runs"].append({"rc": proc.returncode, "stderr": stderr})  # type: ignore[union-attr]
+        if server is not None:  # the server writes what it received when interrupted
+            time.sleep(1.0)
+            os.killpg(server.pid, signal.SIGINT)
+            out["server_rc"] = server.wait(timeout=30)
     finally:
+        if server is not None and server.poll() is None:
+            os.killpg(server.pid, signal.SIGKILL)
         for p in (node, peer):
             if p is not None and p.poll() is None:
                 p.kill()
