@@ -37,7 +37,7 @@ class Replay:
     """Recorded edges the URDF defines: drawn by the kinematics instead."""
     notes: list[str] = field(default_factory=list)
     mcap_files: list[Path] = field(default_factory=list)
-    """The bag's MCAP storage files, for the topics Rerun's own decoders show."""
+    """The bag's MCAP storage files, for the topics no display of ours draws (Rerun's own decoders)."""
     description: str | None = None
     """The URDF text from the bag's /robot_description, when that is where the robot came from."""
     displays: dict[str, str] = field(default_factory=dict)

@@ -1,12 +1,8 @@
-"""A bag's other topics (point clouds, images, ...) into the recording, through Rerun's own MCAP decoders
-(``rerun.chunk.McapReader``, public API of rerun-sdk 0.41): each topic lands on the entity of its name
-(``/camera/image_raw``, ``/points``), in the TF frame its header names (``CoordinateFrame``), on our timeline.
-
-What Rerun 0.41's ``ros2msg`` decoder turns into something a view shows: ``sensor_msgs`` Image, CompressedImage,
-CameraInfo, PointCloud2, NavSatFix, MagneticField, JointState, Imu and the other scalar sensors;
-``geometry_msgs/PoseStamped``; ``tf2_msgs/TFMessage``; ``std_msgs/String``; ``rcl_interfaces/Log``. Not in
-0.41: LaserScan, Odometry, Path, Marker (Rerun would only carry their fields as raw columns): they are listed
-as skipped, with every other topic no decoder understands. ``.db3`` storage: Rerun does not read it.
+"""A bag's topics that no display of ours draws, into the recording through Rerun's own MCAP decoders
+(``rerun.chunk.McapReader``, public API of rerun-sdk 0.41): each topic lands on the entity of its name, on our
+timeline. The display topics (scans, clouds, markers, maps, images…) are decoded by :mod:`r2d2_viz.msgs` and
+excluded here; what is left that Rerun's ``ros2msg`` decoder makes something of: NavSatFix, MagneticField, Imu and
+the other scalar sensors, ``std_msgs/String``, ``rcl_interfaces/Log``. ``.mcap`` storage only, saved runs only.
 
 Rerun's chunks carry three timelines (``message_log_time``: receive time; ``message_publish_time``;
 ``ros2_timestamp``: header stamps); the one matching our ``time`` choice is renamed to our timeline, so the
