@@ -23,6 +23,7 @@ from typing import Protocol, TextIO
 
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.pacing import PACING_LOG_ENV
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
@@ -237,6 +238,7 @@ class _LiveRun:
             fixed_frame=self.fixed_frame,
             header_time=self.config.time == "header",
             styles=self.view.display_styles,
+            load_mesh=uri_loader(self.packages, Path(".")),
         )
         self.rec = rec
         if self.robot is not None:
