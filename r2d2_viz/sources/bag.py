@@ -81,7 +81,7 @@ class _File:
             self.reader = reader
             self.topics = {c.topic: (c.msgtype, c.msgcount) for c in reader.connections}
         except Exception as exc:
-            if self.scan is None or not _TRUNCATED.search(str(exc)):
+            if not _TRUNCATED.search(str(exc)):
                 raise
             self.topics = self.scan.topics()
             count = sum(n for _, n in self.topics.values())
@@ -92,11 +92,8 @@ class _File:
     def messages(self, topic: str) -> Iterator[tuple[int, bytes | memoryview]]:
         if self.db3 is not None:
             return self.db3.messages(topic)
-        if self.scan is not None:
-            return self.scan.messages(topic)
-        assert self.reader is not None
-        connections = [c for c in self.reader.connections if c.topic == topic]
-        return ((time_ns, data) for _, time_ns, data in self.reader.messages(connections)) if connections else iter(())
+        assert self.scan is not None  # an MCAP file: rosbags only said what it holds
+        return self.scan.messages(topic)
 
     def close(self) -> None:
         if self.db3 is not None:
