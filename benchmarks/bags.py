@@ -88,7 +88,7 @@ def _command(command: list[str]) -> tuple[float, float]:
 OURS = """
     import sys, time
     import numpy as np
-    from r2d2_viz.sources.bag import open_bag
+    from r2d2_viz.sources.bags.bag import open_bag
     from r2d2_viz.sources.bag_joints import BagSource
     t = time.perf_counter()
     with open_bag(sys.argv[1]) as bag:
@@ -133,7 +133,7 @@ RERUN_READER = """
 
 MEMORY = """
     import sys, time
-    from r2d2_viz.sources.bag import open_bag
+    from r2d2_viz.sources.bags.bag import open_bag
     from r2d2_viz.sources.bag_joints import BagSource
     if sys.argv[2] == "0":
         print(0, 0, 0.0, HWM()); raise SystemExit

@@ -22,7 +22,7 @@ from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
 from r2d2_viz.signals import sigterm_raises
-from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.base import Source
 from r2d2_viz.sources.motion import ODOM, make_motion

@@ -33,7 +33,7 @@ def _rel(path: Path) -> str:
 
 
 def _stage(module: str) -> str:
-    """``r2d2_viz.sources.bag`` → ``sources``; a top-level module → its own name."""
+    """``r2d2_viz.sources.bags.bag`` → ``sources``; a top-level module → its own name."""
     parts = module.split(".")
     return parts[1] if len(parts) > 1 else ""
 

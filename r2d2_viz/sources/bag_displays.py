@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from r2d2_viz.msgs.registry import DECODERS, decode
 from r2d2_viz.msgs.shapes import Decoded
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.sources.bag import Bag
+from r2d2_viz.sources.bags.bag import Bag
 
 OURS = ("/joint_states", "/tf", "/tf_static", "/robot_description")
 """Topics the robot pipeline itself reads."""

@@ -22,7 +22,7 @@ from r2d2_viz.arrays import F64, I64
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.layouts import STAMP, JointStateLayout, joint_state_layout
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.sources.bag import Bag, Warn
+from r2d2_viz.sources.bags.bag import Bag, Warn
 from r2d2_viz.sources.base import Clock, SampleChunk
 
 JOINT_STATE = "sensor_msgs/msg/JointState"

@@ -16,7 +16,7 @@ import numpy as np
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.layouts import TfLayout, tf_layout
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.sources.bag import Bag
+from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bag_joints import MAX_LAYOUTS, TimeSource, stamps_ns
 from r2d2_viz.sources.base import TfRecords
 

@@ -14,7 +14,7 @@ import numpy as np
 from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
-from r2d2_viz.sources.bag import Bag
+from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bag_displays import TopicMessage, bag_messages, display_frames, display_topics
 from r2d2_viz.sources.bag_joints import BagSource, TimeSource, read_robot_description
 from r2d2_viz.sources.bag_tf import read_tf

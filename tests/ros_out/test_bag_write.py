@@ -13,7 +13,7 @@ from rosbags.rosbag2 import Reader
 
 from r2d2_viz.errors import BagError
 from r2d2_viz.ros_out.bag_write import BagWriter, StaticTransform
-from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.bag_joints import BagSource, read_robot_description
 from r2d2_viz.sources.bag_tf import read_tf
 from r2d2_viz.sources.base import FrameTrack

@@ -8,7 +8,7 @@ import pytest
 from displaybags import MAP_TIME, SCAN_TIMES, T0, write_display_bag
 from rosbags.rosbag2 import Reader
 
-from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.bag_displays import bag_messages, display_frames, display_topics
 
 

@@ -12,7 +12,7 @@ from conftest import REPO
 from rosbags.rosbag2 import Reader
 
 from r2d2_viz.errors import BagError
-from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.bag_joints import BagSource, read_robot_description
 
 ARM = ["shoulder", "elbow", "wrist", "gripper"]

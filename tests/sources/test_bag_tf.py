@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from bagmaker import T0, TS, BagSpec, string, tf_message, write_bag
 
-from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.bag_tf import read_tf, tf_chunks
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 from bagmaker import T0, BagSpec, joint_state, storage_file, string, write_bag
 from rosbags.rosbag2 import Reader
 
-from r2d2_viz.sources.mcap_scan import McapScan
+from r2d2_viz.sources.bags.mcap_scan import McapScan
 
 
 def _intact(tmp_path: Path, n: int = 5000) -> Path:

@@ -13,7 +13,7 @@ from conftest import REPO
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
 from r2d2_viz.errors import BagError
-from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bags.bag import open_bag
 
 REAL = REPO / "tests" / "data" / "bags"
 HELLO = [f"Hello, world! {i}" for i in range(10)]  # what the ROS 2 demo talker published

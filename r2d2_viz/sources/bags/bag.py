@@ -28,11 +28,11 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # rosbags and ruamel.yaml are imported when a bag is opened: not on a run without one
     from rosbags.rosbag2 import Reader
 
-    from r2d2_viz.sources.db3 import Db3
+    from r2d2_viz.sources.bags.db3 import Db3
 
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.typestore import typestore
-from r2d2_viz.sources.mcap_scan import McapScan
+from r2d2_viz.sources.bags.mcap_scan import McapScan
 
 Warn = Callable[[str], None]
 
@@ -66,7 +66,7 @@ class _File:
         self.reader: Reader | None = None
         self.db3: Db3 | None = None
         if path.suffix == ".db3":
-            from r2d2_viz.sources.db3 import Db3
+            from r2d2_viz.sources.bags.db3 import Db3
 
             self.db3 = Db3(path)
             self.topics = self.db3.topics

@@ -17,8 +17,8 @@ from pathlib import Path
 import pytest
 from bagmaker import T0, BagSpec, joint_state, storage_file, write_bag
 
-from r2d2_viz.sources.bag import open_bag
-from r2d2_viz.sources.db3 import readonly_uri
+from r2d2_viz.sources.bags.bag import open_bag
+from r2d2_viz.sources.bags.db3 import readonly_uri
 
 TIMES = [T0 + k * 10**7 for k in range(20)]
 
@@ -42,7 +42,7 @@ def _listing(folder: Path) -> dict[str, tuple[int, int]]:
 
 READ = """
 import sys
-from r2d2_viz.sources.bag import open_bag
+from r2d2_viz.sources.bags.bag import open_bag
 with open_bag(sys.argv[1]) as bag:
     print(len(list(bag.raw("/joint_states"))))
 """
