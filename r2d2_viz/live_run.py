@@ -36,7 +36,7 @@ from r2d2_viz.sources.base import TfRecords, tf_root
 from r2d2_viz.sources.live.dds import LiveGraph
 from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
-from r2d2_viz.sources.replay import Replay
+from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
@@ -163,7 +163,7 @@ class _LiveRun:
                 raise
             return None
 
-    def _plan(self, batches: list[LiveBatch]) -> tuple[Replay, ViewPlan]:
+    def _plan(self, batches: list[LiveBatch]) -> tuple[RunPlan, ViewPlan]:
         records = [r for b in batches for r in b.tf]
         static = next((r for r in records if r.static), None)
         moving = next((r for r in records if not r.static), None)
@@ -171,7 +171,7 @@ class _LiveRun:
         rviz_frame = load_rviz(self.config.rviz).fixed_frame if self.config.rviz is not None else None
         root = tree.robot.root if tree is not None else None
         frame = self.config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
-        plan = Replay(tree, None, static, moving, frame)
+        plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
         return plan, plan_view(plan, rviz=self.config.rviz, fixed_frame=self.config.fixed_frame)
 
     def run(self, on_ready: Callable[[str], None] | None) -> tuple[int, bool, Path | None]:
@@ -233,7 +233,6 @@ class _LiveRun:
         self.recorded = RecordedTf(rec, clock="timestamp", axis_length=self.view.axis_length)
         self.feed = DisplayFeed(
             self.notices,
-            None,
             clock="timestamp",
             fixed_frame=self.fixed_frame,
             header_time=self.config.time == "header",

@@ -1,5 +1,5 @@
-"""A bag as a source: ``/joint_states`` (``sensor_msgs/msg/JointState``) in chunks of samples, and the bag's
-latest ``/robot_description`` (its ``/tf`` and ``/tf_static``: :mod:`r2d2_viz.sources.bag_tf`).
+"""``/joint_states`` (``sensor_msgs/msg/JointState``) decoded into chunks of samples, from a bag or a live graph, and
+a bag's latest ``/robot_description`` (``/tf`` and ``/tf_static``: :mod:`r2d2_viz.sources.bag_tf`).
 
 Messages are decoded in bulk: messages with the same joint names share a byte layout (:mod:`r2d2_viz.msgs.layouts`),
 so each is checked against its layout with one bytes comparison and all positions of a chunk become one numpy
@@ -12,7 +12,7 @@ message whose name and position lengths differ is skipped, and the skipped ones 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -22,8 +22,8 @@ from r2d2_viz.arrays import F64, I64
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.layouts import STAMP, JointStateLayout, joint_state_layout
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.sources.bags.bag import Bag, Warn
-from r2d2_viz.sources.base import Clock, SampleChunk
+from r2d2_viz.sources.bags.bag import Bag
+from r2d2_viz.sources.base import SampleChunk
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 STRING = "std_msgs/msg/String"
@@ -49,49 +49,6 @@ class _Group:
     layout: JointStateLayout
     rows: list[int] = field(default_factory=list)
     values: list[bytes | memoryview] = field(default_factory=list)  # whole messages, all of one length
-
-
-class BagSource:
-    """``/joint_states`` of an open bag as a :class:`~r2d2_viz.sources.base.Source` (clock: timestamp)."""
-
-    clock: Clock = "timestamp"
-    frames: tuple[tuple[str, str], ...] = ()
-
-    def __init__(
-        self,
-        bag: Bag,
-        actuated: Sequence[str],
-        *,
-        topic: str = "/joint_states",
-        time: TimeSource = "receive",
-        warn: Warn | None = None,
-    ) -> None:
-        if time not in ("receive", "header"):
-            raise ValueError(f"time must be 'receive' or 'header', not {time!r}")
-        self.bag, self.topic, self.time = bag, topic, time
-        self.warn = warn or bag.warn
-        self.joints = tuple(actuated)
-        self.present = bag.require_type(topic, JOINT_STATE)
-        self.decoder = JointStateDecoder(self.joints, time=time, deserialize=bag.deserialize)
-
-    def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
-        if not self.present:
-            return
-        last_ns = np.iinfo(np.int64).min
-        moved = 0
-        self.decoder = JointStateDecoder(self.joints, time=self.time, deserialize=self.bag.deserialize)
-        for batch in self.bag.batches(self.topic, max_samples):
-            chunk = self.decoder.decode(batch)
-            if chunk is not None:
-                chunk, last_ns, moved = monotonic(chunk, last_ns, moved)
-                yield chunk
-        for problem in self.decoder.problems():
-            self.warn(f"{self.bag.path}: {self.topic}: {problem}")
-        if moved:
-            self.warn(
-                f"{self.bag.path}: {self.topic}: {moved} header stamps went back in time; "
-                "they are shown at the previous stamp"
-            )
 
 
 class JointStateDecoder:
@@ -229,10 +186,8 @@ def read_robot_description(bag: Bag, topic: str = "/robot_description") -> str |
     """The latest ``std_msgs/msg/String`` on ``topic`` (the URDF robot_state_publisher published), or None."""
     if not bag.require_type(topic, STRING):
         return None
-    last: bytes | memoryview | None = None
-    for _, data in bag.raw(topic):
-        last = data
-    if last is None:
+    found = bag.last(topic)
+    if found is None:
         return None
-    text = bag.deserialize(last, STRING).data
+    text = bag.deserialize(found[1], STRING).data
     return str(text)
