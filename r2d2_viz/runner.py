@@ -46,6 +46,8 @@ LIVE_BLOCK_SECONDS = 5.0
 send each sample when it is due; the sinks are waited for once a block (backpressure)…"""
 LIVE_BLOCK_SAMPLES = 1000
 """…and a block has at most this many samples, so at high rates computing one makes only a sample or two late."""
+FLUSH_BYTES = 64 << 20
+"""A batch run waits for the sinks after about this much data (bag bytes, and 64 bytes a robot sample)."""
 LAP_SAMPLES = 1440
 """One lap of the tutorial's odom circle: 360° / (¼° per sample) — 48 s at the default 30 Hz."""
 
@@ -206,7 +208,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             if streamer is not None:
                 streamer.log_static()
             with progress_bar(plan, config) as shown:
-                windows = _windows(plan, config)
+                windows = _windows(plan, config, displays)
                 if config.live:
                     samples, interrupted = paced(streamer, windows, feeds, speed=config.speed, progress=shown)
                 else:
@@ -228,13 +230,13 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
 
 
-def _windows(plan: RunPlan, config: RunConfig) -> Iterator[Window]:
+def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> Iterator[Window]:
     """The run's windows; a bag's read and decoded ahead in a thread (beside the recording's writing)."""
     if config.live:
         size = _live_block(config)
     else:
         size = batch_chunk_samples(len(plan.tree.moving) if plan.tree is not None else 0)
-    windows = plan.windows(size)
+    windows = plan.windows(size, predecode=displays.decode if displays is not None else None)
     return read_ahead(windows) if plan.replay is not None else windows
 
 
@@ -245,13 +247,15 @@ def _batch(
     flush: Callable[[], None],
     progress: Callable[[Window], None] | None,
 ) -> int:
-    """Every window as fast as the sinks take them, one in flight (memory stays flat)."""
-    samples = 0
-    for k, window in enumerate(windows):
+    """Every window as fast as the sinks take them, a bounded amount in flight (memory stays flat)."""
+    samples = unflushed = 0
+    for window in windows:
         chunk = window.joints if streamer is not None else None
         prepared = streamer.prepare(chunk) if streamer is not None and chunk is not None and len(chunk) else None
-        if k:
-            flush()  # backpressure: the sinks have taken the previous window
+        unflushed += window.nbytes + (len(chunk) if chunk is not None else 0) * 64
+        if unflushed > FLUSH_BYTES:  # backpressure: the sinks have taken what came before
+            flush()
+            unflushed = 0
         if streamer is not None and prepared is not None and chunk is not None:
             streamer.send(prepared)
             samples += len(chunk)

@@ -9,7 +9,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from r2d2_viz.msgs.registry import DECODERS, decode
-from r2d2_viz.msgs.shapes import Decoded
+from r2d2_viz.msgs.shapes import Decoded, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.bag import Bag
 
@@ -26,6 +26,8 @@ class TopicMessage:
     topic: str
     msgtype: str
     data: bytes | memoryview
+    decoded: Decoded | list[MarkerOp] | MsgError | None = None
+    """What it draws, when decoded ahead (in the bag reader's thread); None: not yet decoded."""
 
 
 def display_topics(bag: Bag) -> tuple[dict[str, str], dict[str, str]]:

@@ -99,14 +99,18 @@ class RunPlan:
             return self.tree is not None and any(JOINTS in s.topics for s in self.replay.segments)
         return self.source is not None
 
-    def windows(self, max_samples: int) -> Iterator[Window]:
-        """The run, stretch by stretch (a bag's one pass, or a motion's chunks)."""
+    def windows(
+        self, max_samples: int, *, predecode: Callable[[TopicMessage], TopicMessage] | None = None
+    ) -> Iterator[Window]:
+        """The run, stretch by stretch (a bag's one pass, or a motion's chunks); ``predecode`` decodes each
+        display message as it is read."""
         if self.replay is not None:
             r = self.replay
             actuated = self.tree.actuated if self.tree is not None else None
-            yield from BagPass(r.bag, r.segments, actuated=actuated, displays=self.displays, time=r.time).windows(
-                max_samples
+            bag_pass = BagPass(
+                r.bag, r.segments, actuated=actuated, displays=self.displays, time=r.time, predecode=predecode
             )
+            yield from bag_pass.windows(max_samples)
         elif self.source is not None:
             yield from source_windows(self.source, max_samples)
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import itertools
 import queue
 import threading
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,10 +69,13 @@ class BagPass:
         displays: Mapping[str, str],
         time: TimeSource = "receive",
         quiet: bool = False,
+        predecode: Callable[[TopicMessage], TopicMessage] | None = None,
     ) -> None:
         self.bag, self.segments, self.displays, self.time = bag, tuple(segments), dict(displays), time
         self.quiet = quiet
         """Say nothing of what was skipped (a look-ahead: the pass itself says it)."""
+        self.predecode = predecode
+        """Decodes each display message as it is read (in :func:`read_ahead`'s thread, beside the writing)."""
         self.joints = JointStateDecoder(actuated, time=time, deserialize=bag.deserialize) if actuated else None
         self.tf = TfDecoder(bag.deserialize, static=False, time=time)
         self.read_ns = 0
@@ -103,7 +106,7 @@ class BagPass:
     def _window(self, block: Block) -> Window:
         chunk = None
         if self.joints is not None and len(rows := block.rows(JOINTS)):
-            chunk = self.joints.decode(block.take(rows).pairs())
+            chunk = self.joints.decode_block(block.take(rows))
             if chunk is not None:
                 chunk, self._last_ns, self._moved = monotonic(chunk, self._last_ns, self._moved)
         tf = None
@@ -114,6 +117,8 @@ class BagPass:
             for t, data in block.take(block.rows(topic)).pairs():
                 messages.append(TopicMessage(t, topic, msgtype, data))
         messages.sort(key=lambda m: m.time_ns)
+        if self.predecode is not None:
+            messages = [self.predecode(m) for m in messages]
         self.read_ns = int(block.times_ns[-1])
         return Window(self.read_ns, chunk, tf, tuple(messages), block.nbytes)
 

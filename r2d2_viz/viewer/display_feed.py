@@ -124,7 +124,10 @@ class DisplayFeed:
             self._unflushed = 0
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
-            decoded = decode(message.msgtype, message.data, style.options)
+            decoded = self.decode(message).decoded
+            if isinstance(decoded, MsgError):
+                raise decoded
+            assert decoded is not None
         except MsgError as exc:
             state.problems += 1
             self.notices.report(
@@ -153,6 +156,18 @@ class DisplayFeed:
                 markers=state.markers,
                 load_mesh=self.load_mesh,
             )
+
+    def decode(self, message: TopicMessage) -> TopicMessage:
+        """``message`` with what it draws (or why it cannot), in its topic's style; pure, so a bag's reader
+        thread can call it ahead of :meth:`log`."""
+        if message.decoded is not None:
+            return message
+        style = self.styles.get(message.topic) or DisplayStyle()
+        try:
+            decoded: Decoded | list[MarkerOp] | MsgError = decode(message.msgtype, message.data, style.options)
+        except MsgError as exc:
+            decoded = exc
+        return dataclasses.replace(message, decoded=decoded)
 
     def _where(self, topic: str) -> str:
         return f"{self.source_name}: {topic}" if self.source_name else topic
