@@ -171,6 +171,8 @@ def _paced_samples(
         if log is not None:
             done = time.monotonic()
             log.writelines(f"{sent + k - i} {done - due[k]:.6f}\n" for k in range(i, j))
+            if sent == 0 and i == 0:
+                log.flush()  # the first sample's line at once: benchmarks time the first data by it
         sent += j - i
         i = j
     return i
