@@ -19,7 +19,7 @@ import numpy as np
 
 from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.sources.bag_joints import JOINT_STATE, JointStateDecoder, TimeSource, monotonic
-from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder
+from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bags.storage import Block
 from r2d2_viz.sources.base import SampleChunk, Source, TfRecords
@@ -84,13 +84,25 @@ class BagPass:
         self._moved = 0
 
     def windows(self, max_samples: int) -> Iterator[Window]:
-        """Every window, each with at most ``max_samples`` joint states and about WINDOW_BYTES of messages."""
+        """Every window, each with at most ``max_samples`` joint states and about WINDOW_BYTES of messages (the
+        storages' blocks gathered or cut to that size)."""
+        pending: list[Block] = []
+        size = samples = 0
         for segment in self.segments:
             for block in self.bag.blocks(segment.topics, start_ns=segment.start_ns, stop_ns=segment.stop_ns):
-                yield from self._windows(block, max_samples)
+                for piece in self._pieces(block, max_samples):
+                    n = len(piece.rows(JOINTS)) if self.joints is not None else 0
+                    if pending and (size + piece.nbytes > WINDOW_BYTES or samples + n > max_samples):
+                        yield self._window(pending)
+                        pending, size, samples = [], 0, 0
+                    pending.append(piece)
+                    size, samples = size + piece.nbytes, samples + n
+        if pending:
+            yield self._window(pending)
         self._finish()
 
-    def _windows(self, block: Block, max_samples: int) -> Iterator[Window]:
+    def _pieces(self, block: Block, max_samples: int) -> Iterator[Block]:
+        """``block`` cut where it holds ``max_samples`` joint states or WINDOW_BYTES."""
         joint_rows = block.rows(JOINTS) if self.joints is not None else np.zeros(0, dtype=np.int64)
         cuts = {0, len(block)}
         if len(joint_rows) > max_samples:  # a long stretch of joint states: cut where a chunk is full
@@ -101,26 +113,29 @@ class BagPass:
         edges = sorted(cuts)
         for lo, hi in itertools.pairwise(edges):
             if hi > lo:
-                yield self._window(block.take(np.arange(lo, hi)) if (lo, hi) != (0, len(block)) else block)
+                yield block.take(np.arange(lo, hi)) if (lo, hi) != (0, len(block)) else block
 
-    def _window(self, block: Block) -> Window:
-        chunk = None
-        if self.joints is not None and len(rows := block.rows(JOINTS)):
-            chunk = self.joints.decode_block(block.take(rows))
-            if chunk is not None:
-                chunk, self._last_ns, self._moved = monotonic(chunk, self._last_ns, self._moved)
-        tf = None
-        if len(rows := block.rows(TF)):
-            tf = self.tf.decode(block.take(rows).pairs()) or None
-        messages = []
-        for topic, msgtype in self.displays.items():
-            for t, data in block.take(block.rows(topic)).pairs():
-                messages.append(TopicMessage(t, topic, msgtype, data))
+    def _window(self, pieces: list[Block]) -> Window:
+        chunks: list[SampleChunk] = []
+        records: list[TfRecords] = []
+        messages: list[TopicMessage] = []
+        for block in pieces:
+            if self.joints is not None and len(rows := block.rows(JOINTS)):
+                chunk = self.joints.decode_block(block.take(rows))
+                if chunk is not None:
+                    chunk, self._last_ns, self._moved = monotonic(chunk, self._last_ns, self._moved)
+                    chunks.append(chunk)
+            if len(rows := block.rows(TF)):
+                records.append(self.tf.decode(block.take(rows).pairs()))
+            for topic, msgtype in self.displays.items():
+                for t, data in block.take(block.rows(topic)).pairs():
+                    messages.append(TopicMessage(t, topic, msgtype, data))
         messages.sort(key=lambda m: m.time_ns)
         if self.predecode is not None:
             messages = [self.predecode(m) for m in messages]
-        self.read_ns = int(block.times_ns[-1])
-        return Window(self.read_ns, chunk, tf, tuple(messages), block.nbytes)
+        self.read_ns = int(pieces[-1].times_ns[-1])
+        tf = concatenate([r for r in records if len(r)])
+        return Window(self.read_ns, _joined(chunks), tf, tuple(messages), sum(p.nbytes for p in pieces))
 
     def _finish(self) -> None:
         if self.quiet:
@@ -145,6 +160,23 @@ def bag_topics_read(bag: Bag, actuated: Sequence[str] | None, displays: Mapping[
     if bag.require_type(TF, TF_MESSAGE):
         wanted.append(TF)
     return tuple(wanted)
+
+
+def _joined(chunks: list[SampleChunk]) -> SampleChunk | None:
+    """Consecutive chunks as one (their joints united; NaN where a chunk did not give a joint)."""
+    if len(chunks) <= 1:
+        return chunks[0] if chunks else None
+    joints = tuple(dict.fromkeys(j for c in chunks for j in c.joints))
+    if all(c.joints == joints for c in chunks):
+        positions = np.vstack([c.positions for c in chunks])
+    else:
+        column = {j: i for i, j in enumerate(joints)}
+        positions = np.full((sum(len(c) for c in chunks), len(joints)), np.nan)
+        at = 0
+        for c in chunks:
+            positions[at : at + len(c), [column[j] for j in c.joints]] = c.positions
+            at += len(c)
+    return SampleChunk(np.concatenate([c.times_ns for c in chunks]), joints, positions)
 
 
 _DONE = object()
