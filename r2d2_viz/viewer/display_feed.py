@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 import rerun as rr
 
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp, MeshResource
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.sources.base import Clock
-from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, set_time
+from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
 
@@ -136,7 +136,9 @@ class DisplayFeed:
                 key=f"display problem {message.topic}",
             )
             return
-        decoded = self._placed(message.topic, decoded)
+        placed = self._placed(message.topic, decoded)
+        prepared = message.prepared if placed is decoded else None  # built for the frame ids it had
+        decoded = placed
         time_ns = message.time_ns
         if self.header_time:
             stamp = decoded.stamp_ns if isinstance(decoded, Decoded) else _first_stamp(decoded)
@@ -155,6 +157,7 @@ class DisplayFeed:
                 clock=self.clock,
                 markers=state.markers,
                 load_mesh=self.load_mesh,
+                prepared=prepared,  # type: ignore[arg-type]  # what self.decode built: displays.Prepared
             )
 
     def decode(self, message: TopicMessage) -> TopicMessage:
@@ -167,7 +170,10 @@ class DisplayFeed:
             decoded: Decoded | list[MarkerOp] | MsgError = decode(message.msgtype, message.data, style.options)
         except MsgError as exc:
             decoded = exc
-        return dataclasses.replace(message, decoded=decoded)
+        prepared = None
+        if isinstance(decoded, Decoded) and decoded.frame_id and not _meshes(decoded):
+            prepared = prepare(decoded)  # the archetypes too, off the logging thread
+        return dataclasses.replace(message, decoded=decoded, prepared=prepared)
 
     def _where(self, topic: str) -> str:
         return f"{self.source_name}: {topic}" if self.source_name else topic
@@ -213,6 +219,11 @@ def camera_images(topics: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
         if images:
             out[info] = images
     return out
+
+
+def _meshes(decoded: Decoded) -> bool:
+    """Whether it draws mesh files (loaded through the package resolver when logged, not ahead)."""
+    return any(isinstance(item, MeshResource) for item in decoded.items)
 
 
 def _first_stamp(ops: list[MarkerOp]) -> int:
