@@ -98,7 +98,9 @@ class McapScan:
         self.path = path
         self.note = ""
         self.problems: dict[str, int] = {}
-        """Damage met while reading (kind → chunks skipped)."""
+        """Damage met while reading (kind → chunks skipped); the bag says it and clears it."""
+        self._damaged: set[int] = set()
+        """File offsets of the chunks found damaged (not read again)."""
         self.channels: dict[int, _Channel] = {}
         self.schemas: dict[int, _Schema] = {}
         self.chunks: list[_ChunkIndex] | None = None
@@ -218,7 +220,9 @@ class McapScan:
     def _chunk_block(
         self, c: _ChunkIndex, order: tuple[str, ...], wanted: dict[int, int], lo: int, hi: int
     ) -> Block | None:
-        """The wanted messages of one chunk; a damaged chunk is counted in :attr:`problems` and skipped."""
+        """The wanted messages of one chunk; a damaged chunk is counted in :attr:`problems` (once) and skipped."""
+        if c.offset in self._damaged:
+            return None
         try:
             data = self._chunk_data(c.offset, c.offset + c.length)
             found = self._indexed(c, order, wanted, data)
@@ -226,6 +230,7 @@ class McapScan:
         except (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError) as exc:
             kind = str(exc) if isinstance(exc, BrokenError) else f"cannot read ({type(exc).__name__})"
             self.problems[kind] = self.problems.get(kind, 0) + 1
+            self._damaged.add(c.offset)
             return None
         keep = (block.times_ns >= lo) & (block.times_ns < hi)
         block = block if keep.all() else block.take(np.flatnonzero(keep))
