@@ -1,5 +1,6 @@
-"""Bags replayed through the command line: bags written by rosbags (tests/bagmaker.py), read back from the
-recording with Rerun's reader; poses against yourdfpy's forward kinematics of the bag's joint states."""
+"""A bag's run plan (sources/plan.plan_bag: what is read before the first frame, bounded; --start-offset,
+--topics) and bags replayed through the command line: bags written by rosbags (tests/bagmaker.py), read back from
+the recording with Rerun's reader; poses against yourdfpy's forward kinematics of the bag's joint states."""
 
 from __future__ import annotations
 
@@ -11,9 +12,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yourdfpy
-from bagmaker import T0, BagSpec, joint_state, string, tf_message, write_bag
+from bagmaker import T0, TYPES, BagSpec, joint_state, string, tf_message, write_bag
 from conftest import REPO, cli
+from displaybags import occupancy_grid
 from rrd import frame_edges_at, pose_in, read_recording, tf_by_child
+
+from r2d2_viz.errors import BagError
+from r2d2_viz.sources.bags.bag import open_bag
+from r2d2_viz.sources.plan import LOOKAHEAD_NS, PREROLL_NS, TF_SAMPLE_NS, BagChoice, plan_bag
+from r2d2_viz.sources.playback import Segment
 
 ARM = REPO / "examples" / "arm6.urdf"
 ARM_JOINTS = ("base_yaw", "shoulder_pitch", "elbow", "wrist_pitch", "wrist_roll")
@@ -149,3 +156,115 @@ def test_live_replay_is_paced_at_the_speed_asked(tmp_path: Path) -> None:
     assert elapsed >= 2.0 / 4 * 0.95  # the last joint state is due 1.98 s / 4 after the first
     recording = read_recording(out)
     assert len(tf_by_child(recording)["shoulder"].times) == 120  # 100 arm messages, 20 tool slide messages
+
+
+S = 1_000_000_000
+MAP = "nav_msgs/msg/OccupancyGrid"
+
+
+def _long_bag(path: Path) -> Path:
+    """10 s of the arm: joint states and /tf every 20 ms, a camera on /tf_static, maps at 1, 3 and 7 s (x = k/10 m
+    along odom at T0 + k · 100 ms), and the robot's description recorded last."""
+    spec = BagSpec(types={**TYPES, "/map": MAP})
+    spec.add("/tf_static", T0, tf_message([(T0, "base_link", "camera", (0.1, 0, 0.3), YAW_90)]))
+    for k in range(500):
+        t = T0 + k * 20 * MS
+        spec.add("/joint_states", t, joint_state(t, ARM_JOINTS, [k / 500] * 5))
+        spec.add("/tf", t + 1, tf_message([(t, "odom", "base_link", (k / 50, 0, 0), (0, 0, 0, 1))]))
+    for second in (1, 3, 7):
+        spec.add("/map", T0 + second * S + 5, occupancy_grid())
+    spec.add("/robot_description", T0 + 10 * S, string(ARM.read_text()))
+    return write_bag(path, spec)
+
+
+def test_the_plan_reads_a_bounded_look_ahead_and_finds_a_description_recorded_last(tmp_path: Path) -> None:
+    path = _long_bag(tmp_path / "long")
+    reads: list[tuple[tuple[str, ...], int | None, int | None, int]] = []
+    with open_bag(path) as bag:
+        blocks = bag.blocks
+
+        def counted(topics, *, start_ns=None, stop_ns=None):  # type: ignore[no-untyped-def]
+            for block in blocks(topics, start_ns=start_ns, stop_ns=stop_ns):
+                reads.append((tuple(sorted(topics)), start_ns, stop_ns, len(block)))
+                yield block
+
+        bag.blocks = counted  # type: ignore[method-assign]
+        plan = plan_bag(bag)
+    assert plan.description == ARM.read_text() and plan.tree is not None  # through Bag.last, not a pass
+    assert plan.tree.robot.name == "arm6" and plan.fixed_frame == "odom"
+    for topics, start, stop, _ in reads:  # only /tf_static whole; everything else a bounded stretch
+        assert topics == ("/tf_static",) or (
+            start is not None and stop is not None and stop - start <= max(LOOKAHEAD_NS, TF_SAMPLE_NS)
+        ), (topics, start, stop)
+    assert sum(n for *_, n in reads) < 500  # of the 1,505 messages
+    assert plan.preview_joints is not None and plan.preview_joints.times_ns[-1] < T0 + LOOKAHEAD_NS
+    assert plan.moving_tf is not None and plan.moving_tf.times_ns[-1] > T0 + 9 * S  # sampled over the whole bag
+    assert plan.static_tf is not None and plan.static_tf.children == ("camera",)
+    assert plan.replay is not None and plan.replay.segments == (
+        Segment(("/map", "/joint_states", "/tf"), T0, T0 + 10 * S + 1),
+    )
+    assert plan.seek_messages == () and plan.replay.span == (T0, T0 + 10 * S)
+
+
+def test_a_start_offset_keeps_the_state_before_it(tmp_path: Path) -> None:
+    path = _long_bag(tmp_path / "long")
+    offset = T0 + 5 * S
+    with open_bag(path) as bag:
+        plan = plan_bag(bag, choice=BagChoice(start_offset_s=5.0))
+        assert plan.replay is not None
+        assert plan.replay.segments == (
+            Segment(("/joint_states", "/tf"), offset - PREROLL_NS, offset),  # the state before the seek
+            Segment(("/map", "/joint_states", "/tf"), offset, T0 + 10 * S + 1),
+        )
+        windows = list(plan.windows(1000))
+    assert plan.replay.span == (offset, T0 + 10 * S)
+    # the latest map before the offset is shown first (the one at 3 s, not 1 s or 7 s), with its bytes
+    assert [(m.time_ns, m.topic, m.msgtype, bytes(m.data)) for m in plan.seek_messages] == [
+        (T0 + 3 * S + 5, "/map", MAP, occupancy_grid())
+    ]
+    assert plan.static_tf is not None and plan.static_tf.children == ("camera",)  # /tf_static whatever the offset
+    # the transforms before the offset are replayed first: the last of them (x = 4.98 m) holds at the offset
+    tf = [w.tf for w in windows if w.tf is not None]
+    times = np.concatenate([r.times_ns for r in tf])
+    x = np.concatenate([r.translation[:, 0] for r in tf])
+    before = times < offset
+    assert before.any() and times[before][-1] == T0 + 249 * 20 * MS + 1 and x[before][-1] == 249 / 50
+    assert times[~before][0] == offset + 1 and x[~before][0] == 250 / 50
+    assert [m.time_ns for w in windows for m in w.displays] == [T0 + 7 * S + 5]  # maps after it, in the pass
+    assert plan.preview_joints is not None and plan.preview_joints.times_ns[0] >= offset
+
+
+def test_topics_and_offsets_the_bag_cannot_give_are_one_line(tmp_path: Path) -> None:
+    path = _long_bag(tmp_path / "long")
+    with open_bag(path) as bag:
+        with pytest.raises(BagError) as info:
+            plan_bag(bag, choice=BagChoice(topics=("/tf", "/scan")))
+        assert str(info.value) == (
+            f"{path}: no topic /scan in this bag; its topics: /joint_states, /map, /robot_description, /tf, /tf_static"
+        )
+        with pytest.raises(BagError, match=r"start offset 10.5 s is past the bag's end \(it lasts 10.0 s\)"):
+            plan_bag(bag, choice=BagChoice(start_offset_s=10.5))
+        only = plan_bag(bag, choice=BagChoice(topics=("/tf",)))
+        everything = plan_bag(bag)
+    assert only.replay is not None and only.replay.segments == (Segment(("/tf",), T0, T0 + 10 * S + 1),)
+    assert only.displays == {} and only.static_tf is None and only.tree is not None  # the description still read
+    assert not only.moves_robot and everything.moves_robot  # without /joint_states the robot stands still
+
+
+def test_start_offset_and_topics_on_the_command_line(tmp_path: Path) -> None:
+    path = _long_bag(tmp_path / "long")
+    out = tmp_path / "seek.rrd"
+    result = cli("--bag", str(path), "--start-offset", "5", "--topics", "/tf", "/map", "--save", str(out))
+    assert result.returncode == 0, result.stderr
+    recording = read_recording(out)
+    base = tf_by_child(recording)["base_link"]
+    assert base.times[0] < T0 + 5 * S <= base.times[-1]  # the state before the offset, then the rest
+    assert "/map" in recording
+    for args, problem in [
+        (["--start-offset", "11"], "past the bag's end"),
+        (["--topics", "/scan"], "no topic /scan in this bag; its topics: /joint_states, /map"),
+    ]:
+        bad = cli("--bag", str(path), *args, "--save", str(tmp_path / "bad.rrd"))
+        lines = bad.stderr.strip().splitlines()
+        assert bad.returncode == 2 and len(lines) == 1 and problem in lines[0], bad.stderr
+        assert not (tmp_path / "bad.rrd").exists()
