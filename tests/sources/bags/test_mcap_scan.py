@@ -11,10 +11,11 @@ import zlib
 from pathlib import Path
 
 import pytest
-from bagmaker import T0, TS, BagSpec, joint_state, storage_file, string, tf_message, write_bag
+from bagmaker import T0, TS, TYPES, BagSpec, joint_state, storage_file, string, tf_message, write_bag
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, StoragePlugin, Writer
 from rosbags.rosbag2.storage_mcap import ChunkInfo, McapReader
 
+import r2d2_viz.sources.bags.mcap_scan as mcap_scan
 from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.bags.mcap_scan import McapScan
 
@@ -149,8 +150,8 @@ def test_chunks_without_a_wanted_topic_are_never_read(tmp_path: Path, monkeypatc
 
     scan = McapScan(file)
     reads: list[int] = []
-    chunk_data = McapScan._chunk_data
-    monkeypatch.setattr(McapScan, "_chunk_data", lambda self, a, b: reads.append(a) or chunk_data(self, a, b))
+    chunk_data = mcap_scan.chunk_data  # decompresses and checks one chunk
+    monkeypatch.setattr(mcap_scan, "chunk_data", lambda buf, a, b: reads.append(a) or chunk_data(buf, a, b))
     assert _read(scan, ["/joint_states"]) == expected and scan.problems == {}
     assert sorted(reads) == [c.chunk_start_offset for c, h in zip(chunks, holds, strict=True) if "/joint_states" in h]
     # a stretch within one chunk reads that chunk alone
@@ -176,6 +177,25 @@ def test_start_and_stop_and_the_last_before(tmp_path: Path) -> None:
         last = [m for m in mine if m[0] < before][-1]
         assert scan.last(topic, before_ns=before) == (last[0], last[2])
     assert scan.last("/tf", before_ns=T0) is None and scan.last("/nothing") is None
+
+
+def test_chunks_that_overlap_in_time(tmp_path: Path) -> None:
+    """Messages written out of time order (rosbags' writer keeps them as given): the first chunk spans 10..100 ns
+    but holds the description only at 10; the second, 50..90, holds it at 80. The last description is the one at 80,
+    and a pass gives every message in time order."""
+    spec = BagSpec(types={**TYPES, "/pad": "std_msgs/msg/String"})
+    pad = string("p" * 600_000)  # two of these fill a chunk
+    spec.add("/robot_description", T0 + 10, string("first")).add("/pad", T0 + 100, pad).add("/pad", T0 + 100, pad)
+    spec.add("/pad", T0 + 50, pad).add("/robot_description", T0 + 80, string("later")).add("/pad", T0 + 90, pad)
+    file = storage_file(write_bag(tmp_path / "overlap", spec))
+    chunks, _ = _chunks(file)
+    assert [(c.message_start_time - T0, c.message_end_time - T0) for c in chunks[:2]] == [(10, 100), (50, 90)]
+    scan = McapScan(file)
+    assert scan.last("/robot_description") == (T0 + 80, string("later"))
+    assert scan.last("/robot_description", before_ns=T0 + 80) == (T0 + 10, string("first"))
+    expected = _rosbags(file, {"/robot_description", "/pad"})
+    assert _read(scan, ["/robot_description", "/pad"]) == expected
+    assert [t - T0 for t, _, _ in expected] == [10, 50, 80, 90, 100, 100]
 
 
 def _edit_summary(data: bytearray, how: str) -> None:
