@@ -112,15 +112,19 @@ def test_the_feed_pulls_messages_up_to_a_time_and_odometry_goes_round_its_keep()
     try:
         from displaybags import odometry
 
-        messages = iter([TopicMessage(t, "/odom", "nav_msgs/msg/Odometry", odometry(1, float(t))) for t in (1, 2, 3)])
-        feed = DisplayFeed(_Notices(), messages, clock="timestamp", fixed_frame="odom")  # type: ignore[arg-type]
+        messages = [TopicMessage(t, "/odom", "nav_msgs/msg/Odometry", odometry(1, float(t))) for t in (1, 2, 3, 4)]
+        feed = DisplayFeed(_Notices(), clock="timestamp", fixed_frame="odom")  # type: ignore[arg-type]
         feed.styles["/odom"] = feed_module.DisplayStyle(keep=2)
+        assert feed.next_time_ns is None and feed.until(None) == 0  # nothing read yet
+        feed.push(messages[:3])  # one stretch of the replay
         assert feed.next_time_ns == 1
         assert feed.until(2) == 2 and feed.next_time_ns == 3
         assert feed.until(None) == 1 and feed.next_time_ns is None
+        feed.push(messages[3:])  # the next stretch
+        assert feed.next_time_ns == 4 and feed.until(3) == 0 and feed.until(4) == 1
     finally:
         feed_module.log_decoded = original
-    assert sent == [("/odom/0", 1), ("/odom/1", 2), ("/odom/0", 3)]
+    assert sent == [("/odom/0", 1), ("/odom/1", 2), ("/odom/0", 3), ("/odom/1", 4)]
 
 
 STYLED_CONFIG = """Visualization Manager:

@@ -24,23 +24,28 @@ from r2d2_viz.sources.bags.mcap_records import (
     MAGIC,
     OP_CHANNEL,
     OP_CHUNK,
+    OP_CHUNK_INDEX,
     OP_DATA_END,
+    OP_FOOTER,
     OP_MESSAGE,
     OP_SCHEMA,
+    OP_STATISTICS,
     BrokenError,
     Channel,
     ChunkIndex,
     Schema,
-    Summary,
+    channel_at,
     chunk_data,
-    clusters,
+    chunk_index,
     holds,
     indexed,
-    merged,
+    merge_blocks,
     message_times,
-    read_summary,
-    records,
-    walk,
+    overlapping,
+    schema_at,
+    statistics,
+    walk_messages,
+    walk_records,
 )
 from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, topic_tuple
 
@@ -52,11 +57,11 @@ class McapScan:
         self.path = path
         self.note = ""
         self.problems: dict[str, int] = {}
-        """Damage met while reading (kind → chunks skipped)."""
-        self._found = Summary()
-        """What a file read from the start has shown so far (its schemas and channels)."""
-        self.channels: dict[int, Channel] = self._found.channels
-        self.schemas: dict[int, Schema] = self._found.schemas
+        """Damage met while reading (kind → chunks skipped); the bag says it and clears it."""
+        self._damaged: set[int] = set()
+        """File offsets of the chunks found damaged (not read again)."""
+        self.channels: dict[int, Channel] = {}
+        self.schemas: dict[int, Schema] = {}
         self.chunks: list[ChunkIndex] | None = None
         """The chunk index (None: the file has no usable summary and is read from the start)."""
         self._counts: dict[int, int] = {}
@@ -70,28 +75,46 @@ class McapScan:
             raise ValueError("not an MCAP file (no magic)")
         if not self._read_summary():
             self._scan_everything()
-        self.topics = self._topics()
+        self.topics = _topics(self.channels, self.schemas, self._counts)
 
     # --- the summary --------------------------------------------------------------------------------------------
 
     def _read_summary(self) -> bool:
         """Channels, schemas, counts and chunk indexes from the summary; False when the file has none usable."""
-        summary = read_summary(self._map)
-        if isinstance(summary, str):
-            self.note = summary
+        buf, size = self._map, len(self._map)
+        footer = size - len(MAGIC) - 29
+        if footer < len(MAGIC) or buf[size - len(MAGIC) :] != MAGIC or buf[footer] != OP_FOOTER:
+            self.note = "the file breaks off (no footer, no index)"
             return False
-        self.channels, self.schemas, self._counts = summary.channels, summary.schemas, summary.counts
-        self.chunks, self._span = summary.chunks, summary.span
+        summary_start, offsets_start, _ = struct.unpack_from("<QQI", buf, footer + 9)
+        if summary_start == 0:
+            return False  # a valid file without a summary: read from the start, no warning
+        end = offsets_start or footer
+        if not len(MAGIC) <= summary_start <= end <= footer:
+            self.note = "its summary points outside the file"
+            return False
+        chunks: list[ChunkIndex] = []
+        try:
+            for op, at, stop in walk_records(buf, summary_start, end):
+                if op == OP_SCHEMA:
+                    self.schemas.update([schema_at(buf, at)])
+                elif op == OP_CHANNEL:
+                    self.channels.update([channel_at(buf, at)])
+                elif op == OP_CHUNK_INDEX:
+                    chunks.append(chunk_index(buf, at, stop, size))
+                elif op == OP_STATISTICS:
+                    span, self._counts = statistics(buf, at, stop)
+                    self._span = span or self._span
+        except (BrokenError, struct.error, IndexError) as exc:
+            self.note = f"its summary is damaged ({exc or type(exc).__name__})"
+            self.channels, self.schemas, self._counts = {}, {}, {}
+            return False
+        if not chunks and self._counts and sum(self._counts.values()):
+            return False  # messages outside chunks: only a scan finds them
+        self.chunks = sorted(chunks, key=lambda c: (c.start_ns, c.offset))
+        if chunks and self._span is None:
+            self._span = (min(c.start_ns for c in chunks), max(c.end_ns for c in chunks))
         return True
-
-    def _topics(self) -> dict[str, TopicInfo]:
-        topics: dict[str, TopicInfo] = {}
-        for channel in self.channels.values():
-            schema = self.schemas.get(channel.schema_id, Schema("", "", ""))
-            old = topics.get(channel.topic)
-            count = (old.count if old else 0) + self._counts.get(channel.id, 0)
-            topics[channel.topic] = TopicInfo(channel.topic, schema.name, count, schema.data, schema.encoding)
-        return topics
 
     # --- reading ------------------------------------------------------------------------------------------------
 
@@ -115,24 +138,27 @@ class McapScan:
         lo = -1 if start_ns is None else start_ns
         hi = 2**64 if stop_ns is None else stop_ns
         chosen = [c for c in self.chunks if c.end_ns >= lo and c.start_ns < hi and holds(c, wanted)]
-        for cluster in clusters(chosen):
+        for cluster in overlapping(chosen):
             parts = [b for c in cluster if (b := self._chunk_block(c, order, wanted, lo, hi)) is not None]
             if len(parts) == 1:
                 yield parts[0]
             elif parts:
-                yield merged(parts)
+                yield merge_blocks(parts)
 
     def _chunk_block(
         self, c: ChunkIndex, order: tuple[str, ...], wanted: dict[int, int], lo: int, hi: int
     ) -> Block | None:
-        """The wanted messages of one chunk; a damaged chunk is counted in :attr:`problems` and skipped."""
+        """The wanted messages of one chunk; a damaged chunk is counted in :attr:`problems` (once) and skipped."""
+        if c.offset in self._damaged:
+            return None
         try:
             data = chunk_data(self._map, c.offset, c.offset + c.length)
             found = indexed(self._map, c, order, wanted, data)
-            block = found if found is not None else walk(data, order, wanted)
+            block = found if found is not None else walk_messages(data, order, wanted)
         except (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError) as exc:
             kind = str(exc) if isinstance(exc, BrokenError) else f"cannot read ({type(exc).__name__})"
             self.problems[kind] = self.problems.get(kind, 0) + 1
+            self._damaged.add(c.offset)
             return None
         keep = (block.times_ns >= lo) & (block.times_ns < hi)
         block = block if keep.all() else block.take(np.flatnonzero(keep))
@@ -160,7 +186,7 @@ class McapScan:
         buf = self._map
         view = memoryview(buf)
         try:
-            for op, at, stop in records(buf, len(MAGIC), len(buf)):
+            for op, at, stop in walk_records(buf, len(MAGIC), len(buf)):
                 if op == OP_DATA_END:
                     return
                 if op == OP_CHUNK:
@@ -176,11 +202,11 @@ class McapScan:
                 self.note = f"the file is damaged ({exc or type(exc).__name__})"
 
     def _note_definitions(self, data: memoryview, start: int, end: int) -> None:
-        for op, at, _ in records(data, start, end):
+        for op, at, _ in walk_records(data, start, end):
             if op == OP_SCHEMA:
-                self._found.schema(data, at)
+                self.schemas.update([schema_at(data, at)])
             elif op == OP_CHANNEL:
-                self._found.channel(data, at)
+                self.channels.update([channel_at(data, at)])
 
     def _scan_blocks(
         self, order: tuple[str, ...], wanted: dict[int, int], start_ns: int | None, stop_ns: int | None
@@ -189,7 +215,7 @@ class McapScan:
         hi = 2**64 if stop_ns is None else stop_ns
         for _, _, data, start, end in self._walk_file():
             wanted = self._wanted(order)  # channels appear as the file goes on
-            block = walk(data[start:end], order, wanted)
+            block = walk_messages(data[start:end], order, wanted)
             keep = (block.times_ns >= lo) & (block.times_ns < hi)
             if keep.any():
                 yield in_time_order(block if keep.all() else block.take(np.flatnonzero(keep)))
@@ -202,16 +228,29 @@ class McapScan:
             for block in self.blocks([topic], stop_ns=hi):
                 found = (int(block.times_ns[-1]), bytes(block.data(len(block) - 1)))
             return found
+        best: tuple[int, bytes] | None = None
         for c in sorted(self.chunks, key=lambda c: c.end_ns, reverse=True):
+            if best is not None and c.end_ns < best[0]:
+                break  # chunks may overlap in time: one that ends later may hold only earlier messages of it
             if c.start_ns >= hi or not holds(c, wanted):
                 continue
             part = self._chunk_block(c, (topic,), wanted, -1, hi)
-            if part is not None:
-                return int(part.times_ns[-1]), bytes(part.data(len(part) - 1))
-        return None
+            if part is not None and (best is None or int(part.times_ns[-1]) >= best[0]):
+                best = int(part.times_ns[-1]), bytes(part.data(len(part) - 1))
+        return best
 
     def close(self) -> None:
         try:
             self._map.close()
         except BufferError:  # blocks still hold views of the file's pages: the map closes when they are gone
             pass
+
+
+def _topics(channels: dict[int, Channel], schemas: dict[int, Schema], counts: dict[int, int]) -> dict[str, TopicInfo]:
+    topics: dict[str, TopicInfo] = {}
+    for channel in channels.values():
+        schema = schemas.get(channel.schema_id, Schema("", "", ""))
+        old = topics.get(channel.topic)
+        count = (old.count if old else 0) + counts.get(channel.id, 0)
+        topics[channel.topic] = TopicInfo(channel.topic, schema.name, count, schema.data, schema.encoding)
+    return topics

@@ -1,53 +1,91 @@
-"""MCAP records read against the spec (https://mcap.dev/spec) on files rosbags' writer made: the summary's chunk
-index covers every message rosbags reads back, and a chunk's message indexes find exactly those messages."""
+"""MCAP records, on bytes laid out by hand from the spec (https://mcap.dev/spec): a record is an opcode, a u64
+length and its body; a Message record's body is channel id u16, sequence u32, log time u64, publish time u64, data;
+a Chunk Index record's is start, end, chunk offset, chunk length (u64 each), then a u32-sized map of channel id u16 →
+message index offset u64."""
 
 from __future__ import annotations
 
-import mmap
-from pathlib import Path
+import struct
 
-from bagmaker import T0, BagSpec, joint_state, storage_file, string, write_bag
-from rosbags.rosbag2 import Reader
+import numpy as np
+import pytest
 
-from r2d2_viz.sources.bags.mcap_records import Summary, chunk_data, indexed, read_summary, walk
-
-
-def _file(tmp_path: Path) -> Path:
-    spec = BagSpec().add("/robot_description", T0, string("<robot/>"))
-    for k in range(12000):  # rosbags writes chunks of about 1 MB: several chunks
-        spec.add("/joint_states", T0 + 1000 * k, joint_state(T0 + 1000 * k, ["a", "b"], [k, -k]))
-    return storage_file(write_bag(tmp_path / "b", spec))
-
-
-def test_the_summary_and_message_indexes_find_what_rosbags_reads(tmp_path: Path) -> None:
-    file = _file(tmp_path)
-    with Reader(file) as reader:
-        expected = [(t, bytes(d)) for c, t, d in reader.messages() if c.topic == "/joint_states"]
-    with file.open("rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as buf:
-        summary = read_summary(buf)
-        assert isinstance(summary, Summary)
-        topics = {c.topic: c.id for c in summary.channels.values()}
-        assert summary.counts[topics["/joint_states"]] == 12000
-        assert summary.span == (T0, T0 + 1000 * 11999)
-        assert len(summary.chunks) > 1
-        wanted = {topics["/joint_states"]: 0}
-        got_indexed, got_walked = [], []
-        for c in summary.chunks:
-            data = chunk_data(buf, c.offset, c.offset + c.length)
-            for blocks, found in (
-                (got_indexed, indexed(buf, c, ("/joint_states",), wanted, data)),
-                (got_walked, walk(data, ("/joint_states",), wanted)),
-            ):
-                if found is not None:
-                    blocks += [(t, bytes(d)) for t, d in found.pairs()]
-        del data, found  # views of the map
-    assert got_indexed == expected
-    assert got_walked == expected
+from r2d2_viz.sources.bags.mcap_records import (
+    BrokenError,
+    ChunkIndex,
+    chunk_index,
+    holds,
+    merge_blocks,
+    message_times,
+    overlapping,
+    string_at,
+    walk_messages,
+    walk_records,
+)
+from r2d2_viz.sources.bags.storage import Block
 
 
-def test_a_file_without_footer_has_no_summary_and_says_so(tmp_path: Path) -> None:
-    file = _file(tmp_path)
-    cut = tmp_path / "cut.mcap"
-    cut.write_bytes(file.read_bytes()[:-100])
-    with cut.open("rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as buf:
-        assert read_summary(buf) == "the file breaks off (no footer, no index)"
+def _record(op: int, body: bytes) -> bytes:
+    return bytes([op]) + struct.pack("<Q", len(body)) + body
+
+
+def _message(channel: int, log_time: int, data: bytes) -> bytes:
+    return _record(0x05, struct.pack("<HIQQ", channel, 7, log_time, log_time + 1) + data)
+
+
+def test_records_and_strings() -> None:
+    buf = memoryview(_record(0x03, b"abc") + _record(0x04, b"") + _record(0x05, b"x" * 10)[:-1])
+    walked = walk_records(buf, 0, len(buf))
+    assert next(walked) == (0x03, 9, 12) and next(walked) == (0x04, 21, 21)
+    with pytest.raises(BrokenError, match="runs past the end"):
+        next(walked)  # the third claims 10 bytes, 9 are there
+    text = struct.pack("<I", 5) + b"/odom" + struct.pack("<I", 9) + b"short"
+    assert string_at(text, 0) == ("/odom", 9)
+    with pytest.raises(BrokenError, match="string runs past"):
+        string_at(text, 9)
+
+
+def test_a_chunks_messages_walked_record_by_record() -> None:
+    chunk = (
+        _message(1, 30, b"one")
+        + _record(0x03, b"a schema between them")
+        + _message(2, 10, b"two!")
+        + _message(3, 20, b"three")
+        + _message(1, 5, b"")
+    )
+    block = walk_messages(memoryview(chunk), ("/a", "/c"), {1: 0, 3: 1})  # channel 2 is not wanted
+    assert block.times_ns.tolist() == [30, 20, 5]  # file order (the scan puts them in time order)
+    assert [block.topics[i] for i in block.topic_index] == ["/a", "/c", "/a"]
+    assert [bytes(block.data(i)) for i in range(3)] == [b"one", b"three", b""]
+    assert list(message_times(memoryview(chunk), 0, len(chunk))) == [(1, 30), (2, 10), (3, 20), (1, 5)]
+    with pytest.raises(BrokenError, match="past its chunk"):
+        walk_messages(memoryview(chunk[:-1]), ("/a",), {1: 0})
+
+
+def test_a_chunk_index() -> None:
+    pairs = struct.pack("<HQ", 1, 5000) + struct.pack("<HQ", 4, 6000)
+    body = struct.pack("<QQQQ", 10, 20, 100, 900) + struct.pack("<I", len(pairs)) + pairs
+    index = chunk_index(body, 0, len(body), 1000)  # type: ignore[arg-type]
+    assert index == ChunkIndex(10, 20, 100, 900, {1: 5000, 4: 6000})
+    assert holds(index, {4: 0}) and not holds(index, {2: 0, 3: 1})
+    assert holds(ChunkIndex(10, 20, 100, 900, {}), {2: 0})  # no message index offsets: it may hold them
+    with pytest.raises(BrokenError, match="points past the end"):
+        chunk_index(body, 0, len(body), 999)  # type: ignore[arg-type]
+    with pytest.raises(BrokenError, match="runs past its record"):
+        chunk_index(body, 0, len(body) - 1, 1000)  # type: ignore[arg-type]
+
+
+def test_chunks_that_overlap_in_time_are_grouped_and_merged_in_time_order() -> None:
+    a, b, c, d = (ChunkIndex(s, e, k, 1, {}) for k, (s, e) in enumerate([(0, 10), (5, 20), (21, 30), (30, 40)]))
+    assert list(overlapping([a, b, c, d])) == [[a, b], [c, d]]  # c starts after b ends; d where c ends
+    assert list(overlapping([])) == []
+
+    def block(times: list[int], data: list[bytes]) -> Block:
+        starts = np.cumsum([0] + [len(x) for x in data[:-1]]).astype(np.int64)
+        lengths = np.array([len(x) for x in data], dtype=np.int64)
+        index = np.zeros(len(times), dtype=np.int32)
+        return Block(np.array(times, dtype=np.int64), index, ("/t",), memoryview(b"".join(data)), starts, lengths)
+
+    merged = merge_blocks([block([0, 6, 9], [b"a0", b"a6", b"a9"]), block([5, 7, 20], [b"b5", b"b7", b"b20"])])
+    assert merged.times_ns.tolist() == [0, 5, 6, 7, 9, 20]
+    assert [bytes(merged.data(i)) for i in range(len(merged))] == [b"a0", b"b5", b"a6", b"b7", b"a9", b"b20"]

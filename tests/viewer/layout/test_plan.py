@@ -12,16 +12,16 @@ from conftest import REPO
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.robot.model import default_urdf_path, load_urdf
 from r2d2_viz.sources.motion import make_motion
-from r2d2_viz.sources.replay import Replay
+from r2d2_viz.sources.plan import RunPlan, plan_motion
 from r2d2_viz.viewer.layout.plan import plan_view
 
 ARM = REPO / "examples" / "arm6.urdf"
 YAW, PITCH = 4.618575572967529, 0.459797203540802  # r2d2.rviz's Views / Current
 
 
-def _plan(urdf: Path, motion: str | None = None) -> Replay:
+def _plan(urdf: Path, motion: str | None = None) -> RunPlan:
     robot = load_urdf(urdf)
-    return Replay(compile_tree(robot), make_motion(robot, motion, n_samples=10), None, None, "odom")
+    return plan_motion(compile_tree(robot), make_motion(robot, motion, n_samples=10), "odom")
 
 
 def test_the_tutorial_keeps_its_exact_view() -> None:
@@ -54,8 +54,6 @@ def test_an_rviz_config_wins_and_a_missing_fixed_frame_is_said(tmp_path: Path) -
 
 
 def test_without_a_config_every_image_topic_gets_a_2d_view() -> None:
-    from r2d2_viz.sources.replay import Replay
-
-    plan = Replay(None, None, None, None, "odom", displays={"/cam/image_raw": "sensor_msgs/msg/Image", "/scan": "x"})
+    plan = RunPlan(None, "odom", displays={"/cam/image_raw": "sensor_msgs/msg/Image", "/scan": "x"})
     topics = plan_view(plan, rviz=None, fixed_frame=None).spec.topics
     assert [(t.kind, t.topic) for t in topics] == [("Image", "/cam/image_raw")]
