@@ -18,6 +18,8 @@ from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 CONNECT_DEFAULT = "rerun+http://127.0.0.1:9876/proxy"
+SAVE_SUFFIXES = (".rrd", ".mcap")
+DEBUG_ENV = "R2D2_VIZ_DEBUG"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -127,17 +129,42 @@ def main(argv: list[str] | None = None) -> int:
         print("r2d2-viz: interrupted; nothing saved", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:
-        if os.environ.get("R2D2_VIZ_DEBUG"):
+        if os.environ.get(DEBUG_ENV):
             traceback.print_exc()
         print(f"error: unexpected {type(exc).__name__}: {exc} (set R2D2_VIZ_DEBUG=1 for details)", file=sys.stderr)
         return EXIT_UNEXPECTED
 
 
+def _quiet_rerun() -> None:
+    """Rerun's own log lines (Rust ``tracing``: ``WARN re_sdk::recording_stream: Recording disabled…``, with
+    colour codes even into a file) off, unless ``R2D2_VIZ_DEBUG`` is set: its filter is read from ``RUST_LOG``
+    once, when rerun is first imported (rerun 0.41), so it is set around that import only — the viewer and
+    server processes started later get the environment as it was. Our own lines say what went wrong."""
+    if os.environ.get(DEBUG_ENV) or "rerun" in sys.modules:
+        return
+    saved = os.environ.get("RUST_LOG")
+    os.environ["RUST_LOG"] = "off"
+    try:
+        import r2d2_viz.viewer.sinks  # noqa: F401  (imports rerun)
+    finally:
+        if saved is None:
+            del os.environ["RUST_LOG"]
+        else:
+            os.environ["RUST_LOG"] = saved
+
+
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     # Heavy imports (rerun, yourdfpy, trimesh) only after the arguments parsed: --help stays instant.
     from r2d2_viz.errors import UsageError
+
+    if args.save is not None and args.save.suffix not in SAVE_SUFFIXES and not args.save.is_dir():
+        raise UsageError(
+            f"--save {args.save}: unknown extension {args.save.suffix or '(none)'!r}; "
+            "write a recording (.rrd) or a ROS 2 bag (.mcap)"
+        )
+    _quiet_rerun()
     from r2d2_viz.runner import RunConfig, print_summary, run
-    from r2d2_viz.viewer.sinks import SinkConfig
+    from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
     if args.connect is not None and ":=" in args.connect:  # "--connect ur_type:=ur5e": a xacro argument, not a URL
         args.xacro_args = [args.connect, *args.xacro_args]
@@ -160,11 +187,12 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError(f"--save {args.save}: a bag is written as fast as it can, not with a live sink or --realtime")
     if not (math.isfinite(args.speed) and args.speed > 0):
         raise UsageError(f"--speed must be a positive factor, got {args.speed:g}")
-    spawn = args.spawn or not (live or args.save or args.headless)
+    implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
+    fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
     sink = SinkConfig(
-        spawn=spawn,
+        spawn=args.spawn or (implied and not fallback),
         connect=args.connect,
-        serve=args.serve,
+        serve=args.serve or fallback,
         save=args.save,
         headless=args.headless,
         bind=args.bind,
@@ -193,9 +221,23 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         rviz=args.rviz,
         ros=args.ros,
     )
-    result = run(config, on_ready=lambda message: print(message, file=sys.stderr, flush=True))
+
+    def on_ready(message: str) -> None:
+        if fallback:
+            message = _no_display(message, args.port, args.web_port)
+        print(message, file=sys.stderr, flush=True)
+
+    result = run(config, on_ready=on_ready)
     print_summary(result, config)
     return EXIT_OK
+
+
+def _no_display(serving: str, port: int, web_port: int) -> str:
+    """The one line of the fallback to the web viewer: why, the URL, and how to reach it from another machine."""
+    forward = f"ssh -L {web_port}:localhost:{web_port} -L {port}:localhost:{port} THIS-HOST"
+    how = serving.removeprefix("serving: ")
+    why = "no display for a viewer window: serving the web viewer instead"
+    return f"{why}; {how} (on your own machine first: {forward})"
 
 
 def _list_topics() -> int:

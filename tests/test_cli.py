@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import socket
 from pathlib import Path
 
 import pytest
@@ -89,6 +90,8 @@ def test_headless_computes_and_writes_nothing(tmp_path: Path) -> None:
         (["--spawn", "--serve"], "choose one live sink"),
         (["--headless", "--save", "x.rrd"], "--headless"),
         (["--bogus"], "unrecognized arguments: --bogus"),
+        (["--save", "out.txt"], "--save out.txt: unknown extension '.txt'; write a recording (.rrd) or a ROS 2 bag"),
+        (["--save", "recording"], "--save recording: unknown extension"),
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path: Path, args: list[str], fragment: str) -> None:
@@ -134,3 +137,54 @@ def test_connect_without_a_url_leaves_xacro_arguments_alone(monkeypatch: pytest.
     first, second = seen
     assert (first.mappings, first.sink.connect) == ({"ur_type": "ur5e", "name": "ur"}, CONNECT_DEFAULT)
     assert (second.mappings, second.sink.connect) == ({"name": "ur"}, "rerun+http://10.0.0.2:9876/proxy")
+
+
+def _free_ports(n: int) -> list[int]:
+    """``n`` loopback ports nothing listens on (bound by the kernel's choice, then released)."""
+    sockets = [socket.socket() for _ in range(n)]
+    try:
+        for s in sockets:
+            s.bind(("127.0.0.1", 0))
+        return [s.getsockname()[1] for s in sockets]
+    finally:
+        for s in sockets:
+            s.close()
+
+
+def test_connect_to_no_viewer_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    """Rerun's gRPC sink connects lazily and retries for ever (a run used to hang, deaf to Ctrl-C): the address
+    is tried first. The subprocess's timeout ends a hang; no timing is asserted."""
+    (port,) = _free_ports(1)
+    url = f"rerun+http://127.0.0.1:{port}/proxy"
+    result = cli("--connect", url, "--duration", "30", timeout=60, cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith(f"error: --connect {url}: no viewer at 127.0.0.1:{port}"), result.stderr
+    assert f"rerun --port {port}" in lines[0]
+
+
+def test_without_a_display_the_default_viewer_is_the_web_viewer_on_loopback(tmp_path: Path) -> None:
+    """No sink flag on a machine without a display (a server, a container, SSH): the web viewer, served on
+    127.0.0.1, and one line with its URL and the ``ssh -L`` that reaches it from another machine. (A typed
+    ``--spawn`` still says it cannot: tests/test_bad_input.py.)"""
+    grpc, web = _free_ports(2)
+    env = {"DISPLAY": "", "WAYLAND_DISPLAY": ""}
+    result = cli("--duration", "1", "--port", str(grpc), "--web-port", str(web), env=env, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    [line] = [line for line in result.stderr.splitlines() if "no display" in line]
+    assert f"open http://localhost:{web}/?url=rerun%2Bhttp%3A%2F%2Flocalhost%3A{grpc}%2Fproxy" in line, line
+    assert f"ssh -L {web}:localhost:{web} -L {grpc}:localhost:{grpc} " in line, line
+    assert "error" not in result.stderr and "30 samples" in result.stderr
+    assert not list(tmp_path.iterdir())
+
+
+def test_rerun_log_lines_only_with_r2d2_viz_debug(tmp_path: Path) -> None:
+    """``--headless`` disables the recording, and Rerun logs a WARN line (with colour codes) for every call it
+    ignores: off by default; ``R2D2_VIZ_DEBUG=1`` turns them back on (so the check is not vacuous)."""
+    quiet = cli("--headless", "--duration", "0.2", env={"RUST_LOG": "info"}, cwd=tmp_path)
+    assert quiet.returncode == 0, quiet.stderr
+    assert all(line.startswith(("warning: ", "r2d2-viz: ")) for line in quiet.stderr.splitlines()), quiet.stderr
+    debug = cli("--headless", "--duration", "0.2", env={"R2D2_VIZ_DEBUG": "1"}, cwd=tmp_path)
+    assert debug.returncode == 0, debug.stderr
+    assert "re_sdk::recording_stream" in debug.stderr
