@@ -242,3 +242,21 @@ def test_blueprint_entry_point_refuses_what_is_not_a_blueprint(tmp_path: Path) -
         [sys.executable, "-m", "r2d2_viz.blueprint", "mine.rbl"], capture_output=True, text=True, cwd=tmp_path
     )
     assert result.returncode == 0 and (tmp_path / "mine.rbl").stat().st_size > 1000, result.stderr
+
+
+def test_a_bag_with_78_undrawn_topics_says_so_in_one_short_line(tmp_path: Path) -> None:
+    """A Gazebo bag's 78 topics no display draws used to be one 6,000-character line: now the count and the first
+    few names (the bag written by rosbags; .db3, so Rerun's own MCAP decoders take none of them)."""
+    from bagmaker import T0, BagSpec, string, write_bag
+
+    topics = [f"/gazebo/link_{k:02d}/diagnostics_with_a_long_name" for k in range(78)]
+    spec = BagSpec(types={t: "std_msgs/msg/String" for t in topics})
+    for k, topic in enumerate(topics):
+        spec.add(topic, T0 + k, string("x"))
+    bag = write_bag(tmp_path / "gz", spec, storage="sqlite3")
+    result = cli("--bag", str(bag), "--save", str(tmp_path / "gz.rrd"), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    [line] = [line for line in result.stderr.splitlines() if "not shown" in line]
+    assert "78 topics with no display, not shown: " in line and "and 73 more" in line, line
+    assert f"{topics[0]} (std_msgs/msg/String)" in line and topics[-1] not in line
+    assert max(len(line) for line in result.stderr.splitlines()) < 500, result.stderr
