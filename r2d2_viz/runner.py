@@ -95,6 +95,9 @@ class RunResult:
     samples: int
     interrupted: bool
     saved: Path | None
+    what: str = "samples"
+    """What ``samples`` counts, for the summary: a motion's samples, a bag's joint states, or — in a bag without
+    joint states — its transforms and display messages."""
 
 
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -113,7 +116,19 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
             with sigterm_raises():
                 samples = write_bag(save, plan, plan.description or _description_text(config))
             return RunResult(samples=samples, interrupted=False, saved=save)
-        return _record(config, plan, on_ready)
+        result = _record(config, plan, on_ready)
+        result.what = _counted(config, plan, result.samples)
+        return result
+
+
+def _counted(config: RunConfig, plan: Replay, samples: int) -> str:
+    """What a run without ``--ros`` counted (batch and paced runs count the robot's samples when it has a source
+    that gave any, else the transforms and display messages handed on)."""
+    if config.bag is None:
+        return "samples"
+    if plan.tree is not None and plan.source is not None and samples:
+        return "joint states"
+    return "transforms and display messages"
 
 
 def _packages(config: RunConfig) -> PackageIndex:
@@ -287,6 +302,7 @@ def batch_chunk_samples(n_moving: int) -> int:
 def print_summary(result: RunResult, config: RunConfig) -> None:
     where = f" to {result.saved}" if result.saved else ""
     how = " (stopped by signal)" if result.interrupted else ""
-    what = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
-    what = "of joint states from the ROS 2 graph" if config.ros else what
-    print(f"r2d2-viz: {result.samples} samples {what}{where}{how}", file=sys.stderr)
+    origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
+    origin = "from the ROS 2 graph" if config.ros else origin
+    what = "joint states" if config.ros else result.what
+    print(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}", file=sys.stderr)

@@ -260,3 +260,25 @@ def test_a_bag_with_78_undrawn_topics_says_so_in_one_short_line(tmp_path: Path) 
     assert "78 topics with no display, not shown: " in line and "and 73 more" in line, line
     assert f"{topics[0]} (std_msgs/msg/String)" in line and topics[-1] not in line
     assert max(len(line) for line in result.stderr.splitlines()) < 500, result.stderr
+
+
+def test_the_summary_names_what_it_counted(tmp_path: Path, tutorial_urdf: Path) -> None:
+    """'samples' meant joint states for one bag, clouds for another: the summary now says which. Seven joint
+    states written (by rosbags) → '7 joint states'; a bag without joint states counts its transforms and display
+    messages; a motion counts its samples."""
+    from bagmaker import T0, BagSpec, joint_state, write_bag
+    from displaybags import write_display_bag
+
+    spec = BagSpec()
+    for k in range(7):
+        spec.add("/joint_states", T0 + k * 10**8, joint_state(T0 + k * 10**8, ["swivel", "tilt"], [0.1 * k, 0.0]))
+    joints = write_bag(tmp_path / "joints", spec)
+    result = cli("--bag", str(joints), "--urdf", str(tutorial_urdf), "--headless", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert f"r2d2-viz: 7 joint states from {joints}" in result.stderr, result.stderr
+    displays = write_display_bag(tmp_path / "displays")
+    result = cli("--bag", str(displays), "--headless", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "transforms and display messages from" in result.stderr.splitlines()[-1], result.stderr
+    result = cli("--headless", "--duration", "1", cwd=tmp_path)
+    assert result.stderr.splitlines()[-1] == "r2d2-viz: 30 samples at 30 Hz", result.stderr
