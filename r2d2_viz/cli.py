@@ -241,9 +241,15 @@ def _no_display(serving: str, port: int, web_port: int) -> str:
 
 
 def _list_topics() -> int:
-    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts."""
-    from r2d2_viz.sources.live.dds import list_topics
+    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts; an empty graph says where
+    it was searched and how to check (exit 0, like ``ros2 topic list``: an empty graph is an answer, not an error)."""
+    from r2d2_viz.sources.live.dds import LIST_SECONDS, list_topics
+    from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT
 
-    for topic, msgtype, publishers in list_topics():
+    topics, discovery = list_topics()
+    for topic, msgtype, publishers in topics:
         print(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}", flush=True)
+    if not topics:
+        searched = f"no topics after {LIST_SECONDS:g} s of discovery on {discovery.searched()}"
+        print(f"r2d2-viz: {searched}; {EMPTY_GRAPH_HINT}", file=sys.stderr, flush=True)
     return EXIT_OK
