@@ -91,7 +91,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="show the live graph: /robot_description (or --urdf), /joint_states, /tf, /tf_static and display "
         "topics; --duration is then seconds of wall time",
     )
-    ros.add_argument("--list", action="store_true", help="with --ros: print the topics, types and publishers; exit")
+    ros.add_argument(
+        "--list",
+        action="store_true",
+        help="with --ros: print the graph's topics, types and publishers; with --bag: every topic, type and "
+        "message count (like ros2 bag info); exit",
+    )
     parser.add_argument(
         "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
     )
@@ -177,7 +182,9 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if args.bag is not None and args.motion is not None:
         raise UsageError("--motion and --bag both say what moves the robot; choose one")
     if args.list and not args.ros:
-        raise UsageError("--list lists a live ROS 2 graph's topics: use it with --ros")
+        if args.bag is None:
+            raise UsageError("--list lists the topics of a live ROS 2 graph or a bag: use it with --ros or --bag PATH")
+        return _list_bag(args.bag)
     if args.ros:
         if args.bag is not None or args.motion is not None:
             raise UsageError("--ros shows the live graph; it cannot be combined with --bag or --motion")
@@ -238,6 +245,17 @@ def _no_display(serving: str, port: int, web_port: int) -> str:
     how = serving.removeprefix("serving: ")
     why = "no display for a viewer window: serving the web viewer instead"
     return f"{why}; {how} (on your own machine first: {forward})"
+
+
+def _list_bag(path: Path) -> int:
+    """``r2d2-viz --bag PATH --list``: every topic, however many (warnings show the first few), like ``ros2 bag
+    info``."""
+    from r2d2_viz.sources.bags.bag import open_bag
+
+    with open_bag(path) as bag:
+        for info in sorted(bag.topics.values(), key=lambda t: t.name):
+            print(f"{info.name} [{info.msgtype}] {info.count} message{'' if info.count == 1 else 's'}", flush=True)
+    return EXIT_OK
 
 
 def _list_topics() -> int:

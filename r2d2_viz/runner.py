@@ -14,7 +14,7 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import UsageError, listed
+from r2d2_viz.errors import SHOWN, UsageError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.pacing import Feeds, paced
@@ -265,7 +265,8 @@ def _other_topics(plan: Replay, config: RunConfig, notices: Notices) -> None:
     if skipped:
         names = listed(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
         n = len(skipped)
-        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}")
+        every = " (--list shows every topic)" if n > SHOWN + 1 else ""
+        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}")
 
 
 def _live_block(config: RunConfig) -> int:

@@ -257,9 +257,12 @@ def test_a_bag_with_78_undrawn_topics_says_so_in_one_short_line(tmp_path: Path) 
     result = cli("--bag", str(bag), "--save", str(tmp_path / "gz.rrd"), cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     [line] = [line for line in result.stderr.splitlines() if "not shown" in line]
-    assert "78 topics with no display, not shown: " in line and "and 73 more" in line, line
+    assert "78 topics with no display, not shown: " in line and "and 73 more (--list shows every topic)" in line
     assert f"{topics[0]} (std_msgs/msg/String)" in line and topics[-1] not in line
     assert max(len(line) for line in result.stderr.splitlines()) < 500, result.stderr
+    listed = cli("--bag", str(bag), "--list", cwd=tmp_path)  # all of them, like ros2 bag info
+    assert listed.returncode == 0 and listed.stderr == "", listed.stderr
+    assert listed.stdout.splitlines() == [f"{t} [std_msgs/msg/String] 1 message" for t in topics]
 
 
 def test_the_summary_names_what_it_counted(tmp_path: Path, tutorial_urdf: Path) -> None:

@@ -160,7 +160,7 @@ def test_list_needs_ros_and_ros_refuses_a_bag(capsys: pytest.CaptureFixture[str]
     assert main(["--list"]) == 2
     assert main(["--ros", "--bag", "x.mcap"]) == 2
     err = capsys.readouterr().err
-    assert "use it with --ros" in err and "cannot be combined with --bag" in err
+    assert "use it with --ros or --bag PATH" in err and "cannot be combined with --bag" in err
 
 
 def test_missing_cyclonedds_is_one_line_exit_2(without_cyclonedds: None, capsys: Any) -> None:
