@@ -13,13 +13,12 @@ import sys
 import traceback
 from pathlib import Path
 
-from r2d2_viz.errors import R2d2VizError
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError
 from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 CONNECT_DEFAULT = "rerun+http://127.0.0.1:9876/proxy"
 SAVE_SUFFIXES = (".rrd", ".mcap")
-DEBUG_ENV = "R2D2_VIZ_DEBUG"
 
 
 class _Parser(argparse.ArgumentParser):

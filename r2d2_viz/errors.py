@@ -8,6 +8,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+DEBUG_ENV = "R2D2_VIZ_DEBUG"
+"""Set (to anything): tracebacks of unexpected errors, and the log lines of Rerun itself and of the Rerun processes
+the app starts (off otherwise: our own lines say what went wrong)."""
 SHOWN = 5
 """How many names a message line shows of a long list before counting the rest."""
 

@@ -188,6 +188,13 @@ def test_rerun_log_lines_only_with_r2d2_viz_debug(tmp_path: Path) -> None:
     debug = cli("--headless", "--duration", "0.2", env={"R2D2_VIZ_DEBUG": "1"}, cwd=tmp_path)
     assert debug.returncode == 0, debug.stderr
     assert "re_sdk::recording_stream" in debug.stderr
+    # the Rerun server --serve starts: silent, unless R2D2_VIZ_DEBUG ("Listening for gRPC connections" at INFO)
+    grpc, web = _free_ports(2)
+    serve = ["--serve", "--duration", "0.5", "--port", str(grpc), "--web-port", str(web)]
+    quiet = cli(*serve, cwd=tmp_path)
+    assert quiet.returncode == 0 and "Listening for gRPC" not in quiet.stderr, quiet.stderr
+    debug = cli(*serve, env={"R2D2_VIZ_DEBUG": "1", "RUST_LOG": "info"}, cwd=tmp_path)
+    assert debug.returncode == 0 and "Listening for gRPC" in debug.stderr, debug.stderr
 
 
 def _entry_points() -> list[str]:

@@ -20,7 +20,7 @@ from urllib.parse import quote, urlsplit
 import rerun as rr
 import rerun.blueprint as rrb
 
-from r2d2_viz.errors import SinkError, UsageError, one_line
+from r2d2_viz.errors import DEBUG_ENV, SinkError, UsageError, one_line
 from r2d2_viz.viewer.entities import APP_ID
 
 DEFAULT_GRPC_PORT = 9876
@@ -69,6 +69,11 @@ def viewer_executable() -> str | None:
     if beside.is_file() and os.access(beside, os.X_OK):
         return str(beside)
     return shutil.which("rerun")
+
+
+def _child_output() -> int | None:
+    """Where the Rerun processes we start write their log lines: nowhere, unless ``R2D2_VIZ_DEBUG`` is set."""
+    return None if os.environ.get(DEBUG_ENV) else subprocess.DEVNULL
 
 
 def _check_port_free(bind: str, port: int, what: str) -> None:
@@ -137,8 +142,8 @@ def _spawn_viewer(port: int) -> str:
         viewer = subprocess.Popen(
             command,
             stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
+            stdout=_child_output(),
+            stderr=_child_output(),
             start_new_session=True,  # detached: Ctrl-C in the terminal ends the app, not the window
             env={**os.environ, "RERUN_APP_ONLY": "true"},
         )
@@ -198,7 +203,8 @@ def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
         "--web-viewer-port",
         str(config.web_port),
     ]
-    server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    output = _child_output()
+    server = subprocess.Popen(command, stdout=output, stderr=output, start_new_session=True)
     local = "127.0.0.1" if config.bind in ("0.0.0.0", "::") else config.bind
     deadline = time.monotonic() + SERVER_START_TIMEOUT_S
     while time.monotonic() < deadline and server.poll() is None:
