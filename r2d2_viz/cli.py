@@ -159,7 +159,7 @@ def _quiet_rerun() -> None:
 
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     # Heavy imports (rerun, yourdfpy, trimesh) only after the arguments parsed: --help stays instant.
-    from r2d2_viz.errors import UsageError
+    from r2d2_viz.errors import SinkError, UsageError
 
     if args.save is not None and args.save.suffix not in SAVE_SUFFIXES and not args.save.is_dir():
         raise UsageError(
@@ -233,7 +233,12 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             message = _no_display(message, args.port, args.web_port)
         print(message, file=sys.stderr, flush=True)
 
-    result = run(config, on_ready=on_ready)
+    try:
+        result = run(config, on_ready=on_ready)
+    except SinkError as exc:
+        if fallback:  # the user typed no --serve: say why it was tried
+            raise SinkError(f"no display for a viewer window, and the web viewer instead failed: {exc}") from None
+        raise
     print_summary(result, config)
     return EXIT_OK
 

@@ -292,3 +292,15 @@ def test_the_summary_names_what_it_counted(tmp_path: Path, tutorial_urdf: Path) 
     assert "transforms and display messages from" in result.stderr.splitlines()[-1], result.stderr
     result = cli("--headless", "--duration", "1", cwd=tmp_path)
     assert result.stderr.splitlines()[-1] == "r2d2-viz: 30 samples at 30 Hz", result.stderr
+
+
+def test_the_web_viewer_fallback_says_why_when_it_fails(tmp_path: Path) -> None:
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        result = cli("--duration", "1", "--port", str(port), env={"DISPLAY": "", "WAYLAND_DISPLAY": ""}, cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    [line] = result.stderr.strip().splitlines()
+    assert line.startswith("error: no display for a viewer window, and the web viewer instead failed: "), line
+    assert f"cannot listen on 127.0.0.1:{port}" in line
