@@ -63,7 +63,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=_number,
         default=None,
         metavar="SECONDS",
-        help="robot time to generate (default: one lap, 1,440 samples, for --save; until Ctrl-C for live sinks)",
+        help="robot time to generate (default: one lap, 1,440 samples, for --save; until Ctrl-C for live sinks); "
+        "with --bag, the first SECONDS of the bag (from --start-offset)",
     )
     parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="samples per second (default 30)")
     bags = parser.add_argument_group("replaying a ROS 2 bag (a rosbag2 directory, a .mcap or a .db3 file)")
@@ -76,6 +77,20 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("receive", "header"),
         default="receive",
         help="a bag's times: when messages were recorded (default) or their header stamps",
+    )
+    bags.add_argument(
+        "--start-offset",
+        type=_number,
+        default=0.0,
+        metavar="SECONDS",
+        help="start this many seconds into the bag, like ros2 bag play --start-offset",
+    )
+    bags.add_argument(
+        "--topics",
+        nargs="+",
+        default=None,
+        metavar="TOPIC",
+        help="replay only these topics of the bag, like ros2 bag play --topics",
     )
     bags.add_argument(
         "--fixed-frame",
@@ -167,6 +182,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             "write a recording (.rrd) or a ROS 2 bag (.mcap)"
         )
     _quiet_rerun()
+    from r2d2_viz.progress import wanted
     from r2d2_viz.runner import RunConfig, print_summary, run
     from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
@@ -193,6 +209,13 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError(f"--save {args.save}: a bag is written as fast as it can, not with a live sink or --realtime")
     if not (math.isfinite(args.speed) and args.speed > 0):
         raise UsageError(f"--speed must be a positive factor, got {args.speed:g}")
+    if args.topics is not None:  # "--topics /scan ur_type:=ur5e": the xacro argument is not a topic
+        args.xacro_args += [t for t in args.topics if ":=" in t]
+        args.topics = [t for t in args.topics if ":=" not in t] or None
+    if args.bag is None and (args.start_offset or args.topics is not None):
+        raise UsageError("--start-offset and --topics choose what of a bag to replay: use them with --bag")
+    if not (math.isfinite(args.start_offset) and args.start_offset >= 0):
+        raise UsageError(f"--start-offset must be a number of seconds >= 0, got {args.start_offset:g}")
     implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
     fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
     sink = SinkConfig(
@@ -226,6 +249,9 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         fixed_frame=args.fixed_frame,
         rviz=args.rviz,
         ros=args.ros,
+        start_offset=args.start_offset,
+        topics=tuple(args.topics) if args.topics is not None else None,
+        progress=wanted(),
     )
 
     def on_ready(message: str) -> None:

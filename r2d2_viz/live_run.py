@@ -37,7 +37,7 @@ from r2d2_viz.sources.live.dds import LiveGraph
 from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, RosDiscovery
 from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
-from r2d2_viz.sources.replay import Replay
+from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
@@ -211,7 +211,7 @@ def _settle(source: LiveSource, model: _Model, deadline: _Deadline) -> list[Live
     return batches
 
 
-def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> tuple[Replay, ViewPlan]:
+def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> tuple[RunPlan, ViewPlan]:
     records = [r for b in batches for r in b.tf]
     static = next((r for r in records if r.static), None)
     moving = next((r for r in records if not r.static), None)
@@ -219,7 +219,7 @@ def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> 
     rviz_frame = load_rviz(config.rviz).fixed_frame if config.rviz is not None else None
     root = tree.robot.root if tree is not None else None
     frame = config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
-    plan = Replay(tree, None, static, moving, frame)
+    plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
     return plan, plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
 
 
@@ -295,7 +295,6 @@ class _Scene:
         self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
         self.feed = DisplayFeed(
             self.notices,
-            None,
             clock="timestamp",
             fixed_frame=fixed_frame,
             header_time=config.time == "header",

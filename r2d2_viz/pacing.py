@@ -12,6 +12,7 @@ import math
 import os
 import threading
 import time
+from collections.abc import Callable, Iterable
 from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import TextIO
@@ -19,7 +20,8 @@ from typing import TextIO
 import numpy as np
 
 from r2d2_viz.signals import signals_set
-from r2d2_viz.sources.base import Source
+from r2d2_viz.sources.base import SampleChunk
+from r2d2_viz.sources.playback import Window
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.stream import RobotStream
 from r2d2_viz.viewer.tf_recorded import TfFeed
@@ -38,6 +40,12 @@ class Feeds:
 
     tf: TfFeed
     displays: DisplayFeed | None = None
+
+    def push(self, window: Window) -> None:
+        """A stretch's transforms and display messages, logged by :meth:`until` when due."""
+        self.tf.push(window.tf)
+        if self.displays is not None and window.displays:
+            self.displays.push(window.displays)
 
     @property
     def next_time_ns(self) -> int | None:
@@ -72,13 +80,14 @@ class _Clock:
 
 
 def _feed_until(clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Event, log: TextIO | None = None) -> None:
-    """Until ``deadline`` (monotonic seconds), send the feeds' items as each falls due."""
+    """Until ``deadline`` (monotonic seconds), send the feeds' items as each falls due; returns early when nothing
+    is pending (the next window may hold more)."""
     while not stop.is_set():
         t = feeds.next_time_ns
         now = time.monotonic()
-        if t is None and math.isinf(deadline):
-            return  # nothing left to wait for
-        if t is None or clock.due(t) > deadline:
+        if t is None:
+            return
+        if clock.due(t) > deadline:
             if deadline > now:
                 time.sleep(min(deadline - now, MAX_SLEEP))
                 continue
@@ -92,62 +101,78 @@ def _feed_until(clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Ev
 
 
 def paced(
-    streamer: RobotStream | None, source: Source | None, feeds: Feeds, *, block: int, speed: float = 1.0
+    streamer: RobotStream | None,
+    windows: Iterable[Window],
+    feeds: Feeds,
+    *,
+    speed: float = 1.0,
+    progress: Callable[[Window], None] | None = None,
 ) -> tuple[int, bool]:
-    """Send each robot sample (computed ``block`` at a time) and every feed item when due, until done or
-    signalled; returns the samples sent (or, without a robot, the items) and whether a signal stopped it."""
+    """Send each robot sample and every feed item of each window when due, until done or signalled; returns the
+    samples sent (or, without a robot, the items) and whether a signal stopped it."""
     stop = threading.Event()
     sent = 0
     log_path = os.environ.get(PACING_LOG_ENV)
     clock: _Clock | None = None
     with signals_set(stop), open(log_path, "w") if log_path else nullcontext() as log:
-        if streamer is not None and source is not None:
-            sent, clock = _paced_samples(streamer, source, feeds, block, speed, stop, log)
-        if not stop.is_set():
+        for window in windows:
+            feeds.push(window)
+            chunk = window.joints if streamer is not None else None
+            if clock is None:  # the schedule starts when the first item is ready to go
+                first = [t for t in (feeds.next_time_ns,) if t is not None]
+                if chunk is not None and len(chunk):
+                    first.append(int(chunk.times_ns[0]))
+                if first:
+                    clock = _Clock(time.monotonic(), min(first), speed)
             if clock is None:
-                first = feeds.next_time_ns
-                clock = _Clock(time.monotonic(), first if first is not None else 0, speed)
+                continue
+            if streamer is not None and chunk is not None and len(chunk):
+                sent += _paced_samples(streamer, chunk, feeds, clock, stop, log, sent)
+            if not stop.is_set():
+                _feed_until(clock, feeds, clock.due(window.end_ns), stop, log)
+            if progress is not None:
+                progress(window)
+            if stop.is_set():
+                break
+            if streamer is not None:
+                # Backpressure, once a window: wait until the sinks have taken what was sent, so a sink slower
+                # than the sample rate makes samples late instead of piling them up in memory.
+                streamer.rec.flush()
+        if not stop.is_set() and clock is not None:
             _feed_until(clock, feeds, math.inf, stop, log)
-    return (sent if streamer is not None and source is not None else feeds.sent), stop.is_set()
+    return (sent if streamer is not None and sent else feeds.sent), stop.is_set()
 
 
 def _paced_samples(
     streamer: RobotStream,
-    source: Source,
+    chunk: SampleChunk,
     feeds: Feeds,
-    block: int,
-    speed: float,
+    clock: _Clock,
     stop: threading.Event,
     log: TextIO | None,
-) -> tuple[int, _Clock | None]:
-    sent = 0
-    clock: _Clock | None = None
-    for chunk in source.chunks(block):
-        prepared = streamer.prepare(chunk)
-        n = len(chunk)
-        if n == 0:
-            continue
-        if clock is None:  # the schedule starts when the first sample is ready to go
-            first = feeds.next_time_ns
-            t0 = int(chunk.times_ns[0]) if first is None else min(first, int(chunk.times_ns[0]))
-            clock = _Clock(time.monotonic(), t0, speed)
-        due = clock.start + (chunk.times_ns - clock.t0) * (1e-9 / speed)
-        i = 0
-        while i < n:
-            _feed_until(clock, feeds, float(due[i]), stop, log)
-            if stop.is_set():
-                break
-            j = i + 1 + int(np.searchsorted(due[i + 1 :], time.monotonic(), side="right"))
-            feeds.until(int(chunk.times_ns[j - 1]))
-            streamer.send(prepared, i, j)
-            if log is not None:
-                now = time.monotonic()
-                log.writelines(f"{sent + k - i} {now - due[k]:.6f}\n" for k in range(i, j))
-            sent += j - i
-            i = j
-        if i < n:
+    sent: int,
+) -> int:
+    """One window's samples, each when due, with the feed items due between them; how many were sent."""
+    prepared = streamer.prepare(chunk)
+    n = len(chunk)
+    due = clock.start + (chunk.times_ns - clock.t0) * (1e-9 / clock.speed)
+    i = 0
+    while i < n:
+        _feed_until(clock, feeds, float(due[i]), stop, log)
+        if stop.is_set():
             break
-        # Backpressure, once a block (five seconds): wait until the sinks have taken what was sent, so a
-        # sink slower than the sample rate makes samples late instead of piling them up in memory.
-        streamer.rec.flush()
-    return sent, clock
+        now = time.monotonic()
+        if due[i] > now:
+            time.sleep(min(float(due[i]) - now, MAX_SLEEP))
+            continue
+        j = i + 1 + int(np.searchsorted(due[i + 1 :], now, side="right"))
+        feeds.until(int(chunk.times_ns[j - 1]))
+        streamer.send(prepared, i, j)
+        if log is not None:
+            done = time.monotonic()
+            log.writelines(f"{sent + k - i} {done - due[k]:.6f}\n" for k in range(i, j))
+            if sent == 0 and i == 0:
+                log.flush()  # the first sample's line at once: benchmarks time the first data by it
+        sent += j - i
+        i = j
+    return i

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,15 +18,17 @@ from r2d2_viz.errors import SHOWN, UsageError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.pacing import Feeds, paced
+from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
 from r2d2_viz.signals import sigterm_raises
-from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.bag_joints import TimeSource
-from r2d2_viz.sources.base import Source
+from r2d2_viz.sources.bags.bag import open_bag
+from r2d2_viz.sources.base import Clock, Source
 from r2d2_viz.sources.motion import ODOM, make_motion
-from r2d2_viz.sources.replay import Replay, open_replay
+from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
+from r2d2_viz.sources.playback import Window, read_ahead
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import plan_view
@@ -44,6 +46,8 @@ LIVE_BLOCK_SECONDS = 5.0
 send each sample when it is due; the sinks are waited for once a block (backpressure)…"""
 LIVE_BLOCK_SAMPLES = 1000
 """…and a block has at most this many samples, so at high rates computing one makes only a sample or two late."""
+FLUSH_BYTES = 64 << 20
+"""A batch run waits for the sinks after about this much data (bag bytes, and 64 bytes a robot sample)."""
 LAP_SAMPLES = 1440
 """One lap of the tutorial's odom circle: 360° / (¼° per sample) — 48 s at the default 30 Hz."""
 
@@ -74,6 +78,12 @@ class RunConfig:
     """Lay the viewer out as this RViz config does (default: the tutorial's r2d2.rviz, fitted to the robot)."""
     ros: bool = False
     """Join the live ROS 2 graph (:mod:`r2d2_viz.live_run`); ``duration`` is then seconds of wall time."""
+    start_offset: float = 0.0
+    """Seconds into the bag to start at (``ros2 bag play --start-offset``)."""
+    topics: tuple[str, ...] | None = None
+    """Only these topics of the bag (``ros2 bag play --topics``); None: all."""
+    progress: bool = False
+    """Show a progress bar on stderr (the CLI sets it on a terminal)."""
 
     @property
     def live(self) -> bool:
@@ -121,12 +131,12 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
         return result
 
 
-def _counted(config: RunConfig, plan: Replay, samples: int) -> str:
-    """What a run without ``--ros`` counted (batch and paced runs count the robot's samples when it has a source
-    that gave any, else the transforms and display messages handed on)."""
+def _counted(config: RunConfig, plan: RunPlan, samples: int) -> str:
+    """What a run without ``--ros`` counted (batch and paced runs count the robot's samples when something moves
+    it and gave any, else the transforms and display messages handed on)."""
     if config.bag is None:
         return "samples"
-    if plan.tree is not None and plan.source is not None and samples:
+    if plan.moves_robot and samples:
         return "joint states"
     return "transforms and display messages"
 
@@ -145,7 +155,7 @@ def _description_text(config: RunConfig) -> str:
     return data.decode("utf-8")
 
 
-def _plan(config: RunConfig, inputs: ExitStack) -> Replay:
+def _plan(config: RunConfig, inputs: ExitStack) -> RunPlan:
     """The robot, its source, recorded transforms and the fixed frame of this run."""
     packages = _packages(config)
 
@@ -154,25 +164,24 @@ def _plan(config: RunConfig, inputs: ExitStack) -> Replay:
 
     if config.bag is not None:
         bag = inputs.enter_context(open_bag(config.bag))
-        replay = open_replay(
+        return plan_bag(
             bag,
             load_robot=robot if config.urdf is not None else None,
             time=config.time,
             fixed_frame=config.fixed_frame,
             packages=packages,
+            choice=BagChoice(config.start_offset, config.duration, config.topics),
         )
-        replay.mcap_files = [f for f in bag.files if f.suffix == ".mcap"]
-        return replay
     loaded = robot()
-    return Replay(compile_tree(loaded), config.source(loaded), None, None, config.fixed_frame or ODOM)
+    return plan_motion(compile_tree(loaded), config.source(loaded), config.fixed_frame or ODOM)
 
 
-def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | None) -> RunResult:
+def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | None) -> RunResult:
     save = config.sink.save
     tmp = _temp_path(save) if save is not None else None
     samples, interrupted = 0, False
-    source, tree = plan.source, plan.tree
-    clock = source.clock if source is not None else "timestamp"
+    tree = plan.tree
+    clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
@@ -184,7 +193,7 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
                 streamer = RobotStream(
                     rec,
                     tree,
-                    frames=source.frames if source is not None else (),
+                    frames=plan.source.frames if plan.source is not None else (),
                     clock=clock,
                     fixed_frame=plan.fixed_frame,
                     root_placed=plan.root_placed,
@@ -194,14 +203,13 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
             notices = streamer.notices if streamer is not None else Notices(rec)
             for note in (*plan.notes, *view.notes):
                 notices.report(note)
-            recorded = RecordedTf(rec, clock=clock, skip=plan.skip_edges, axis_length=view.axis_length)
+            recorded = RecordedTf(rec, clock=clock, skip=set(plan.skip_edges), axis_length=view.axis_length)
             if plan.static_tf is not None:
                 recorded.log(plan.static_tf)
             displays = None
-            if plan.display_messages is not None:
+            if plan.displays:
                 displays = DisplayFeed(
                     notices,
-                    plan.display_messages(),
                     clock=clock,
                     fixed_frame=plan.fixed_frame,
                     header_time=config.time == "header",
@@ -210,14 +218,17 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
                     topics=plan.displays,
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
-            feeds = Feeds(TfFeed(recorded, plan.moving_tf), displays)
+                displays.push(plan.seek_messages)
+            feeds = Feeds(TfFeed(recorded), displays)
             if streamer is not None:
                 streamer.log_static()
-            if config.live:
-                samples, interrupted = paced(streamer, source, feeds, block=_live_block(config), speed=config.speed)
-            else:
-                with sigterm_raises():
-                    samples = _batch(streamer, source, feeds, rec.flush, n_moving=len(tree.moving) if tree else 0)
+            with progress_bar(plan, config) as shown:
+                windows = _windows(plan, config, displays)
+                if config.live:
+                    samples, interrupted = paced(streamer, windows, feeds, speed=config.speed, progress=shown)
+                else:
+                    with sigterm_raises():
+                        samples = _batch(streamer, windows, feeds, rec.flush, shown)
             _other_topics(plan, config, notices)
             if displays is not None:
                 displays.finish()
@@ -234,25 +245,44 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
 
 
+def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> Iterator[Window]:
+    """The run's windows; a bag's read and decoded ahead in a thread (beside the recording's writing)."""
+    if config.live:
+        size = _live_block(config)
+    else:
+        size = batch_chunk_samples(len(plan.tree.moving) if plan.tree is not None else 0)
+    windows = plan.windows(size, predecode=displays.decode if displays is not None else None)
+    return read_ahead(windows) if plan.replay is not None else windows
+
+
 def _batch(
-    streamer: RobotStream | None, source: Source | None, feed: Feeds, flush: Callable[[], None], *, n_moving: int
+    streamer: RobotStream | None,
+    windows: Iterator[Window],
+    feed: Feeds,
+    flush: Callable[[], None],
+    progress: Callable[[Window], None] | None,
 ) -> int:
-    """Every sample as fast as the sinks take them, one chunk in flight (memory stays flat)."""
-    samples = 0
-    if streamer is not None and source is not None:
-        for k, chunk in enumerate(source.chunks(batch_chunk_samples(n_moving))):
-            prepared = streamer.prepare(chunk)  # meanwhile the sinks write the previous chunk
-            if k:
-                flush()  # backpressure
+    """Every window as fast as the sinks take them, a bounded amount in flight (memory stays flat)."""
+    samples = unflushed = 0
+    for window in windows:
+        chunk = window.joints if streamer is not None else None
+        prepared = streamer.prepare(chunk) if streamer is not None and chunk is not None and len(chunk) else None
+        unflushed += window.nbytes + (len(chunk) if chunk is not None else 0) * 64
+        if unflushed > FLUSH_BYTES:  # backpressure: the sinks have taken what came before
+            flush()
+            unflushed = 0
+        if streamer is not None and prepared is not None and chunk is not None:
             streamer.send(prepared)
-            if len(chunk):
-                feed.until(int(chunk.times_ns[-1]))
             samples += len(chunk)
+        feed.push(window)
+        feed.until(window.end_ns)
+        if progress is not None:
+            progress(window)
     feed.until(None)
     return samples or feed.sent
 
 
-def _other_topics(plan: Replay, config: RunConfig, notices: Notices) -> None:
+def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:
     """The bag's topics no display of ours draws: what Rerun's own MCAP decoders show of them (batch runs, .mcap
     storage), and one line naming the rest."""
     skipped = dict(plan.undisplayed)

@@ -23,7 +23,7 @@ STAGES = ("robot", "meshes", "kinematics", "msgs", "sources", "rviz", "viewer", 
 """The pipeline's stages, in order: each may import only the ones before it (and the base modules)."""
 BASE = ("errors", "arrays")
 """Modules every stage may import."""
-TOP = ("signals", "pacing", "live_run", "runner", "api", "cli", "blueprint", "__init__", "__main__")
+TOP = ("signals", "pacing", "progress", "live_run", "runner", "api", "cli", "blueprint", "__init__", "__main__")
 """The top: it may import every stage."""
 RERUN_STAGES = ("viewer",)
 

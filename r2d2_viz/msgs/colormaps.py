@@ -12,6 +12,19 @@ import numpy as np
 
 from r2d2_viz.msgs.shapes import F32, U8
 
+_N, _0, _1 = (0.0, 1.0), (0.0, 0.0), (1.0, 0.0)
+_SEXTANTS = [  # getRainbowColor's (r, g, b) for i = 0..6 (0 and 1 alike: v clipped to [0, 1] gives i >= 1)
+    (_N, _0, _1),
+    (_N, _0, _1),
+    (_0, _N, _1),
+    (_0, _1, _N),
+    (_N, _1, _0),
+    (_1, _N, _0),
+    (_1, _N, _0),
+]
+_CONSTANT = [np.array([row[c][0] for row in _SEXTANTS]) for c in range(3)]
+_SLOPE = [np.array([row[c][1] for row in _SEXTANTS]) for c in range(3)]
+
 
 def rainbow(value: F32) -> U8:
     """RViz's ``getRainbowColor`` (HSV hue 0..5/6) of ``value`` clipped to [0, 1] (NaN reads as 0): RGBA8."""
@@ -19,12 +32,9 @@ def rainbow(value: F32) -> U8:
     h = v * 5.0 + 1.0
     i = np.floor(h).astype(np.int64)
     f = h - i
-    f = np.where(i % 2 == 0, 1.0 - f, f)
-    n = 1.0 - f
-    zero, one = np.zeros_like(n), np.ones_like(n)
-    r = np.select([i <= 1, i == 2, i == 3, i == 4], [n, zero, zero, n], one)
-    g = np.select([i <= 1, i == 2, i == 3, i == 4], [zero, n, one, one], n)
-    b = np.select([i <= 1, i == 2, i == 3, i == 4], [one, one, n, zero], zero)
+    n = np.where(i % 2 == 0, f, 1.0 - f)  # 1 - f on even sextants, as getRainbowColor flips f there
+    # each channel is one of n, 0 or 1 per sextant i (1..6): constant + slope * n, looked up (no np.select)
+    r, g, b = (_CONSTANT[c][i] + _SLOPE[c][i] * n for c in range(3))
     out = np.empty((v.shape[0], 4), dtype=np.uint8)
     out[:, 0], out[:, 1], out[:, 2] = (np.round(c * 255) for c in (r, g, b))
     out[:, 3] = 255

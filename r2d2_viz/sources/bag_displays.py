@@ -1,23 +1,20 @@
 """A bag's display topics — what RViz's displays draw: scans, clouds, markers, maps, paths, poses, images
-(the types of :data:`r2d2_viz.msgs.registry.DECODERS`) — as one stream of raw messages in receive-time order,
-read lazily from either storage; and what such a bag's frames say about where to look. Pure: no rerun.
+(the types of :data:`r2d2_viz.msgs.registry.DECODERS`): which of a bag's topics they are, their raw messages
+(:class:`TopicMessage`), and the frames such messages are drawn in. Pure: no rerun.
 """
 
 from __future__ import annotations
 
-import heapq
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 from r2d2_viz.msgs.registry import DECODERS, decode
-from r2d2_viz.msgs.shapes import Decoded
+from r2d2_viz.msgs.shapes import Decoded, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.bag import Bag
 
 OURS = ("/joint_states", "/tf", "/tf_static", "/robot_description")
 """Topics the robot pipeline itself reads."""
-BATCH = 16
-"""Messages read ahead per topic: a cloud or an image is megabytes, so a few at a time."""
 
 
 @dataclass(frozen=True)
@@ -29,6 +26,10 @@ class TopicMessage:
     topic: str
     msgtype: str
     data: bytes | memoryview
+    decoded: Decoded | list[MarkerOp] | MsgError | None = None
+    """What it draws, when decoded ahead (in the bag reader's thread); None: not yet decoded."""
+    prepared: object = None
+    """What the viewer built ahead from ``decoded`` to log it (opaque here; None: nothing built)."""
 
 
 def display_topics(bag: Bag) -> tuple[dict[str, str], dict[str, str]]:
@@ -42,25 +43,14 @@ def display_topics(bag: Bag) -> tuple[dict[str, str], dict[str, str]]:
     return shown, other
 
 
-def bag_messages(bag: Bag, topics: Mapping[str, str]) -> Iterator[TopicMessage]:
-    """Every message of ``topics``, merged across topics by receive time (each topic read lazily)."""
-
-    def one(topic: str, msgtype: str) -> Iterator[TopicMessage]:
-        for batch in bag.batches(topic, BATCH):
-            yield from (TopicMessage(int(t), topic, msgtype, data) for t, data in batch)
-
-    return heapq.merge(*(one(t, m) for t, m in topics.items()), key=lambda m: m.time_ns)
-
-
-def display_frames(bag: Bag, topics: Mapping[str, str], *, per_topic: int = 3) -> set[str]:
-    """The frames the first few messages of each display topic are drawn in (empty ids left out)."""
+def frames_of(messages: Iterable[TopicMessage]) -> set[str]:
+    """The frames these display messages are drawn in (empty ids and undecodable messages left out)."""
     frames: set[str] = set()
-    for topic, msgtype in topics.items():
-        for _, data in next(iter(bag.batches(topic, per_topic)), []):
-            try:
-                decoded = decode(msgtype, data)
-            except MsgError:
-                continue
-            parts = [decoded] if isinstance(decoded, Decoded) else [op.decoded for op in decoded if op.decoded]
-            frames.update(d.frame_id for d in parts if d.frame_id)
+    for message in messages:
+        try:
+            decoded = decode(message.msgtype, message.data)
+        except MsgError:
+            continue
+        parts = [decoded] if isinstance(decoded, Decoded) else [op.decoded for op in decoded if op.decoded]
+        frames.update(d.frame_id for d in parts if d.frame_id)
     return frames

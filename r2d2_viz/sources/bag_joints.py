@@ -1,5 +1,5 @@
-"""A bag as a source: ``/joint_states`` (``sensor_msgs/msg/JointState``) in chunks of samples, and the bag's
-latest ``/robot_description`` (its ``/tf`` and ``/tf_static``: :mod:`r2d2_viz.sources.bag_tf`).
+"""``/joint_states`` (``sensor_msgs/msg/JointState``) decoded into chunks of samples, from a bag or a live graph, and
+a bag's latest ``/robot_description`` (``/tf`` and ``/tf_static``: :mod:`r2d2_viz.sources.bag_tf`).
 
 Messages are decoded in bulk: messages with the same joint names share a byte layout (:mod:`r2d2_viz.msgs.layouts`),
 so each is checked against its layout with one bytes comparison and all positions of a chunk become one numpy
@@ -12,18 +12,19 @@ message whose name and position lengths differ is skipped, and the skipped ones 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
 import numpy as np
+import numpy.typing as npt
 
 from r2d2_viz.arrays import F64, I64
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.layouts import STAMP, JointStateLayout, joint_state_layout
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.sources.bags.bag import Bag, Warn
-from r2d2_viz.sources.base import Clock, SampleChunk
+from r2d2_viz.sources.bags.bag import Bag
+from r2d2_viz.sources.bags.storage import Block, block_of
+from r2d2_viz.sources.base import SampleChunk
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 STRING = "std_msgs/msg/String"
@@ -40,58 +41,6 @@ def stamps_ns(stamps: bytes) -> I64:
     s = np.frombuffer(stamps, dtype=_STAMP)
     ns: I64 = s["sec"].astype(np.int64) * 1_000_000_000 + s["nsec"].astype(np.int64)
     return ns
-
-
-@dataclass
-class _Group:
-    """Messages of one layout within a chunk."""
-
-    layout: JointStateLayout
-    rows: list[int] = field(default_factory=list)
-    values: list[bytes | memoryview] = field(default_factory=list)  # whole messages, all of one length
-
-
-class BagSource:
-    """``/joint_states`` of an open bag as a :class:`~r2d2_viz.sources.base.Source` (clock: timestamp)."""
-
-    clock: Clock = "timestamp"
-    frames: tuple[tuple[str, str], ...] = ()
-
-    def __init__(
-        self,
-        bag: Bag,
-        actuated: Sequence[str],
-        *,
-        topic: str = "/joint_states",
-        time: TimeSource = "receive",
-        warn: Warn | None = None,
-    ) -> None:
-        if time not in ("receive", "header"):
-            raise ValueError(f"time must be 'receive' or 'header', not {time!r}")
-        self.bag, self.topic, self.time = bag, topic, time
-        self.warn = warn or bag.warn
-        self.joints = tuple(actuated)
-        self.present = bag.require_type(topic, JOINT_STATE)
-        self.decoder = JointStateDecoder(self.joints, time=time, deserialize=bag.deserialize)
-
-    def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
-        if not self.present:
-            return
-        last_ns = np.iinfo(np.int64).min
-        moved = 0
-        self.decoder = JointStateDecoder(self.joints, time=self.time, deserialize=self.bag.deserialize)
-        for batch in self.bag.batches(self.topic, max_samples):
-            chunk = self.decoder.decode(batch)
-            if chunk is not None:
-                chunk, last_ns, moved = monotonic(chunk, last_ns, moved)
-                yield chunk
-        for problem in self.decoder.problems():
-            self.warn(f"{self.bag.path}: {self.topic}: {problem}")
-        if moved:
-            self.warn(
-                f"{self.bag.path}: {self.topic}: {moved} header stamps went back in time; "
-                "they are shown at the previous stamp"
-            )
 
 
 class JointStateDecoder:
@@ -145,59 +94,61 @@ class JointStateDecoder:
 
     def decode(self, messages: Sequence[tuple[int, bytes | memoryview]]) -> SampleChunk | None:
         """``(receive time ns, CDR bytes)`` pairs to one chunk (None: no message could be used)."""
-        groups: dict[tuple[int, int], _Group] = {}  # (layout, message length) → its messages: one matrix
-        times: list[int] = []
-        singles: list[tuple[int, tuple[str, ...], F64, int]] = []  # messages rosbags had to decode
-        group: _Group | None = None
-        key, key_end, size = b"", 0, -1
-        for receive_ns, data in messages:
-            if len(data) == size and data[12:key_end] == key:  # the same layout as the last message
-                assert group is not None
-                group.rows.append(len(times))
-                group.values.append(data)
-                times.append(receive_ns)
-                continue
-            layout = self._layout_of(data)
-            if layout is None:
-                try:
-                    names, positions, stamp_ns = self._generic(data)
-                except (BagError, MsgError):
-                    self.undecodable += 1
-                    continue
-                if len(names) != len(positions):
-                    self.skipped += 1
-                    continue
-                singles.append((len(times), names, positions, stamp_ns))
-                times.append(receive_ns)
-                continue
-            if layout.count != len(layout.names):
-                self.skipped += 1
-                continue
-            group = groups.setdefault((id(layout), len(data)), _Group(layout))
-            key, key_end, size = layout.key, 12 + len(layout.key), len(data)
-            group.rows.append(len(times))
-            group.values.append(data)
-            times.append(receive_ns)
-        if not times:
+        return self.decode_block(block_of([(t, "", data) for t, data in messages], ("",)))
+
+    def decode_block(self, block: Block) -> SampleChunk | None:
+        """A block of JointState messages to one chunk, in bulk: messages of one length and layout (the same
+        names) are one ``(n, length)`` byte matrix whose positions are one float64 view; rosbags decodes the rest.
+        None: no message could be used."""
+        n = len(block)
+        if n == 0:
             return None
-        seen = {name for g in groups.values() for name in g.layout.names} | {n for s in singles for n in s[1]}
+        buf = np.frombuffer(block.buffer, dtype=np.uint8)
+        groups: list[tuple[JointStateLayout, I64, npt.NDArray[np.uint8]]] = []
+        singles: list[tuple[int, tuple[str, ...], F64, int]] = []
+        bad = np.zeros(n, dtype=bool)
+        for length in np.unique(block.lengths):
+            rows = np.flatnonzero(block.lengths == length)
+            raw = _matrix(buf, block.starts[rows], int(length))
+            left = np.arange(len(rows))
+            while len(left):
+                first = int(left[0])
+                layout = self._layout_of(raw[first].tobytes()) if length >= 12 else None
+                if layout is None:
+                    row = int(rows[first])
+                    single = self._single(block.data(row))
+                    if single is None:
+                        bad[row] = True
+                    else:
+                        singles.append((row, *single))
+                    left = left[1:]
+                    continue
+                key_end = 12 + len(layout.key)
+                same = np.all(raw[left, 12:key_end] == raw[first, 12:key_end], axis=1)
+                if layout.count != len(layout.names):  # name and position lengths differ: all of them skipped
+                    bad[rows[left[same]]] = True
+                    self.skipped += int(np.count_nonzero(same))
+                else:
+                    groups.append((layout, rows[left[same]], raw[left[same]]))
+                left = left[~same]
+        used = ~bad
+        if not used.any():
+            return None
+        seen = {name for g in groups for name in g[0].names} | {name for s in singles for name in s[1]}
         joints = tuple(j for j in self.joints if j in seen)
         column = {name: i for i, name in enumerate(joints)}
-        positions = np.full((len(times), len(joints)), np.nan)
-        header = np.zeros(len(times), dtype=np.int64)
-        for (_, length), g in groups.items():
-            rows = np.asarray(g.rows)
-            raw = np.frombuffer(b"".join(g.values), dtype=np.uint8).reshape(len(rows), length)
+        positions = np.full((n, len(joints)), np.nan)
+        header = np.zeros(n, dtype=np.int64)
+        for layout, rows, raw in groups:
             header[rows] = stamps_ns(raw[:, STAMP].tobytes())
-            names = g.layout.names
-            keep = [i for i, name in enumerate(names) if name in column]
+            keep = [i for i, name in enumerate(layout.names) if name in column]
             if keep:
-                block = raw[:, g.layout.positions : g.layout.end].copy().view("<f8")[:, keep]
-                bad = ~np.isfinite(block)
-                if bad.any():
-                    self.nonfinite += int(np.count_nonzero(bad.any(axis=1)))
-                    block[bad] = np.nan
-                positions[rows[:, None], [column[names[i]] for i in keep]] = block
+                values = raw[:, layout.positions : layout.end].copy().view("<f8")[:, keep]
+                nonfinite = ~np.isfinite(values)
+                if nonfinite.any():
+                    self.nonfinite += int(np.count_nonzero(nonfinite.any(axis=1)))
+                    values[nonfinite] = np.nan
+                positions[rows[:, None], [column[layout.names[i]] for i in keep]] = values
         for row, names, values, stamp_ns in singles:
             header[row] = stamp_ns
             self.nonfinite += int(not np.isfinite(values).all())
@@ -206,13 +157,42 @@ class JointStateDecoder:
                     positions[row, column[name]] = value if np.isfinite(value) else np.nan
                 elif name not in self._column and len(self.unknown) < MAX_UNKNOWN:
                     self.unknown.add(name)
-        times_ns: I64 = np.asarray(times, dtype=np.int64) if self.time == "receive" else header
-        return SampleChunk(times_ns, joints, positions)
+        times_ns: I64 = block.times_ns if self.time == "receive" else header
+        if bad.any():
+            times_ns, positions = times_ns[used], positions[used]
+        return SampleChunk(np.ascontiguousarray(times_ns), joints, positions)
+
+    def _single(self, data: bytes | memoryview) -> tuple[tuple[str, ...], F64, int] | None:
+        """A message no byte layout fits, through rosbags (None: it cannot be used; counted)."""
+        try:
+            names, positions, stamp_ns = self._generic(data)
+        except (BagError, MsgError):
+            self.undecodable += 1
+            return None
+        if len(names) != len(positions):
+            self.skipped += 1
+            return None
+        return names, positions, stamp_ns
 
     def _generic(self, data: bytes | memoryview) -> tuple[tuple[str, ...], F64, int]:
         msg = self._deserialize(data, JOINT_STATE)
         stamp = msg.header.stamp
         return tuple(msg.name), np.asarray(msg.position, dtype=np.float64), int(stamp.sec) * 10**9 + int(stamp.nanosec)
+
+
+def _matrix(buf: npt.NDArray[np.uint8], starts: I64, length: int) -> npt.NDArray[np.uint8]:
+    """Messages of one ``length`` as rows of a byte matrix: a strided view when they lie evenly spaced (one
+    publisher's messages back to back), else one gather."""
+    if len(starts) > 1:
+        step = np.diff(starts)
+        if step[0] >= length and bool(np.all(step == step[0])):
+            first = int(starts[0])
+            view: npt.NDArray[np.uint8] = np.lib.stride_tricks.as_strided(
+                buf[first:], shape=(len(starts), length), strides=(int(step[0]), 1), writeable=False
+            )
+            return view
+    gathered: npt.NDArray[np.uint8] = buf[starts[:, None] + np.arange(length)]
+    return gathered
 
 
 def monotonic(chunk: SampleChunk, last_ns: int, moved: int) -> tuple[SampleChunk, int, int]:
@@ -229,10 +209,8 @@ def read_robot_description(bag: Bag, topic: str = "/robot_description") -> str |
     """The latest ``std_msgs/msg/String`` on ``topic`` (the URDF robot_state_publisher published), or None."""
     if not bag.require_type(topic, STRING):
         return None
-    last: bytes | memoryview | None = None
-    for _, data in bag.raw(topic):
-        last = data
-    if last is None:
+    found = bag.last(topic)
+    if found is None:
         return None
-    text = bag.deserialize(last, STRING).data
+    text = bag.deserialize(found[1], STRING).data
     return str(text)

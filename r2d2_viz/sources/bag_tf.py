@@ -1,6 +1,6 @@
-"""A bag's ``/tf`` and ``/tf_static`` (``tf2_msgs/msg/TFMessage``) as transform rows
-(:class:`~r2d2_viz.sources.base.TfRecords`), in chunks: each transform at its message's receive time, or at its own
-header stamp (``time="header"``).
+"""``/tf`` and ``/tf_static`` messages (``tf2_msgs/msg/TFMessage``) as transform rows
+(:class:`~r2d2_viz.sources.base.TfRecords`): each transform at its message's receive time, or at its own header
+stamp (``time="header"``).
 
 Decoded in bulk like JointState (:mod:`r2d2_viz.msgs.layouts`): messages with the same frames share a layout; others
 go through rosbags' deserializer; ones that cannot be decoded are skipped and counted in one warning. Pure.
@@ -8,7 +8,7 @@ go through rosbags' deserializer; ones that cannot be decoded are skipped and co
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -16,7 +16,6 @@ import numpy as np
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.layouts import TfLayout, tf_layout
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bag_joints import MAX_LAYOUTS, TimeSource, stamps_ns
 from r2d2_viz.sources.base import TfRecords
 
@@ -24,30 +23,10 @@ TF_MESSAGE = "tf2_msgs/msg/TFMessage"
 _STAMP = np.dtype([("sec", "<i4"), ("nsec", "<u4")])
 
 
-def read_tf(bag: Bag, *, time: TimeSource = "receive") -> list[TfRecords]:
-    """``/tf_static`` (static) and ``/tf`` whole, one TfRecords each; topics the bag lacks are left out."""
-    out = []
-    for topic in ("/tf_static", "/tf"):
-        parts = list(tf_chunks(bag, topic, time=time))
-        if parts:
-            out.append(_concatenate(parts))
-    return out
-
-
-def tf_chunks(bag: Bag, topic: str, *, time: TimeSource = "receive", max_messages: int = 10_000) -> Iterator[TfRecords]:
-    """The transforms of ``topic`` (static when it is ``/tf_static``), a TfRecords per ``max_messages``."""
-    if not bag.require_type(topic, TF_MESSAGE):
-        return
-    reader = TfDecoder(bag.deserialize, static=topic == "/tf_static", time=time)
-    for batch in bag.batches(topic, max_messages):
-        records = reader.decode(batch)
-        if len(records):
-            yield records
-    if reader.bad:
-        bag.warn(f"{bag.path}: {topic}: skipped {reader.bad} messages that cannot be decoded")
-
-
-def _concatenate(parts: list[TfRecords]) -> TfRecords:
+def concatenate(parts: list[TfRecords]) -> TfRecords | None:
+    """Several TfRecords (of one kind) as one; None when there are none."""
+    if not parts:
+        return None
     if len(parts) == 1:
         return parts[0]
     return TfRecords(

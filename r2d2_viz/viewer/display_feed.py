@@ -9,17 +9,18 @@ go round ``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator, Mapping
+from collections import deque
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import rerun as rr
 
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp, MeshResource
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.sources.base import Clock
-from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, set_time
+from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
 
@@ -47,12 +48,12 @@ class _TopicState:
 
 
 class DisplayFeed:
-    """Decode and log display messages; :meth:`until` pulls them from ``messages`` up to a time."""
+    """Decode and log display messages: a replay :meth:`push` es those of each stretch it reads and :meth:`until`
+    logs what is due; a live source calls :meth:`log` as messages arrive."""
 
     def __init__(
         self,
         notices: Notices,
-        messages: Iterator[TopicMessage] | None = None,
         *,
         clock: Clock,
         fixed_frame: str,
@@ -64,8 +65,8 @@ class DisplayFeed:
         topics: Mapping[str, str] | None = None,
     ) -> None:
         self.notices, self.rec = notices, notices.rec
-        self._messages = messages
-        self._next: TopicMessage | None = None
+        self._pending: deque[TopicMessage] = deque()
+        self._anchored = False
         self.clock, self.fixed_frame, self.header_time = clock, fixed_frame, header_time
         self.styles = dict(styles or {})
         self.load_mesh, self.source_name, self.timeline = load_mesh, source_name, timeline
@@ -73,9 +74,7 @@ class DisplayFeed:
         self.cameras = camera_images(topics or {})
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
-        self._pull()
-        if self._next is not None and topics:
-            self._anchor(topics, self._next.time_ns)
+        self._topic_types = dict(topics or {})
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -88,21 +87,26 @@ class DisplayFeed:
             for entity in [f"{topic}/{k}" for k in range(keep)] if keep > 1 else [topic]:
                 self.rec.log(entity, rr.CoordinateFrame(self.fixed_frame))
 
-    def _pull(self) -> None:
-        self._next = next(self._messages, None) if self._messages is not None else None
+    def push(self, messages: Iterable[TopicMessage]) -> None:
+        """Messages just read, in receive-time order; the first ones anchor every display entity."""
+        for message in messages:
+            if not self._anchored:
+                self._anchored = True
+                if self._topic_types:
+                    self._anchor(self._topic_types, message.time_ns)
+            self._pending.append(message)
 
     @property
     def next_time_ns(self) -> int | None:
-        """The receive time of the next message not logged yet (None: none left)."""
-        return self._next.time_ns if self._next is not None else None
+        """The receive time of the next message not logged yet (None: none pending)."""
+        return self._pending[0].time_ns if self._pending else None
 
     def until(self, time_ns: int | None = None) -> int:
-        """Log the messages received up to ``time_ns`` (inclusive; all when None); how many were logged."""
+        """Log the pending messages received up to ``time_ns`` (inclusive; all when None); how many."""
         logged = 0
-        while self._next is not None and (time_ns is None or self._next.time_ns <= time_ns):
-            self.log(self._next)
+        while self._pending and (time_ns is None or self._pending[0].time_ns <= time_ns):
+            self.log(self._pending.popleft())
             logged += 1
-            self._pull()
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
             if state.markers.live:
                 expire_markers(
@@ -120,7 +124,10 @@ class DisplayFeed:
             self._unflushed = 0
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
-            decoded = decode(message.msgtype, message.data, style.options)
+            decoded = self.decode(message).decoded
+            if isinstance(decoded, MsgError):
+                raise decoded
+            assert decoded is not None
         except MsgError as exc:
             state.problems += 1
             self.notices.report(
@@ -129,7 +136,9 @@ class DisplayFeed:
                 key=f"display problem {message.topic}",
             )
             return
-        decoded = self._placed(message.topic, decoded)
+        placed = self._placed(message.topic, decoded)
+        prepared = message.prepared if placed is decoded else None  # built for the frame ids it had
+        decoded = placed
         time_ns = message.time_ns
         if self.header_time:
             stamp = decoded.stamp_ns if isinstance(decoded, Decoded) else _first_stamp(decoded)
@@ -148,7 +157,23 @@ class DisplayFeed:
                 clock=self.clock,
                 markers=state.markers,
                 load_mesh=self.load_mesh,
+                prepared=prepared,  # type: ignore[arg-type]  # what self.decode built: displays.Prepared
             )
+
+    def decode(self, message: TopicMessage) -> TopicMessage:
+        """``message`` with what it draws (or why it cannot), in its topic's style; pure, so a bag's reader
+        thread can call it ahead of :meth:`log`."""
+        if message.decoded is not None:
+            return message
+        style = self.styles.get(message.topic) or DisplayStyle()
+        try:
+            decoded: Decoded | list[MarkerOp] | MsgError = decode(message.msgtype, message.data, style.options)
+        except MsgError as exc:
+            decoded = exc
+        prepared = None
+        if isinstance(decoded, Decoded) and decoded.frame_id and not _meshes(decoded):
+            prepared = prepare(decoded)  # the archetypes too, off the logging thread
+        return dataclasses.replace(message, decoded=decoded, prepared=prepared)
 
     def _where(self, topic: str) -> str:
         return f"{self.source_name}: {topic}" if self.source_name else topic
@@ -194,6 +219,11 @@ def camera_images(topics: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
         if images:
             out[info] = images
     return out
+
+
+def _meshes(decoded: Decoded) -> bool:
+    """Whether it draws mesh files (loaded through the package resolver when logged, not ahead)."""
+    return any(isinstance(item, MeshResource) for item in decoded.items)
 
 
 def _first_stamp(ops: list[MarkerOp]) -> int:

@@ -136,13 +136,30 @@ def archetypes(item: shapes.Shape, load: MeshLoader | None = None) -> list[rr.As
     return _grid(item)
 
 
-def _log_items(rec: rr.RecordingStream, entity_path: str, decoded: Decoded, load: MeshLoader | None) -> None:
+Prepared = list[tuple[str, list[rr.AsComponents]]]
+"""A decoded message's archetypes, built ahead: per item, its entity's suffix and what is logged there."""
+
+
+def prepare(decoded: Decoded, load: MeshLoader | None = None) -> Prepared:
+    """The archetypes of every item of ``decoded`` (pure: a bag's reader thread builds them beside the logging)."""
     many = len(decoded.items) > 1
+    out: Prepared = []
     for i, item in enumerate(decoded.items):
-        entity = f"{entity_path}/{i}" if many else entity_path
         in_3d = not isinstance(item, (shapes.Image, shapes.CompressedImage))
-        frame = [rr.CoordinateFrame(decoded.frame_id)] if in_3d and decoded.frame_id else []
-        rec.log(entity, *frame, *archetypes(item, load))
+        frame: list[rr.AsComponents] = [rr.CoordinateFrame(decoded.frame_id)] if in_3d and decoded.frame_id else []
+        out.append((f"/{i}" if many else "", [*frame, *archetypes(item, load)]))
+    return out
+
+
+def _log_items(
+    rec: rr.RecordingStream,
+    entity_path: str,
+    decoded: Decoded,
+    load: MeshLoader | None,
+    prepared: Prepared | None = None,
+) -> None:
+    for suffix, components in prepared if prepared is not None else prepare(decoded, load):
+        rec.log(entity_path + suffix, *components)
 
 
 def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, time_ns: int, clock: Clock) -> None:
@@ -183,12 +200,14 @@ def log_decoded(
     clock: Clock = "timestamp",
     markers: MarkerBook | None = None,
     load_mesh: MeshLoader | None = None,
+    prepared: Prepared | None = None,
 ) -> None:
-    """Log one decoded message on ``entity_path`` at ``time_ns``. Marker messages need the topic's ``markers``
-    book (for DELETEALL and lifetimes); markers that expired before ``time_ns`` are cleared first."""
+    """Log one decoded message on ``entity_path`` at ``time_ns`` (its archetypes ``prepared`` ahead, if they
+    were). Marker messages need the topic's ``markers`` book (for DELETEALL and lifetimes); markers that expired
+    before ``time_ns`` are cleared first."""
     if isinstance(decoded, Decoded):
         set_time(rec, timeline, time_ns, clock)
-        _log_items(rec, entity_path, decoded, load_mesh)
+        _log_items(rec, entity_path, decoded, load_mesh, prepared)
         return
     book = markers if markers is not None else MarkerBook()
     expire_markers(rec, book, timeline, time_ns, clock)

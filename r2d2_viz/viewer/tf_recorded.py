@@ -9,6 +9,8 @@ Edges that the robot's URDF also defines are left out (the kinematics of the joi
 
 from __future__ import annotations
 
+from collections import deque
+
 import numpy as np
 import rerun as rr
 
@@ -117,47 +119,39 @@ class RecordedTf:
 
 
 class TfFeed:
-    """Recorded moving transforms handed to a :class:`RecordedTf` in time order, as far as a replay has got."""
+    """Recorded moving transforms handed to a :class:`RecordedTf` in time order, as far as a replay has got: a
+    replay :meth:`push` es each stretch it reads, and :meth:`until` logs what is due."""
 
-    def __init__(self, recorded: RecordedTf, records: TfRecords | None) -> None:
+    def __init__(self, recorded: RecordedTf) -> None:
         self.recorded = recorded
-        if records is None or len(records) == 0:
-            self._records: TfRecords | None = None
-            return
-        order = np.argsort(records.times_ns, kind="stable")
-        self._records = TfRecords(
-            records.times_ns[order],
-            tuple(records.parents[i] for i in order),
-            tuple(records.children[i] for i in order),
-            records.translation[order],
-            records.quat_xyzw[order],
-        )
-        self._next = 0
+        self._pending: deque[TfRecords] = deque()
+        self.logged = 0
 
-    @property
-    def times_ns(self) -> np.ndarray:
-        return self._records.times_ns if self._records is not None else np.zeros(0, dtype=np.int64)
+    def push(self, records: TfRecords | None) -> None:
+        """Transforms just read (sorted by time here: header stamps need not be in order)."""
+        if records is None or len(records) == 0:
+            return
+        times = records.times_ns
+        if len(times) > 1 and not bool(np.all(times[1:] >= times[:-1])):
+            records = records.rows(np.argsort(times, kind="stable"))
+        self._pending.append(records)
 
     @property
     def next_time_ns(self) -> int | None:
-        """The time of the next record not logged yet (None: none left)."""
-        r = self._records
-        return int(r.times_ns[self._next]) if r is not None and self._next < len(r) else None
-
-    @property
-    def logged(self) -> int:
-        return self._next if self._records is not None else 0
+        """The time of the next record not logged yet (None: none pending)."""
+        return int(self._pending[0].times_ns[0]) if self._pending else None
 
     def until(self, time_ns: int | None = None) -> None:
-        """Log the records up to ``time_ns`` (inclusive; all of them when None) not logged yet."""
-        r = self._records
-        if r is None:
-            return
-        stop = len(r) if time_ns is None else int(np.searchsorted(r.times_ns, time_ns, side="right"))
-        if stop <= self._next:
-            return
-        part = slice(self._next, stop)
-        self.recorded.log(
-            TfRecords(r.times_ns[part], r.parents[part], r.children[part], r.translation[part], r.quat_xyzw[part])
-        )
-        self._next = stop
+        """Log the pending records up to ``time_ns`` (inclusive; all of them when None)."""
+        while self._pending:
+            r = self._pending[0]
+            stop = len(r) if time_ns is None else int(np.searchsorted(r.times_ns, time_ns, side="right"))
+            if stop == 0:
+                return
+            part = r if stop == len(r) else r.rows(np.arange(stop))
+            self.recorded.log(TfRecords(part.times_ns, part.parents, part.children, part.translation, part.quat_xyzw))
+            self.logged += stop
+            if stop < len(r):
+                self._pending[0] = r.rows(np.arange(stop, len(r)))
+                return
+            self._pending.popleft()

@@ -1,38 +1,29 @@
 """Open a ROS 2 bag without ROS: a rosbag2 directory (``metadata.yaml`` with ``.db3`` or ``.mcap`` storage, metadata
 versions 1..9, i.e. up to what Rolling writes), a directory of ``.db3`` or ``.mcap`` files whose metadata.yaml
 is missing (what ``ros2 bag reindex`` repairs), a single ``.mcap`` or a single ``.db3``; hand out the raw CDR messages
-of a topic, in time order, with their receive times.
+of several topics in one pass, in time order, with their receive times (:mod:`.storage`).
 
 Nothing is ever written beside the bag: ``.db3`` files are opened read-only and immutable (:mod:`.db3`), so a bag in
 a read-only folder opens, and SQLite leaves no ``-journal``, ``-wal`` or ``-shm`` file behind.
 
 Every problem is one :class:`~r2d2_viz.errors.BagError` line naming the file; a bag that breaks off part-way
-(truncated, corrupt pages) gives what could be read and one warning, "recovered N of M messages".
-
-Message types are decoded with the ROS 2 Humble type store (``rosbags.typesys.Stores.ROS2_HUMBLE``): the types
-read here (JointState, TFMessage, String) are the same on every ROS 2 distribution, and Humble ``.db3`` files
-carry no message definitions. Pure: no rerun import.
+(truncated, corrupt pages, damaged chunks) gives what could be read and one warning. Pure: no rerun import.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import sys
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
-from itertools import islice
+from collections.abc import Callable, Collection, Iterator
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING, Any
-
-if TYPE_CHECKING:  # rosbags and ruamel.yaml are imported when a bag is opened: not on a run without one
-    from rosbags.rosbag2 import Reader
-
-    from r2d2_viz.sources.bags.db3 import Db3
+from typing import Any
 
 from r2d2_viz.errors import BagError
-from r2d2_viz.msgs.typestore import typestore
+from r2d2_viz.msgs.typestore import deserialize
 from r2d2_viz.sources.bags.mcap_scan import McapScan
+from r2d2_viz.sources.bags.storage import Block, Storage, TopicInfo
 
 Warn = Callable[[str], None]
 
@@ -41,12 +32,16 @@ def to_stderr(message: str) -> None:
     print(f"warning: {message}", file=sys.stderr, flush=True)
 
 
-@dataclass(frozen=True)
-class TopicInfo:
-    name: str
-    msgtype: str
-    count: int
-    """Messages the bag's index announces (the metadata, the MCAP summary or the database)."""
+STORAGES = (".db3", ".mcap")
+"""Storage files a bag is made of."""
+
+
+def _open_storage(path: Path) -> Storage:
+    if path.suffix == ".db3":
+        from r2d2_viz.sources.bags.db3 import Db3
+
+        return Db3(path)
+    return McapScan(path)
 
 
 def _problem(exc: BaseException) -> str:
@@ -54,69 +49,18 @@ def _problem(exc: BaseException) -> str:
     return text[:300]
 
 
-class _File:
-    """One storage file. A ``.db3`` is read by :class:`Db3` (read-only, immutable: nothing written beside it). An
-    MCAP file is opened by ``rosbags``, which says what it holds, and its messages are then read by
-    :class:`McapScan` (several times faster than rosbags' reader), which also reads one that breaks off."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.note = ""
-        """Why the file was read without its index (it breaks off), if it was."""
-        self.reader: Reader | None = None
-        self.db3: Db3 | None = None
-        if path.suffix == ".db3":
-            from r2d2_viz.sources.bags.db3 import Db3
-
-            self.db3 = Db3(path)
-            self.topics = self.db3.topics
-            self.scan = None
-            return
-        self.scan = McapScan(path)
-        from rosbags.rosbag2 import Reader
-
-        try:
-            reader = Reader(path)
-            reader.open()
-            self.reader = reader
-            self.topics = {c.topic: (c.msgtype, c.msgcount) for c in reader.connections}
-        except Exception as exc:
-            if not _TRUNCATED.search(str(exc)):
-                raise
-            self.topics = self.scan.topics()
-            count = sum(n for _, n in self.topics.values())
-            if not count:
-                raise
-            self.note = f"{path}: the file breaks off ({_problem(exc)}): recovered {count} messages"
-
-    def messages(self, topic: str) -> Iterator[tuple[int, bytes | memoryview]]:
-        if self.db3 is not None:
-            return self.db3.messages(topic)
-        assert self.scan is not None  # an MCAP file: rosbags only said what it holds
-        return self.scan.messages(topic)
-
-    def close(self) -> None:
-        if self.db3 is not None:
-            self.db3.close()
-        if self.reader is not None:
-            self.reader.close()
-
-
-_TRUNCATED = re.compile(r"end magic|footer|summary", re.IGNORECASE)
-
-
 class Bag:
-    """An open bag (use :func:`open_bag`, as a context manager)."""
+    """An open bag (use :func:`open_bag`, as a context manager): its storage files read as one."""
 
     def __init__(self, path: Path, *, warn: Warn = to_stderr) -> None:
         self.path, self.warn = path, warn
-        self._files: list[_File] = []
+        self._files: list[Storage] = []
         try:
             self._open()
         except BagError:
             self.close()
             raise
-        except Exception as exc:  # rosbags, sqlite3, lz4, zstd, struct ...: hostile input, one line
+        except Exception as exc:  # sqlite3, lz4, zstd, struct, mmap ...: hostile input, one line
             self.close()
             raise BagError(f"{path}: cannot read this bag: {_problem(exc)}") from None
 
@@ -127,26 +71,31 @@ class Bag:
             raise BagError(f"{path}: no such file or directory")
         if path.is_dir():
             files, expected = _directory(path)
-        elif path.suffix in (".mcap", ".db3"):
+        elif path.suffix in STORAGES:
             files = [path]
         else:
             raise BagError(f"{path}: not a ROS 2 bag (expected a rosbag2 directory, a .mcap or a .db3 file)")
         for file in files:
-            self._files.append(_File(file))
-            if self._files[-1].note and not expected:
-                self.warn(self._files[-1].note)
-            if (db3 := self._files[-1].db3) is not None and db3.note:
-                self.warn(db3.note)
+            try:
+                storage = _open_storage(file)
+            except BagError:
+                raise
+            except Exception as exc:
+                raise BagError(f"{file}: cannot read this bag: {_problem(exc)}") from None
+            self._files.append(storage)
+            if storage.note:
+                self.warn(f"{file}: {storage.note}")
         topics: dict[str, TopicInfo] = {}
         for f in self._files:
-            for topic, (msgtype, count) in f.topics.items():
+            for topic, info in f.topics.items():
                 old = topics.get(topic)
-                if old is not None and old.msgtype != msgtype:
-                    raise BagError(f"{path}: topic {topic} has two types, {old.msgtype} and {msgtype}")
-                topics[topic] = TopicInfo(topic, msgtype, (old.count if old else 0) + count)
+                if old is not None and old.msgtype != info.msgtype:
+                    raise BagError(f"{path}: topic {topic} has two types, {old.msgtype} and {info.msgtype}")
+                count = (old.count if old else 0) + info.count
+                topics[topic] = dataclasses.replace(old or info, count=count)
         for topic, count in expected.items():  # the metadata's counts, where it has them
             if topic in topics:
-                topics[topic] = TopicInfo(topic, topics[topic].msgtype, max(count, topics[topic].count))
+                topics[topic] = dataclasses.replace(topics[topic], count=max(count, topics[topic].count))
         self.topics = topics
         if sum(t.count for t in topics.values()) == 0:
             raise BagError(f"{path}: empty bag (no messages)")
@@ -155,6 +104,12 @@ class Bag:
     def files(self) -> tuple[Path, ...]:
         """The storage files (``.mcap`` ones can go to :func:`r2d2_viz.viewer.bag_topics.log_other_topics`)."""
         return tuple(f.path for f in self._files)
+
+    @property
+    def span(self) -> tuple[int, int] | None:
+        """``(first, last)`` receive time (ns) of the bag's messages, from the storages' indexes."""
+        spans = [s for f in self._files if (s := f.span) is not None]
+        return (min(s[0] for s in spans), max(s[1] for s in spans)) if spans else None
 
     def topic_type(self, topic: str) -> str | None:
         info = self.topics.get(topic)
@@ -167,37 +122,60 @@ class Bag:
             raise BagError(f"{self.path}: {topic} is {found}, expected {msgtype}")
         return found is not None
 
-    def raw(self, topic: str) -> Iterator[tuple[int, bytes | memoryview]]:
-        """``(receive time ns, CDR bytes)`` of every message on ``topic``, in time order (see :meth:`batches`)."""
-        for batch in self.batches(topic, 4096):
-            yield from batch
-
-    def batches(self, topic: str, size: int) -> Iterator[list[tuple[int, bytes | memoryview]]]:
-        """:meth:`raw` in lists of at most ``size`` messages (cheaper per message).
-
-        If the bag breaks off, stops there with one warning (or a BagError when nothing could be read)."""
-        expected = self.topics[topic].count if topic in self.topics else 0
-        got = 0
-        try:
-            for f in self._files:
-                messages = f.messages(topic)
-                while batch := list(islice(messages, size)):
-                    got += len(batch)
-                    yield batch
-        except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
-            if got == 0:
-                raise BagError(f"{self.path}: cannot read {topic}: {_problem(exc)}") from None
-            self.warn(f"{self.path}: {topic}: recovered {got} of {expected} messages ({_problem(exc)})")
+    def blocks(
+        self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
+    ) -> Iterator[Block]:
+        """The messages on ``topics`` received in ``[start_ns, stop_ns)``, in time order, in one pass over each
+        storage file (:meth:`Storage.blocks`). Damage is one warning: a file that breaks off gives what was read
+        before it; damaged chunks are skipped and counted."""
+        wanted = [t for t in topics if t in self.topics]
+        if not wanted:
             return
-        if got < expected:
-            self.warn(f"{self.path}: {topic}: recovered {got} of {expected} messages")
+        got = 0
+        for f in self._files:
+            try:
+                for block in f.blocks(wanted, start_ns=start_ns, stop_ns=stop_ns):
+                    got += len(block)
+                    yield block
+            except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
+                if got == 0 and len(self._files) == 1:
+                    raise BagError(f"{f.path}: cannot read {', '.join(wanted)}: {_problem(exc)}") from None
+                self.warn(f"{f.path}: the rest of the file cannot be read ({_problem(exc)}); recovered {got} messages")
+            self._say_problems(f)
+        if start_ns is None and stop_ns is None and not any(f.note for f in self._files):
+            expected = sum(self.topics[t].count for t in wanted)
+            if got < expected:
+                self.warn(f"{self.path}: {', '.join(sorted(wanted))}: recovered {got} of {expected} messages")
+
+    def _say_problems(self, f: Storage) -> None:
+        problems: dict[str, int] = getattr(f, "problems", {})
+        for kind, n in sorted(problems.items()):
+            self.warn(f"{f.path}: {kind}: {n} chunk{'s' if n > 1 else ''} skipped")
+        problems.clear()
+
+    def raw(self, topic: str) -> Iterator[tuple[int, memoryview]]:
+        """``(receive time ns, CDR bytes)`` of every message on ``topic``, in time order."""
+        for block in self.blocks([topic]):
+            yield from block.pairs()
+
+    def last(self, topic: str, *, before_ns: int | None = None) -> tuple[int, bytes] | None:
+        """The last message on ``topic`` received before ``before_ns`` (the bag's last when None), through the
+        storages' indexes."""
+        if topic not in self.topics:
+            return None
+        for f in reversed(self._files):
+            try:
+                found = f.last(topic, before_ns=before_ns)
+            except Exception as exc:
+                self.warn(f"{f.path}: {topic}: cannot read its last message ({_problem(exc)})")
+                continue
+            if found is not None:
+                return found
+        return None
 
     def deserialize(self, data: bytes | memoryview, msgtype: str) -> Any:
-        """One message as rosbags' dataclass; a BagError when it cannot be decoded."""
-        try:
-            return typestore().deserialize_cdr(bytes(data), msgtype)
-        except Exception as exc:
-            raise BagError(f"{self.path}: a {msgtype} message cannot be decoded: {_problem(exc)}") from None
+        """One message as rosbags' dataclass; a MsgError when it cannot be decoded."""
+        return deserialize(data, msgtype)
 
     def close(self) -> None:
         files, self._files = self._files, []

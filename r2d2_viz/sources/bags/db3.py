@@ -9,16 +9,23 @@ rosbags' own reader opens the same way but puts the path into the URI unquoted, 
 Immutable means SQLite also ignores a ``-wal`` file left beside the database by a recorder that did not finish:
 what that log holds is not read, and :attr:`Db3.note` says so (folding it in would mean writing the user's file).
 
-Tables read (every rosbag2 schema, Foxy to Rolling): ``topics(id, name, type, …)`` and
-``messages(topic_id, timestamp, data)``. Pure: no rerun import.
+Tables read (every rosbag2 schema, Foxy to Rolling): ``topics(id, name, type, …)``,
+``messages(topic_id, timestamp, data)`` (read in timestamp order, rosbag2's ``timestamp_idx``) and, where the bag
+has it (Iron on), ``message_definitions``. Pure: no rerun import.
 """
 
 from __future__ import annotations
 
 import sqlite3
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 from pathlib import Path
 from urllib.parse import quote
+
+from r2d2_viz.sources.bags.storage import Block, TopicInfo, block_of, topic_tuple
+
+BLOCK_ROWS = 4096
+BLOCK_BYTES = 16 << 20
+"""A block holds at most this many messages, or about this many bytes (a few images)."""
 
 
 def readonly_uri(path: Path) -> str:
@@ -27,10 +34,12 @@ def readonly_uri(path: Path) -> str:
 
 
 class Db3:
-    """The topics and messages of one ``.db3`` file; errors are sqlite3's (the caller makes them one line)."""
+    """One ``.db3`` storage file (:class:`~r2d2_viz.sources.bags.storage.Storage`); errors are sqlite3's (the
+    caller makes them one line)."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
+        self.problems: dict[str, int] = {}
         self.note = ""
         """A warning to give once, if the file has an unfinished write-ahead log beside it."""
         wal = path.with_name(path.name + "-wal")
@@ -51,27 +60,74 @@ class Db3:
         except BaseException:
             self._db.close()
             raise
+        definitions = self._definitions(tables)
         self._ids: dict[str, list[int]] = {}
-        self.topics: dict[str, tuple[str, int]] = {}
-        """``topic: (message type, message count)``."""
+        self._topic_of: dict[int, str] = {}
+        self.topics: dict[str, TopicInfo] = {}
         for topic_id, name, msgtype, count in rows:
             name, msgtype = str(name), str(msgtype)
             self._ids.setdefault(name, []).append(int(topic_id))
+            self._topic_of[int(topic_id)] = name
             old = self.topics.get(name)
-            if old is not None and old[0] != msgtype:
-                raise sqlite3.DatabaseError(f"topic {name} has two types, {old[0]} and {msgtype}")
-            self.topics[name] = (msgtype, (old[1] if old else 0) + int(count))
+            if old is not None and old.msgtype != msgtype:
+                raise sqlite3.DatabaseError(f"topic {name} has two types, {old.msgtype} and {msgtype}")
+            definition, encoding = definitions.get(msgtype, ("", ""))
+            self.topics[name] = TopicInfo(name, msgtype, (old.count if old else 0) + int(count), definition, encoding)
+        first, last = self._db.execute("SELECT min(timestamp), max(timestamp) FROM messages").fetchone()
+        self._span = (int(first), int(last)) if first is not None else None
 
-    def messages(self, topic: str) -> Iterator[tuple[int, bytes]]:
-        """``(receive time ns, CDR bytes)`` of the topic's messages, in time order."""
-        ids = self._ids.get(topic, [])
-        if not ids:
-            return iter(())
+    def _definitions(self, tables: set[str]) -> dict[str, tuple[str, str]]:
+        """type → (definition, encoding) from the ``message_definitions`` table, where the bag has one."""
+        if "message_definitions" not in tables:
+            return {}
+        rows = self._db.execute(
+            "SELECT topic_type, encoding, encoded_message_definition FROM message_definitions"
+        ).fetchall()
+        return {str(t): (str(d or ""), str(e or "")) for t, e, d in rows if d}
+
+    @property
+    def span(self) -> tuple[int, int] | None:
+        return self._span
+
+    def _where(self, topics: Collection[str], start_ns: int | None, stop_ns: int | None) -> tuple[str, list[int]]:
+        ids = [i for t in topics for i in self._ids.get(t, [])]
+        where, args = f"topic_id IN ({', '.join('?' * len(ids))})", list(ids)
+        if start_ns is not None:
+            where, args = f"{where} AND timestamp >= ?", [*args, start_ns]
+        if stop_ns is not None:
+            where, args = f"{where} AND timestamp < ?", [*args, stop_ns]
+        return where, args
+
+    def blocks(
+        self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
+    ) -> Iterator[Block]:
+        order = topic_tuple(topics)
+        where, args = self._where(order, start_ns, stop_ns)
+        if not any(self._ids.get(t) for t in order):
+            return
         cursor = self._db.execute(
-            f"SELECT timestamp, data FROM messages WHERE topic_id IN ({', '.join('?' * len(ids))}) ORDER BY timestamp",
-            ids,
+            f"SELECT timestamp, topic_id, data FROM messages WHERE {where} ORDER BY timestamp, id", args
         )
-        return ((int(t), bytes(data)) for t, data in cursor)
+        pending: list[tuple[int, str, bytes | memoryview]] = []
+        size = 0
+        while rows := cursor.fetchmany(64):
+            for t, topic_id, data in rows:
+                pending.append((int(t), self._topic_of[int(topic_id)], data))
+                size += len(data)
+            if len(pending) >= BLOCK_ROWS or size >= BLOCK_BYTES:
+                yield block_of(pending, order)
+                pending, size = [], 0
+        if pending:
+            yield block_of(pending, order)
+
+    def last(self, topic: str, *, before_ns: int | None = None) -> tuple[int, bytes] | None:
+        if not self._ids.get(topic):
+            return None
+        where, args = self._where([topic], None, before_ns)
+        row = self._db.execute(
+            f"SELECT timestamp, data FROM messages WHERE {where} ORDER BY timestamp DESC, id DESC LIMIT 1", args
+        ).fetchone()
+        return (int(row[0]), bytes(row[1])) if row is not None else None
 
     def close(self) -> None:
         self._db.close()

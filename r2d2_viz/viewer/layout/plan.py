@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from itertools import islice
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +20,7 @@ from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, TopicDisplay, ViewSpec, missing_fixed_frame, orbit_eye
 from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
-from r2d2_viz.sources.replay import Replay
+from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
 from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle
 from r2d2_viz.viewer.layout.blueprint import Layout
@@ -47,7 +46,7 @@ class ViewPlan:
     """Display topic → how the config's display draws it (absent: RViz's defaults)."""
 
 
-def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> ViewPlan:
+def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> ViewPlan:
     spec = load_rviz(rviz) if rviz is not None else tutorial_spec()
     if rviz is None:  # without a config, every image topic gets its 2D view, as an Image display would
         images = [TopicDisplay("Image", t, t, True) for t, m in sorted(plan.displays.items()) if m in IMAGES]
@@ -59,7 +58,7 @@ def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> Vi
     n_continuous = len(tree.moving) - n_limited if tree is not None else 0
     scale = spec.tf.marker_scale if spec.tf is not None else 1.0
     axis_length, camera, arrows = AXIS_LENGTH * scale, None, True
-    recorded = plan.moving_tf is not None or plan.display_messages is not None
+    recorded = plan.moving_tf is not None or plan.replay is not None
     fit = None
     if rviz is None and recorded:
         fit = _recorded_fit(plan)
@@ -125,7 +124,7 @@ def _orbit_angles(spec: ViewSpec) -> tuple[float, float]:
     return float(np.arctan2(dy, dx)), float(np.arcsin(dz / distance))
 
 
-def _recorded_fit(plan: Replay) -> ViewFit | None:
+def _recorded_fit(plan: RunPlan) -> ViewFit | None:
     """A bag's view: the robot (its size) along the trajectory its recorded TF gives its root, the TF frames of
     a replay without a robot, and what the first display messages draw, all in the fixed frame."""
     records = [r for r in (plan.static_tf, plan.moving_tf) if r is not None]
@@ -143,11 +142,10 @@ def _recorded_fit(plan: Replay) -> ViewFit | None:
         children = sorted({c for r in records for c in r.children})
         points += list(frame_positions(records, plan.fixed_frame, children, times).values())
     backgrounds: list[np.ndarray] = []
-    if plan.display_messages is not None:
-        for message in islice(plan.display_messages(), PREVIEW_MESSAGES):
-            drawn, background = _drawn(message.msgtype, message.data, message.time_ns, records, plan.fixed_frame)
-            points.append(drawn)
-            backgrounds.append(background)
+    for message in plan.preview_messages[:PREVIEW_MESSAGES]:
+        drawn, background = _drawn(message.msgtype, message.data, message.time_ns, records, plan.fixed_frame)
+        points.append(drawn)
+        backgrounds.append(background)
     if not any(len(p) for p in points):  # only maps (RViz does not frame a map; here it is all there is)
         points = backgrounds
     if not any(len(p) for p in points):
@@ -182,7 +180,7 @@ def _drawn(
     return out[0], out[1]
 
 
-def _preview(plan: Replay) -> np.ndarray:
+def _preview(plan: RunPlan) -> np.ndarray:
     """Joint positions over a stretch of the motion, full rows for the kinematics."""
     tree, source = plan.tree, plan.source
     assert tree is not None
@@ -191,8 +189,9 @@ def _preview(plan: Replay) -> np.ndarray:
         k = np.unique(np.linspace(0, PREVIEW_SAMPLES, 256).astype(np.int64))
         positions, _ = source.at(k)
         return state.update(SampleChunk(k, source.joints, positions))
-    if source is not None:
+    chunk = plan.preview_joints
+    if chunk is None and source is not None:
         chunk = next(iter(source.chunks(2000)), None)
-        if chunk is not None and len(chunk):
-            return state.update(chunk)
+    if chunk is not None and len(chunk):
+        return state.update(chunk)
     return np.zeros((1, len(tree.actuated)))

@@ -1,0 +1,72 @@
+"""A bag replay's progress on a terminal, as people know it from pip and rsync: one bar on stderr (rich), with the
+percent of the bag replayed (by its time), MB/s and the time left — or, for a live replay, its position in the bag
+(``12.3 / 150.0 s``). Off a terminal, nothing (the run's summary line says what was done).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Protocol
+
+from r2d2_viz.sources.plan import RunPlan
+from r2d2_viz.sources.playback import Window
+
+S = 1e9
+
+
+class _Config(Protocol):
+    @property
+    def progress(self) -> bool: ...
+    @property
+    def live(self) -> bool: ...
+
+
+def wanted() -> bool:
+    """Whether a bar belongs on stderr (a terminal)."""
+    return sys.stderr.isatty()
+
+
+@contextmanager
+def progress_bar(plan: RunPlan, config: _Config) -> Iterator[Callable[[Window], None] | None]:
+    """A callback taking each window as it is done (None: no bar wanted, or not a bag)."""
+    if not config.progress or plan.replay is None:
+        yield None
+        return
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        Progress,
+        TaskProgressColumn,
+        TextColumn,
+        TimeRemainingColumn,
+    )
+
+    start, end = plan.replay.span
+    length = max(end - start, 1) / S
+    name = plan.replay.bag.path.name
+    console = Console(file=sys.stderr)
+    if config.live:
+        columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.fields[position]}"))
+    else:
+        columns = (  # type: ignore[assignment]
+            TextColumn("{task.description}"),
+            BarColumn(),
+            TaskProgressColumn(),
+            TextColumn("{task.fields[mb]:.0f} MB, {task.fields[rate]:.0f} MB/s"),
+            TimeRemainingColumn(),
+        )
+    with Progress(*columns, console=console, transient=False) as bar:
+        task = bar.add_task(name, total=length, position=f"0.0 / {length:.1f} s", mb=0.0, rate=0.0)
+        done_bytes, began = 0, time.monotonic()
+
+        def advance(window: Window) -> None:
+            nonlocal done_bytes
+            done_bytes += window.nbytes
+            at = min(max(window.end_ns - start, 0) / S, length)
+            rate = done_bytes / 1e6 / max(time.monotonic() - began, 1e-3)
+            bar.update(task, completed=at, position=f"{at:.1f} / {length:.1f} s", mb=done_bytes / 1e6, rate=rate)
+
+        yield advance

@@ -1,0 +1,286 @@
+"""The plan of a run, built once before anything is shown: the robot and its kinematics, what drives it (a generated
+motion, or a bag's one pass: :mod:`r2d2_viz.sources.playback`), the static transforms, the fixed frame, and what the
+view is fitted to. A bag's plan reads only what must be known before the first frame, through the storages' indexes
+and a bounded look-ahead: the latest ``/robot_description``, ``/tf_static``, the first seconds of ``/tf``, joint
+states and display messages, and ``/tf`` sampled at a few times over the bag — never a whole extra pass.
+
+``--start-offset``: the pass starts there, with the state a seek needs (as Foxglove's): the transforms and joint
+states of the last seconds before it, the latest map before it, every static transform. Pure: no rerun import.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from r2d2_viz.errors import BagError
+from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
+from r2d2_viz.robot.model import Robot, parse_urdf
+from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.sources.bag_displays import TopicMessage, display_topics, frames_of
+from r2d2_viz.sources.bag_joints import TimeSource, read_robot_description
+from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
+from r2d2_viz.sources.bags.bag import Bag
+from r2d2_viz.sources.base import JointState, SampleChunk, Source, TfRecords, tf_root
+from r2d2_viz.sources.motion import ODOM
+from r2d2_viz.sources.playback import JOINTS, TF, BagPass, Segment, Window, bag_topics_read, source_windows
+from r2d2_viz.sources.tf_check import disagreement, urdf_edges
+
+S = 1_000_000_000
+LOOKAHEAD_NS = 2 * S
+"""What the plan reads of the bag's start (joint states, /tf, display messages)…"""
+TF_SAMPLES, TF_SAMPLE_NS = 16, S // 5
+"""…and /tf at this many times spread over the bag, this long each (the view follows the robot's trajectory)."""
+PREVIEW_MESSAGES = 16
+"""Display messages the view is fitted to (the first ones)."""
+PREROLL_NS = 5 * S
+"""A seek replays the transforms and joint states of this long before the offset (their latest values apply)."""
+SEEK_LATEST = ("nav_msgs/msg/OccupancyGrid",)
+"""Display types whose latest message before a seek is shown from the start (a map is sent once, latched)."""
+
+
+@dataclass(frozen=True)
+class BagReplay:
+    """How a bag is replayed: the storage, the stretches and topics its one pass reads."""
+
+    bag: Bag
+    segments: tuple[Segment, ...]
+    time: TimeSource
+    span: tuple[int, int]
+    """The replayed stretch, ``(first, last)`` receive time in ns (progress)."""
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    """Everything a run shows, decided before the first frame (see the module docstring)."""
+
+    tree: KinematicTree | None
+    fixed_frame: str
+    source: Source | None = None
+    """What moves the robot in a run without a bag (a generated motion)."""
+    replay: BagReplay | None = None
+    static_tf: TfRecords | None = None
+    moving_tf: TfRecords | None = None
+    """A bag's /tf as far as the plan read it (look-ahead and samples), not all of it."""
+    skip_edges: frozenset[tuple[str, str]] = frozenset()
+    """Recorded edges the URDF defines: drawn by the kinematics instead."""
+    notes: tuple[str, ...] = ()
+    description: str | None = None
+    """The URDF text from the bag's /robot_description, when that is where the robot came from."""
+    displays: dict[str, str] = field(default_factory=dict)
+    """Display topics (topic → type) the run shows."""
+    undisplayed: dict[str, str] = field(default_factory=dict)
+    """The bag's other topics (no display draws their types)."""
+    mcap_files: tuple[Path, ...] = ()
+    preview_joints: SampleChunk | None = None
+    """The first joint states (the view is fitted to the robot in them)."""
+    preview_messages: tuple[TopicMessage, ...] = ()
+    """The first display messages (the view frames what they draw)."""
+    seek_messages: tuple[TopicMessage, ...] = ()
+    """Shown first: the latest maps before a seek."""
+
+    @property
+    def root_placed(self) -> bool:
+        """Whether the recorded /tf gives the robot's root a parent (then it is not pinned to the fixed frame)."""
+        if self.tree is None:
+            return True
+        root = self.tree.robot.root
+        if root == self.fixed_frame:
+            return True
+        return any(root in r.children for r in (self.static_tf, self.moving_tf) if r is not None)
+
+    @property
+    def moves_robot(self) -> bool:
+        """Whether something drives the robot's joints (a motion, or a bag's joint states)."""
+        if self.replay is not None:
+            return self.tree is not None and any(JOINTS in s.topics for s in self.replay.segments)
+        return self.source is not None
+
+    def windows(
+        self, max_samples: int, *, predecode: Callable[[TopicMessage], TopicMessage] | None = None
+    ) -> Iterator[Window]:
+        """The run, stretch by stretch (a bag's one pass, or a motion's chunks); ``predecode`` decodes each
+        display message as it is read."""
+        if self.replay is not None:
+            r = self.replay
+            actuated = self.tree.actuated if self.tree is not None else None
+            bag_pass = BagPass(
+                r.bag, r.segments, actuated=actuated, displays=self.displays, time=r.time, predecode=predecode
+            )
+            yield from bag_pass.windows(max_samples)
+        elif self.source is not None:
+            yield from source_windows(self.source, max_samples)
+
+
+@dataclass(frozen=True)
+class BagChoice:
+    """What of a bag to replay (``ros2 bag play``'s ``--start-offset`` and ``--topics``, and ``--duration``)."""
+
+    start_offset_s: float = 0.0
+    duration_s: float | None = None
+    topics: tuple[str, ...] | None = None
+
+
+def plan_bag(
+    bag: Bag,
+    *,
+    load_robot: Callable[[], Robot] | None = None,
+    time: TimeSource = "receive",
+    fixed_frame: str | None = None,
+    packages: PackageIndex | None = None,
+    choice: BagChoice = BagChoice(),
+) -> RunPlan:
+    """Read what a replay must know before its first frame (see the module docstring)."""
+    span = bag.span
+    if span is None:
+        raise BagError(f"{bag.path}: empty bag (no messages)")
+    start, stop = _stretch(bag, span, choice)
+    selected = _selected(bag, choice.topics)
+    robot = load_robot() if load_robot is not None else None
+    notes: list[str] = []
+    text = None
+    if robot is None:
+        text = read_robot_description(bag)
+        if text is not None:
+            name = f"{bag.path.name}:/robot_description"
+            robot = parse_urdf(text, source=name, base_dir=bag.path.parent, packages=packages)
+    tree = compile_tree(robot) if robot is not None else None
+    shown, undisplayed = display_topics(bag)
+    shown = {t: m for t, m in shown.items() if t in selected}
+    undisplayed = {t: m for t, m in undisplayed.items() if t in selected}
+    static = _static_tf(bag) if "/tf_static" in selected else None
+    moving = _tf_preview(bag, time, start, stop) if TF in selected else None
+    records = [r for r in (static, moving) if r is not None]
+    actuated = tree.actuated if tree is not None and JOINTS in selected else None
+    lookahead = [Segment(bag_topics_read(bag, actuated, shown), start, min(stop, start + LOOKAHEAD_NS))]
+    preview = BagPass(bag, lookahead, actuated=actuated, displays=shown, time=time, quiet=True)
+    joints, messages = _preview(preview)
+    if robot is None:
+        what = "its transforms and display topics" if shown else "a TF-only replay (frames, axes, arrows)"
+        notes.append(f"{bag.path}: no --urdf and no /robot_description: no robot, {what}")
+    frame = fixed_frame or tf_root(records) or _one_display_frame(records, robot, messages) or ODOM
+    skip: frozenset[tuple[str, str]] = frozenset()
+    if tree is not None:
+        skip = frozenset(e for r in records for e in r.edges() if e in urdf_edges(tree))
+        message = _check(tree, joints, records) if skip else None
+        if message:
+            notes.append(f"{bag.path}: {message}")
+    segments = [Segment(bag_topics_read(bag, actuated, shown), start, stop)]
+    if start > span[0]:  # a seek: the state before it
+        before = tuple(t for t in (JOINTS, TF) if t in segments[0].topics)
+        segments.insert(0, Segment(before, max(span[0], start - PREROLL_NS), start))
+    seek = tuple(
+        TopicMessage(found[0], topic, msgtype, found[1])
+        for topic, msgtype in shown.items()
+        if start > span[0] and msgtype in SEEK_LATEST and (found := bag.last(topic, before_ns=start)) is not None
+    )
+    return RunPlan(
+        tree,
+        frame,
+        replay=BagReplay(bag, tuple(segments), time, (start, min(stop, span[1]))),
+        static_tf=static,
+        moving_tf=moving,
+        skip_edges=skip,
+        notes=tuple(notes),
+        description=text,
+        displays=shown,
+        undisplayed=undisplayed,
+        mcap_files=tuple(f for f in bag.files if f.suffix == ".mcap"),
+        preview_joints=joints,
+        preview_messages=messages,
+        seek_messages=seek,
+    )
+
+
+def _stretch(bag: Bag, span: tuple[int, int], choice: BagChoice) -> tuple[int, int]:
+    """``[start, stop)`` of the replay in receive time."""
+    length = (span[1] - span[0]) / S
+    if not 0 <= choice.start_offset_s <= length:
+        raise BagError(
+            f"{bag.path}: start offset {choice.start_offset_s:g} s is past the bag's end (it lasts {length:.1f} s)"
+        )
+    start = span[0] + round(choice.start_offset_s * S)
+    stop = span[1] + 1 if choice.duration_s is None else start + round(choice.duration_s * S)
+    return start, stop
+
+
+def _selected(bag: Bag, topics: Sequence[str] | None) -> set[str]:
+    """The topics replayed (all without ``--topics``); a topic the bag lacks is a BagError listing the bag's."""
+    if topics is None:
+        return set(bag.topics)
+    if missing := [t for t in topics if t not in bag.topics]:
+        listed = ", ".join(sorted(bag.topics))
+        raise BagError(f"{bag.path}: no topic {', '.join(missing)} in this bag; its topics: {listed}")
+    return {*topics, "/robot_description"}
+
+
+def _static_tf(bag: Bag) -> TfRecords | None:
+    if not bag.require_type("/tf_static", TF_MESSAGE):
+        return None
+    decoder = TfDecoder(bag.deserialize, static=True, time="receive")
+    parts = [decoder.decode(block.pairs()) for block in bag.blocks(["/tf_static"])]
+    if decoder.bad:
+        bag.warn(f"{bag.path}: /tf_static: skipped {decoder.bad} messages that cannot be decoded")
+    return concatenate([p for p in parts if len(p)])
+
+
+def _tf_preview(bag: Bag, time: TimeSource, start: int, stop: int) -> TfRecords | None:
+    """/tf at the start of the stretch and at a few times spread over it."""
+    if not bag.require_type(TF, TF_MESSAGE):
+        return None
+    decoder = TfDecoder(bag.deserialize, static=False, time=time)
+    parts = [
+        decoder.decode(b.pairs()) for b in bag.blocks([TF], start_ns=start, stop_ns=min(stop, start + LOOKAHEAD_NS))
+    ]
+    end = min(stop, (bag.span or (start, start))[1])
+    for t in np.linspace(start + LOOKAHEAD_NS, end, TF_SAMPLES).astype(np.int64) if end > start + LOOKAHEAD_NS else ():
+        for block in bag.blocks([TF], start_ns=int(t), stop_ns=int(t) + TF_SAMPLE_NS):
+            parts.append(decoder.decode(block.pairs()))
+            break
+    return concatenate([p for p in parts if len(p)])
+
+
+def _preview(preview: BagPass) -> tuple[SampleChunk | None, tuple[TopicMessage, ...]]:
+    """The look-ahead's joint states and its first display messages."""
+    chunks: list[SampleChunk] = []
+    messages: list[TopicMessage] = []
+    for window in preview.windows(10_000):
+        if window.joints is not None:
+            chunks.append(window.joints)
+        messages += window.displays[: PREVIEW_MESSAGES - len(messages)]
+    if not chunks or preview.joints is None:
+        return None, tuple(messages)
+    state = JointState(preview.joints.joints)
+    rows = np.vstack([state.update(c) for c in chunks])
+    return SampleChunk(np.concatenate([c.times_ns for c in chunks]), state.joints, rows), tuple(messages)
+
+
+def _one_display_frame(records: list[TfRecords], robot: Robot | None, messages: Sequence[TopicMessage]) -> str | None:
+    """A bag without TF and without a robot whose displays are all in one frame opens in that frame (in ``odom``,
+    where nothing of it could be placed, it would show nothing)."""
+    if records or robot is not None or not messages:
+        return None
+    frames = frames_of(messages)
+    return frames.pop() if len(frames) == 1 else None
+
+
+def _check(tree: KinematicTree, joints: SampleChunk | None, records: list[TfRecords]) -> str | None:
+    """Recorded /tf against the kinematics of the first joint states (one message, or None when they agree)."""
+    if joints is None or not len(joints):
+        return None
+    q = JointState(tree.actuated).update(joints)
+    last = int(joints.times_ns[-1])
+    for r in records:
+        window = r if r.static else r.rows(np.flatnonzero(r.times_ns <= last))
+        message = disagreement(tree, window, joints.times_ns, q)
+        if message:
+            return message
+    return None
+
+
+def plan_motion(tree: KinematicTree, source: Source, fixed_frame: str) -> RunPlan:
+    """A generated motion's plan."""
+    return RunPlan(tree, fixed_frame, source=source)

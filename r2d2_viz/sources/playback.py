@@ -1,0 +1,218 @@
+"""A run as a stream of :class:`Window` s, the stretches of time every consumer takes in turn: a generated motion's
+chunks, or a bag read **once**, in time order, each stretch dispatched by topic — ``/joint_states`` to one
+:class:`~r2d2_viz.sources.base.SampleChunk` (decoded in bulk), ``/tf`` to transform rows, display topics to raw
+messages. Windows are bounded (samples, bytes), so memory stays flat whatever the bag's size; :func:`read_ahead`
+reads and decodes the next windows in a thread while the current one is written (both cores).
+
+Pure: no rerun import.
+"""
+
+from __future__ import annotations
+
+import itertools
+import queue
+import threading
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from r2d2_viz.sources.bag_displays import TopicMessage
+from r2d2_viz.sources.bag_joints import JOINT_STATE, JointStateDecoder, TimeSource, monotonic
+from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
+from r2d2_viz.sources.bags.bag import Bag
+from r2d2_viz.sources.bags.storage import Block
+from r2d2_viz.sources.base import SampleChunk, Source, TfRecords
+
+JOINTS, TF = "/joint_states", "/tf"
+WINDOW_BYTES = 32 << 20
+"""A window holds about this many bytes of messages at most (a few images and clouds)…"""
+
+
+@dataclass(frozen=True, eq=False)
+class Window:
+    """One stretch of a run: everything received up to ``end_ns`` that the previous windows did not hold."""
+
+    end_ns: int
+    joints: SampleChunk | None = None
+    tf: TfRecords | None = None
+    displays: tuple[TopicMessage, ...] = ()
+    nbytes: int = 0
+    """Bytes of bag messages in it (progress)."""
+
+
+def source_windows(source: Source, max_samples: int) -> Iterator[Window]:
+    """A generated motion's chunks as windows."""
+    for chunk in source.chunks(max_samples):
+        yield Window(int(chunk.times_ns[-1]) if len(chunk) else 0, joints=chunk)
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A stretch ``[start_ns, stop_ns)`` of the bag and the topics read in it."""
+
+    topics: tuple[str, ...]
+    start_ns: int | None = None
+    stop_ns: int | None = None
+
+
+class BagPass:
+    """The bag's wanted topics read once, in time order, as windows (see the module docstring). ``actuated``: the
+    robot's joints (None: joint states are not read); ``displays``: display topic → type."""
+
+    def __init__(
+        self,
+        bag: Bag,
+        segments: Sequence[Segment],
+        *,
+        actuated: Sequence[str] | None,
+        displays: Mapping[str, str],
+        time: TimeSource = "receive",
+        quiet: bool = False,
+        predecode: Callable[[TopicMessage], TopicMessage] | None = None,
+    ) -> None:
+        self.bag, self.segments, self.displays, self.time = bag, tuple(segments), dict(displays), time
+        self.quiet = quiet
+        """Say nothing of what was skipped (a look-ahead: the pass itself says it)."""
+        self.predecode = predecode
+        """Decodes each display message as it is read (in :func:`read_ahead`'s thread, beside the writing)."""
+        self.joints = JointStateDecoder(actuated, time=time, deserialize=bag.deserialize) if actuated else None
+        self.tf = TfDecoder(bag.deserialize, static=False, time=time)
+        self.read_ns = 0
+        """How far the pass has read (receive time)."""
+        self._last_ns = np.iinfo(np.int64).min
+        self._moved = 0
+
+    def windows(self, max_samples: int) -> Iterator[Window]:
+        """Every window, each with at most ``max_samples`` joint states and about WINDOW_BYTES of messages (the
+        storages' blocks gathered or cut to that size)."""
+        pending: list[Block] = []
+        size = samples = 0
+        for segment in self.segments:
+            for block in self.bag.blocks(segment.topics, start_ns=segment.start_ns, stop_ns=segment.stop_ns):
+                for piece in self._pieces(block, max_samples):
+                    n = len(piece.rows(JOINTS)) if self.joints is not None else 0
+                    if pending and (size + piece.nbytes > WINDOW_BYTES or samples + n > max_samples):
+                        yield self._window(pending)
+                        pending, size, samples = [], 0, 0
+                    pending.append(piece)
+                    size, samples = size + piece.nbytes, samples + n
+        if pending:
+            yield self._window(pending)
+        self._finish()
+
+    def _pieces(self, block: Block, max_samples: int) -> Iterator[Block]:
+        """``block`` cut where it holds ``max_samples`` joint states or WINDOW_BYTES."""
+        joint_rows = block.rows(JOINTS) if self.joints is not None else np.zeros(0, dtype=np.int64)
+        cuts = {0, len(block)}
+        if len(joint_rows) > max_samples:  # a long stretch of joint states: cut where a chunk is full
+            cuts |= {int(r) for r in joint_rows[max_samples::max_samples]}
+        if block.nbytes > WINDOW_BYTES:
+            sizes = np.cumsum(block.lengths)
+            cuts |= {int(r) for r in np.searchsorted(sizes, np.arange(WINDOW_BYTES, sizes[-1], WINDOW_BYTES))}
+        edges = sorted(cuts)
+        for lo, hi in itertools.pairwise(edges):
+            if hi > lo:
+                yield block.take(np.arange(lo, hi)) if (lo, hi) != (0, len(block)) else block
+
+    def _window(self, pieces: list[Block]) -> Window:
+        chunks: list[SampleChunk] = []
+        records: list[TfRecords] = []
+        messages: list[TopicMessage] = []
+        for block in pieces:
+            if self.joints is not None and len(rows := block.rows(JOINTS)):
+                chunk = self.joints.decode_block(block.take(rows))
+                if chunk is not None:
+                    chunk, self._last_ns, self._moved = monotonic(chunk, self._last_ns, self._moved)
+                    chunks.append(chunk)
+            if len(rows := block.rows(TF)):
+                records.append(self.tf.decode(block.take(rows).pairs()))
+            for topic, msgtype in self.displays.items():
+                for t, data in block.take(block.rows(topic)).pairs():
+                    messages.append(TopicMessage(t, topic, msgtype, data))
+        messages.sort(key=lambda m: m.time_ns)
+        if self.predecode is not None:
+            messages = [self.predecode(m) for m in messages]
+        self.read_ns = int(pieces[-1].times_ns[-1])
+        tf = concatenate([r for r in records if len(r)])
+        return Window(self.read_ns, _joined(chunks), tf, tuple(messages), sum(p.nbytes for p in pieces))
+
+    def _finish(self) -> None:
+        if self.quiet:
+            return
+        warn, path = self.bag.warn, self.bag.path
+        if self.joints is not None:
+            for problem in self.joints.problems():
+                warn(f"{path}: {JOINTS}: {problem}")
+        if self._moved:
+            warn(
+                f"{path}: {JOINTS}: {self._moved} header stamps went back in time; they are shown at the previous stamp"
+            )
+        if self.tf.bad:
+            warn(f"{path}: {TF}: skipped {self.tf.bad} messages that cannot be decoded")
+
+
+def bag_topics_read(bag: Bag, actuated: Sequence[str] | None, displays: Mapping[str, str]) -> tuple[str, ...]:
+    """The topics a pass reads: joint states (with a robot), ``/tf``, the display topics."""
+    wanted = [*displays]
+    if actuated and bag.require_type(JOINTS, JOINT_STATE):
+        wanted.append(JOINTS)
+    if bag.require_type(TF, TF_MESSAGE):
+        wanted.append(TF)
+    return tuple(wanted)
+
+
+def _joined(chunks: list[SampleChunk]) -> SampleChunk | None:
+    """Consecutive chunks as one (their joints united; NaN where a chunk did not give a joint)."""
+    if len(chunks) <= 1:
+        return chunks[0] if chunks else None
+    joints = tuple(dict.fromkeys(j for c in chunks for j in c.joints))
+    if all(c.joints == joints for c in chunks):
+        positions = np.vstack([c.positions for c in chunks])
+    else:
+        column = {j: i for i, j in enumerate(joints)}
+        positions = np.full((sum(len(c) for c in chunks), len(joints)), np.nan)
+        at = 0
+        for c in chunks:
+            positions[at : at + len(c), [column[j] for j in c.joints]] = c.positions
+            at += len(c)
+    return SampleChunk(np.concatenate([c.times_ns for c in chunks]), joints, positions)
+
+
+_DONE = object()
+
+
+def read_ahead(windows: Iterator[Window], depth: int = 2) -> Iterator[Window]:
+    """``windows``, read and decoded ``depth`` ahead in a thread (the bag's reading beside the recording's writing).
+    An exception in the reader comes out here; stopping early (Ctrl-C) stops the reader."""
+    out: queue.Queue[object] = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+
+    def read() -> None:
+        try:
+            for window in windows:
+                while not stop.is_set():
+                    try:
+                        out.put(window, timeout=0.1)
+                        break
+                    except queue.Full:
+                        continue
+                if stop.is_set():
+                    return
+            out.put(_DONE)
+        except BaseException as exc:  # handed to the consumer, raised there
+            out.put(exc)
+
+    thread = threading.Thread(target=read, name="r2d2-viz bag reader", daemon=True)
+    thread.start()
+    try:
+        while True:
+            item = out.get()
+            if item is _DONE:
+                return
+            if isinstance(item, BaseException):
+                raise item
+            assert isinstance(item, Window)
+            yield item
+    finally:
+        stop.set()
