@@ -32,8 +32,9 @@ from r2d2_viz.ros_out.live_record import LiveBagRecorder
 from r2d2_viz.rviz.config import load_rviz
 from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.bag_joints import TimeSource
-from r2d2_viz.sources.base import TfRecords, tf_root
+from r2d2_viz.sources.base import tf_root
 from r2d2_viz.sources.live.dds import LiveGraph
+from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, RosDiscovery
 from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
@@ -114,7 +115,7 @@ def run_live(
     signal stopped it, the file saved)."""
     stop = threading.Event()
     with signals_set(stop), LiveGraph(env) as graph:
-        return _LiveRun(config, graph, stop).run(on_ready)
+        return run_on(config, graph, stop, on_ready)
 
 
 def wanted_topics(rviz: Path | None) -> set[str] | None:
@@ -124,38 +125,70 @@ def wanted_topics(rviz: Path | None) -> set[str] | None:
     return {t.topic for t in load_rviz(rviz).topics if t.enabled and t.topic}
 
 
-class _LiveRun:
-    def __init__(self, config: LiveConfig, graph: LiveGraph, stop: threading.Event) -> None:
-        self.config, self.stop = config, stop
-        self.end = time.monotonic() + config.duration if config.duration is not None else None
-        self.source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time)
+def run_on(
+    config: LiveConfig, graph: LiveGraph, stop: threading.Event, on_ready: Callable[[str], None] | None = None
+) -> tuple[int, bool, Path | None]:
+    """One live run on ``graph``: settle (discovery, latched topics), plan the view, then hand each batch the graph
+    gives to the scene until the deadline or a signal; the files are finalised or, on any failure, removed."""
+    deadline = _Deadline(stop, time.monotonic() + config.duration if config.duration is not None else None)
+    started = time.monotonic()
+    source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time)
+    model = _Model(config)
+    batches = _settle(source, model, deadline)
+    plan, view = _plan(config, model.robot, batches)
+    output = _Output(config.sink, endless=deadline.end is None or config.sink.live)
+    lateness = LatenessLog.from_env()
+    try:
+        recording = output.open(view, on_ready)
+        scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness)
+        latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
+        for k, batch in enumerate(batches):
+            if k < latest:  # a description the settle's latest one replaced: not worth a word
+                batch.descriptions.clear()
+            scene.handle(batch, output.bag)
+        flushed = time.monotonic()
+        while not deadline.done():
+            scene.handle(source.poll(), output.bag)
+            if time.monotonic() - flushed > FLUSH_SECONDS:
+                recording.rec.flush()
+                flushed = time.monotonic()
+            if source.graph.wait(POLL_SECONDS):
+                time.sleep(GATHER_SECONDS)
+        scene.finish()
+        _say_received(source, time.monotonic() - started)
+        output.close()
+    except BaseException:
+        output.abort()
+        raise
+    finally:
+        lateness.close()
+    return scene.samples, stop.is_set(), config.sink.save
+
+
+@dataclasses.dataclass(frozen=True)
+class _Deadline:
+    stop: threading.Event
+    end: float | None
+    """``time.monotonic()`` when ``--duration`` runs out (None: until a signal)."""
+
+    def done(self) -> bool:
+        return self.stop.is_set() or (self.end is not None and time.monotonic() >= self.end)
+
+
+class _Model:
+    """The robot model of a live run: ``--urdf``, else the latest ``/robot_description`` that parses."""
+
+    def __init__(self, config: LiveConfig) -> None:
+        self.fixed_by_urdf = config.urdf is not None
         self.packages = PackageIndex.from_args(config.package_paths, description=config.urdf, environ=os.environ)
         self.robot: Robot | None = None
         if config.urdf is not None:
             self.robot = load_robot(config.urdf, mappings=config.mappings, packages=self.packages)
         self.description: str | None = None
-        self.children: set[str] = set()
-        self.streamer: RobotStream | None = None
-        self.samples = 0
-        self.lateness = LatenessLog(None)
+        """The /robot_description text the robot was built from."""
 
-    def _done(self) -> bool:
-        return self.stop.is_set() or (self.end is not None and time.monotonic() >= self.end)
-
-    def _settle(self) -> list[LiveBatch]:
-        """Discovery, the latched description and static transforms: what the view is planned from."""
-        batches: list[LiveBatch] = []
-        deadline = time.monotonic() + SETTLE_SECONDS
-        while not self._done() and time.monotonic() < deadline:
-            batches.append(self.source.poll())
-            if self.robot is None and any(b.descriptions for b in batches):
-                text = next(d for b in reversed(batches) for d in reversed(b.descriptions))
-                self.robot = self._parse(text, quiet=True)
-                self.description = text if self.robot is not None else None
-            time.sleep(POLL_SECONDS)
-        return batches
-
-    def _parse(self, text: str, *, quiet: bool = False) -> Robot | None:
+    def parse(self, text: str, *, quiet: bool = False) -> Robot | None:
+        """``text`` as a robot; a bad one raises (None when ``quiet``)."""
         try:
             return parse_urdf(text, source="/robot_description", packages=self.packages)
         except R2d2VizError:
@@ -163,85 +196,113 @@ class _LiveRun:
                 raise
             return None
 
-    def _plan(self, batches: list[LiveBatch]) -> tuple[RunPlan, ViewPlan]:
-        records = [r for b in batches for r in b.tf]
-        static = next((r for r in records if r.static), None)
-        moving = next((r for r in records if not r.static), None)
-        tree = compile_tree(self.robot) if self.robot is not None else None
-        rviz_frame = load_rviz(self.config.rviz).fixed_frame if self.config.rviz is not None else None
-        root = tree.robot.root if tree is not None else None
-        frame = self.config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
-        plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
-        return plan, plan_view(plan, rviz=self.config.rviz, fixed_frame=self.config.fixed_frame)
 
-    def run(self, on_ready: Callable[[str], None] | None) -> tuple[int, bool, Path | None]:
-        save = self.config.sink.save
-        bag_path = save if save is not None and save.suffix == ".mcap" else None
-        rrd = save if bag_path is None else None
-        sink = self.config.sink
-        if bag_path is not None:
-            sink = dataclasses.replace(sink, save=None, headless=not sink.live)
-        tmp = rrd.with_name(f".{rrd.name}.{os.getpid()}.partial") if rrd is not None else None
-        batches = self._settle()
-        plan, self.view = self._plan(batches)
-        self.fixed_frame = plan.fixed_frame
-        blueprint = generate_blueprint(self.view.spec, layout=self.view.layout)
-        recording: Recording | None = None
-        bag = LiveBagRecorder(bag_path) if bag_path is not None else None
-        self.lateness = LatenessLog.from_env()
+def _settle(source: LiveSource, model: _Model, deadline: _Deadline) -> list[LiveBatch]:
+    """Discovery, the latched description and static transforms: what the view is planned from."""
+    batches: list[LiveBatch] = []
+    end = time.monotonic() + SETTLE_SECONDS
+    while not deadline.done() and time.monotonic() < end:
+        batches.append(source.poll())
+        if model.robot is None and any(b.descriptions for b in batches):
+            text = next(d for b in reversed(batches) for d in reversed(b.descriptions))
+            model.robot = model.parse(text, quiet=True)
+            model.description = text if model.robot is not None else None
+        time.sleep(POLL_SECONDS)
+    return batches
+
+
+def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> tuple[RunPlan, ViewPlan]:
+    records = [r for b in batches for r in b.tf]
+    static = next((r for r in records if r.static), None)
+    moving = next((r for r in records if not r.static), None)
+    tree = compile_tree(robot) if robot is not None else None
+    rviz_frame = load_rviz(config.rviz).fixed_frame if config.rviz is not None else None
+    root = tree.robot.root if tree is not None else None
+    frame = config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
+    plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
+    return plan, plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+
+
+class _Output:
+    """Where a live run is written: the sinks, ``--save out.rrd`` (beside the target, renamed when done; without a
+    footer when ``endless``: its manifest would grow in memory) or ``--save out.mcap`` (what was received)."""
+
+    def __init__(self, sink: SinkConfig, *, endless: bool) -> None:
+        save = sink.save
+        self.bag_path = save if save is not None and save.suffix == ".mcap" else None
+        self.rrd = save if self.bag_path is None else None
+        self.sink = dataclasses.replace(sink, save=None, headless=not sink.live) if self.bag_path else sink
+        self.tmp = self.rrd.with_name(f".{self.rrd.name}.{os.getpid()}.partial") if self.rrd is not None else None
+        self.endless = endless
+        self.recording: Recording | None = None
+        self.bag: LiveBagRecorder | None = None
+
+    def open(self, view: ViewPlan, on_ready: Callable[[str], None] | None) -> Recording:
+        self.bag = LiveBagRecorder(self.bag_path) if self.bag_path is not None else None
+        blueprint = generate_blueprint(view.spec, layout=view.layout)
+        self.recording = open_recording(
+            self.sink, save_to=self.tmp, live=self.endless, on_ready=on_ready, blueprint=blueprint
+        )
+        return self.recording
+
+    def close(self) -> None:
+        if self.recording is not None:
+            close_recording(self.recording)
+            self.recording = None
+        if self.bag is not None:
+            self.bag.close()
+            self.bag = None
+        if self.tmp is not None and self.rrd is not None:
+            os.replace(self.tmp, self.rrd)
+
+    def abort(self) -> None:
+        """Nothing half-written: the partial recording and bag removed."""
         try:
-            endless = self.end is None or sink.live  # a file without footer: its manifest would grow in memory
-            recording = open_recording(sink, save_to=tmp, live=endless, on_ready=on_ready, blueprint=blueprint)
-            self._start(recording)
-            latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
-            for k, batch in enumerate(batches):
-                if k < latest:  # a description the settle's latest one replaced: not worth a word
-                    batch.descriptions.clear()
-                self._handle(batch, bag)
-            flushed = time.monotonic()
-            while not self._done():
-                self._handle(self.source.poll(), bag)
-                if time.monotonic() - flushed > FLUSH_SECONDS:
-                    recording.rec.flush()
-                    flushed = time.monotonic()
-                if self.source.graph.wait(POLL_SECONDS):
-                    time.sleep(GATHER_SECONDS)
-            self._finish()
-            close_recording(recording)
-            recording = None
-            if bag is not None:
-                bag.close()
-            if tmp is not None and rrd is not None:
-                os.replace(tmp, rrd)
-        except BaseException:
-            if recording is not None:
-                close_recording(recording)
-            if bag is not None:
-                bag.abort()
-            if tmp is not None:
-                tmp.unlink(missing_ok=True)
-            raise
+            if self.recording is not None:
+                close_recording(self.recording)
+        except R2d2VizError:
+            pass  # the error being handled says more
         finally:
-            self.lateness.close()
-        return self.samples, self.stop.is_set(), save
+            if self.bag is not None:
+                self.bag.abort()
+            if self.tmp is not None:
+                self.tmp.unlink(missing_ok=True)
 
-    def _start(self, recording: Recording) -> None:
+
+class _Scene:
+    """What a live run shows, batch by batch: the robot (reloaded when ``/robot_description`` changes; transforms
+    only while it does not parse), recorded transforms, display topics, the notes of the source."""
+
+    def __init__(
+        self,
+        config: LiveConfig,
+        model: _Model,
+        source: LiveSource,
+        view: ViewPlan,
+        fixed_frame: str,
+        recording: Recording,
+        lateness: LatenessLog,
+    ) -> None:
         rec = recording.rec
+        self.model, self.source, self.view, self.fixed_frame, self.rec = model, source, view, fixed_frame, rec
+        self.lateness = lateness
+        self.children: set[str] = set()
+        self.streamer: RobotStream | None = None
+        self.samples = 0
         self.notices = Notices(rec)
-        for note in self.view.notes:
+        for note in view.notes:
             self.notices.report(note)
-        self.recorded = RecordedTf(rec, clock="timestamp", axis_length=self.view.axis_length)
+        self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
         self.feed = DisplayFeed(
             self.notices,
             clock="timestamp",
-            fixed_frame=self.fixed_frame,
-            header_time=self.config.time == "header",
-            styles=self.view.display_styles,
-            load_mesh=uri_loader(self.packages, Path(".")),
+            fixed_frame=fixed_frame,
+            header_time=config.time == "header",
+            styles=view.display_styles,
+            load_mesh=uri_loader(model.packages, Path(".")),
         )
-        self.rec = rec
-        if self.robot is not None:
-            self._load(self.robot)
+        if model.robot is not None:
+            self._load(model.robot)
         else:
             self.notices.report("no --urdf and no /robot_description yet: transforms only until one is published")
 
@@ -266,10 +327,10 @@ class _LiveRun:
 
     def _describe(self, text: str) -> None:
         """A (new) ``/robot_description``: the robot reloaded, or TF only when it does not parse."""
-        first = self.description is None
-        self.description = text
+        first = self.model.description is None
+        self.model.description = text
         try:
-            robot = self._parse(text)
+            robot = self.model.parse(text)
         except R2d2VizError as exc:
             self.notices.report(f"{exc} (showing transforms only)", key=f"description {hash(text)}")
             if self.streamer is not None:
@@ -281,20 +342,21 @@ class _LiveRun:
         if not first:
             line = f"/robot_description changed: robot {robot.name!r} reloaded"
             self.notices.report(line, key=f"loaded {hash(text)}")
-        self.robot = robot
+        self.model.robot = robot
         self._load(robot)
 
-    def _handle(self, batch: LiveBatch, bag: LiveBagRecorder | None) -> None:
+    def handle(self, batch: LiveBatch, bag: LiveBagRecorder | None) -> None:
         if bag is not None:
             bag.write(batch.samples)
         for key, line in batch.notes:
             self.notices.report(line, key=key)
-        if batch.descriptions and self.config.urdf is None:
+        if batch.descriptions and not self.model.fixed_by_urdf:
             text = batch.descriptions[-1]
-            if text != self.description:
+            if text != self.model.description:
                 self._describe(text)
         for records in batch.tf:
-            self._tf(records)
+            self.children.update(records.children)
+            self.recorded.log(records)
         for topic in TF_TOPICS if batch.tf else ():
             self.lateness.sent(topic, (s.source_timestamp_ns for s in batch.samples if s.topic == topic))
         if batch.joints is not None and self.streamer is not None:
@@ -305,15 +367,19 @@ class _LiveRun:
             self.feed.log(message)
             self.lateness.sent(message.topic, (message.time_ns,))
 
-    def _tf(self, records: TfRecords) -> None:
-        self.children.update(records.children)
-        self.recorded.log(records)
-
-    def _finish(self) -> None:
+    def finish(self) -> None:
         for topic, line in self.source.problems():
             self.notices.report(f"{topic}: {line}")
         self.feed.finish()
         if self.streamer is not None:
             self.streamer.finish()
-        received = ", ".join(f"{t} {n}" for t, n in sorted(self.source.received.items())) or "nothing"
-        print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)
+
+
+def _say_received(source: LiveSource, seconds: float) -> None:
+    """The run's last line: each topic's count — or, when nothing came, what was searched and how to check."""
+    received = ", ".join(f"{t} {n}" for t, n in sorted(source.received.items()))
+    if not received:
+        discovery: RosDiscovery | None = getattr(source.graph, "discovery", None)
+        where = f" on {discovery.searched()}" if discovery is not None else ""
+        received = f"nothing in {seconds:.1f} s{where}; {EMPTY_GRAPH_HINT}"
+    print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)

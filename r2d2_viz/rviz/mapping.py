@@ -109,5 +109,13 @@ def mapping_markdown() -> str:
     return "\n".join(lines)
 
 
-if __name__ == "__main__":  # python -m r2d2_viz.rviz.mapping: the README's table
+if (
+    __name__ == "__main__"
+):  # python -m r2d2_viz.rviz.mapping: the README's table of RViz displays and their Rerun counterparts
+    import argparse
+
+    argparse.ArgumentParser(
+        prog="python -m r2d2_viz.rviz.mapping",
+        description="Print the README's table of RViz displays and their Rerun counterparts (Markdown).",
+    ).parse_args()
     print(mapping_markdown())

@@ -182,24 +182,37 @@ def save_blueprint(path: Path = DEFAULT_BLUEPRINT_PATH, spec: ViewSpec | None = 
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m r2d2_viz.blueprint [PATH]`` or ``python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl``."""
-    args = list(sys.argv[1:] if argv is None else argv)
+    """``python -m r2d2_viz.blueprint [OUT.rbl]`` or ``python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl``."""
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m r2d2_viz.blueprint",
+        description="Write the viewer layout as a Rerun blueprint (.rbl), for: rerun FILE.rrd OUT.rbl",
+    )
+    parser.add_argument(
+        "out", nargs="?", type=Path, default=None, metavar="OUT.rbl", help=f"default: {DEFAULT_BLUEPRINT_PATH}"
+    )
+    parser.add_argument(
+        "--rviz", type=Path, default=None, metavar="CONFIG.rviz", help="convert this RViz config (then OUT is needed)"
+    )
+    args = parser.parse_args(argv)
+    if args.rviz is not None and args.out is None:
+        parser.error("--rviz CONFIG.rviz needs OUT.rbl")
+    out: Path = args.out if args.out is not None else DEFAULT_BLUEPRINT_PATH
+    if out.suffix != ".rbl":
+        parser.error(f"{out}: a blueprint is written as NAME.rbl")
     spec = None
-    if args[:1] == ["--rviz"]:
-        if len(args) != 3:
-            print("usage: python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl", file=sys.stderr)
-            return 2
+    if args.rviz is not None:
         from r2d2_viz.errors import R2d2VizError
 
         try:
-            spec = load_rviz(args[1])
+            spec = load_rviz(args.rviz)
         except R2d2VizError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
         for note in spec.notes:
             print(f"note: {note}", file=sys.stderr)
-        args = args[2:]
-    print(save_blueprint(Path(args[0]) if args else DEFAULT_BLUEPRINT_PATH, spec))
+    print(save_blueprint(out, spec))
     return 0
 
 
