@@ -126,7 +126,7 @@ def test_a_conversion_shows_a_bar_on_a_terminal(tmp_path: Path) -> None:
     assert "100%" in shown  # the bar's percent of the bag, at the end
     assert "MB/s" in shown
     assert "arm" in shown  # the bag's name labels the bar
-    assert "r2d2-viz: 2000 samples" in shown
+    assert "r2d2-viz: 2000 joint states" in shown
 
 
 def test_off_a_terminal_only_the_summary_line(tmp_path: Path) -> None:
@@ -135,7 +135,7 @@ def test_off_a_terminal_only_the_summary_line(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     assert "\r" not in result.stderr and "\x1b[" not in result.stderr
     assert [line for line in result.stderr.splitlines() if line.strip()] == [
-        f"r2d2-viz: 2000 samples from {bag} to {tmp_path / 'out.rrd'}"
+        f"r2d2-viz: 2000 joint states from {bag} to {tmp_path / 'out.rrd'}"
     ]
 
 
