@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from r2d2_viz.errors import BagError
+from r2d2_viz.errors import BagError, listed
 from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
@@ -212,8 +212,10 @@ def _selected(bag: Bag, topics: Sequence[str] | None) -> set[str]:
     if topics is None:
         return set(bag.topics)
     if missing := [t for t in topics if t not in bag.topics]:
-        listed = ", ".join(sorted(bag.topics))
-        raise BagError(f"{bag.path}: no topic {', '.join(missing)} in this bag; its topics: {listed}")
+        raise BagError(
+            f"{bag.path}: no topic {listed(missing)} in this bag; its {len(bag.topics)} topics: "
+            f"{listed(sorted(bag.topics))} (--bag {bag.path} --list shows them all)"
+        )
     return {*topics, "/robot_description"}
 
 

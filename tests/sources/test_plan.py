@@ -240,7 +240,8 @@ def test_topics_and_offsets_the_bag_cannot_give_are_one_line(tmp_path: Path) -> 
         with pytest.raises(BagError) as info:
             plan_bag(bag, choice=BagChoice(topics=("/tf", "/scan")))
         assert str(info.value) == (
-            f"{path}: no topic /scan in this bag; its topics: /joint_states, /map, /robot_description, /tf, /tf_static"
+            f"{path}: no topic /scan in this bag; its 5 topics: /joint_states, /map, /robot_description, /tf, "
+            f"/tf_static (--bag {path} --list shows them all)"
         )
         with pytest.raises(BagError, match=r"start offset 10.5 s is past the bag's end \(it lasts 10.0 s\)"):
             plan_bag(bag, choice=BagChoice(start_offset_s=10.5))
@@ -262,7 +263,7 @@ def test_start_offset_and_topics_on_the_command_line(tmp_path: Path) -> None:
     assert "/map" in recording
     for args, problem in [
         (["--start-offset", "11"], "past the bag's end"),
-        (["--topics", "/scan"], "no topic /scan in this bag; its topics: /joint_states, /map"),
+        (["--topics", "/scan"], "no topic /scan in this bag; its 5 topics: /joint_states, /map"),
     ]:
         bad = cli("--bag", str(path), *args, "--save", str(tmp_path / "bad.rrd"))
         lines = bad.stderr.strip().splitlines()

@@ -20,7 +20,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from r2d2_viz.errors import BagError
+from r2d2_viz.errors import BagError, listed
 from r2d2_viz.msgs.typestore import deserialize
 from r2d2_viz.sources.bags.mcap_scan import McapScan
 from r2d2_viz.sources.bags.storage import Block, Storage, TopicInfo
@@ -142,13 +142,13 @@ class Bag:
                     yield block
             except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
                 if got == 0 and len(self._files) == 1:
-                    raise BagError(f"{f.path}: cannot read {', '.join(wanted)}: {_problem(exc)}") from None
+                    raise BagError(f"{f.path}: cannot read {listed(wanted)}: {_problem(exc)}") from None
                 said.append(f"{f.path}: the rest of the file cannot be read ({_problem(exc)})")
             said += self._problems(f)
         expected = sum(self.topics[t].count for t in wanted)
         whole = start_ns is None and stop_ns is None and not any(f.note for f in self._files)
         if whole and got < expected and not self._damage_said:
-            said.append(f"{self.path}: {', '.join(sorted(wanted))}: recovered {got} of {expected} messages")
+            said.append(f"{self.path}: {listed(sorted(wanted))}: recovered {got} of {expected} messages")
         if said:
             self._damage_said = True
             self.warn("; ".join(said))
@@ -233,7 +233,7 @@ def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:
     except Exception as exc:  # YAML errors, missing keys, wrong types
         raise BagError(f"{meta}: not rosbag2 metadata: {_problem(exc)}") from None
     if missing := [f.name for f in files if not f.is_file()]:
-        raise BagError(f"{path}: storage files named in metadata.yaml are missing: {', '.join(missing)}")
+        raise BagError(f"{path}: storage files named in metadata.yaml are missing: {listed(missing)}")
     return files, counts
 
 
