@@ -23,7 +23,7 @@ from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.replay import Replay
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
-from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle
+from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle, camera_images
 from r2d2_viz.viewer.layout.blueprint import Layout
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
 
@@ -83,10 +83,17 @@ def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> Vi
         camera=camera,
         show_arrows=arrows,
         fixed_frame=frame,
+        flat_images=_flat_images(plan.displays),
     )
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
     return ViewPlan(spec, layout, axis_length, show_names, tuple(notes), styles)
+
+
+def _flat_images(displays: dict[str, str]) -> tuple[str, ...]:
+    """Image topics no CameraInfo gives a pinhole (:func:`camera_images` pairs them like RViz's Camera display)."""
+    with_camera = {t for images in camera_images(displays).values() for t in images}
+    return tuple(t for t, m in sorted(displays.items()) if m in IMAGES and t not in with_camera)
 
 
 MAP_SCHEMES = ("map", "costmap", "raw")
