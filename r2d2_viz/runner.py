@@ -193,6 +193,9 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
                     styles=view.display_styles,
                     source_name=str(config.bag),
                     topics=plan.displays,
+                    start_ns=int(plan.moving_tf.times_ns.min())
+                    if plan.moving_tf is not None and len(plan.moving_tf)
+                    else None,
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
             feeds = Feeds(TfFeed(recorded, plan.moving_tf), displays)

@@ -62,6 +62,7 @@ class DisplayFeed:
         source_name: str = "",
         timeline: str = TIMELINE,
         topics: Mapping[str, str] | None = None,
+        start_ns: int | None = None,
     ) -> None:
         self.notices, self.rec = notices, notices.rec
         self._messages = messages
@@ -73,15 +74,18 @@ class DisplayFeed:
         self.cameras = camera_images(topics or {})
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
+        self._anchored: tuple[int, str] | None = None
         self._pull()
-        if self._next is not None and topics:
-            self._anchor(topics, self._next.time_ns)
+        if self._next is not None and topics:  # from the run's start (its first transform) when that is earlier
+            first = self._next.time_ns
+            self._anchor(topics, first if start_ns is None else min(first, start_ns))
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
         frame until its own first message: the viewer then finds a transform path for each from the start
         (otherwise it reports "no transform path" for every entity not drawn yet)."""
         set_time(self.rec, self.timeline, time_ns, self.clock)
+        self._anchored = (time_ns, self.fixed_frame)  # markers' entities too, from their first message
         for topic, msgtype in topics.items():
             style = self.styles.get(topic) or DisplayStyle()
             keep = style.keep if style.keep is not None else KEEP.get(msgtype, 1)
@@ -113,6 +117,7 @@ class DisplayFeed:
     def log(self, message: TopicMessage) -> None:
         """Decode and log one message (a live source calls this as messages arrive)."""
         state = self.topics.setdefault(message.topic, _TopicState())
+        state.markers.anchor = self._anchored
         state.messages += 1
         self._unflushed += len(message.data)
         if self._unflushed > FLUSH_BYTES:  # backpressure: big messages must not pile up ahead of the sinks
@@ -138,17 +143,23 @@ class DisplayFeed:
         keep = style.keep if style.keep is not None else KEEP.get(message.msgtype, 1)
         if keep > 1 and isinstance(decoded, Decoded):
             entity = f"{message.topic}/{(state.messages - 1) % keep}"
-        for target in (entity, *self.cameras.get(message.topic, ())):
-            log_decoded(
-                self.rec,
-                target,
-                decoded,
-                timeline=self.timeline,
-                time_ns=time_ns,
-                clock=self.clock,
-                markers=state.markers,
-                load_mesh=self.load_mesh,
-            )
+        images = self.cameras.get(message.topic, ())
+        times = [time_ns]
+        if images and state.messages == 1 and self._anchored is not None and self._anchored[0] < time_ns:
+            # a camera's first intrinsics from the run's start: its images are never without a pinhole in 3D
+            times.insert(0, self._anchored[0])
+        for t in times:
+            for target in (entity, *images):
+                log_decoded(
+                    self.rec,
+                    target,
+                    decoded,
+                    timeline=self.timeline,
+                    time_ns=t,
+                    clock=self.clock,
+                    markers=state.markers,
+                    load_mesh=self.load_mesh,
+                )
 
     def _where(self, topic: str) -> str:
         return f"{self.source_name}: {topic}" if self.source_name else topic

@@ -77,6 +77,8 @@ def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> Vi
     missing = missing_fixed_frame(spec, frames) if rviz is not None and fixed_frame is None else None
     if missing:
         notes.append(missing)
+    elif plan.display_messages is not None:  # (a fixed frame that does not exist is said already)
+        notes.extend(unconnected_frames(plan, frame))
     layout = Layout(
         limited=n_limited if tree is not None else 0,
         continuous=n_continuous,
@@ -88,6 +90,50 @@ def plan_view(plan: Replay, *, rviz: Path | None, fixed_frame: str | None) -> Vi
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
     return ViewPlan(spec, layout, axis_length, show_names, tuple(notes), styles)
+
+
+CONNECTION_MESSAGES = 512
+"""The display frames checked against the TF tree are those of the first two messages of each display topic
+among the first this many display messages (a cloud is milliseconds to decode)."""
+
+
+def unconnected_frames(plan: Replay, fixed: str) -> list[str]:
+    """One line per display topic whose messages lie in a frame no recorded transform (nor the robot) joins to
+    the fixed frame, in RViz's words: its display says "No transform from [person] to [laser]", and so does the
+    viewer's 3D view (it cannot place them either)."""
+    neighbours: dict[str, set[str]] = {}
+    edges = [e for r in (plan.static_tf, plan.moving_tf) if r is not None for e in r.edges()]
+    if plan.tree is not None:
+        edges += [(plan.tree.robot.root, link) for link in plan.tree.links]
+    for parent, child in edges:
+        neighbours.setdefault(parent, set()).add(child)
+        neighbours.setdefault(child, set()).add(parent)
+    reached, todo = {fixed}, [fixed]
+    while todo:
+        for other in neighbours.get(todo.pop(), ()):
+            if other not in reached:
+                reached.add(other)
+                todo.append(other)
+    lost: dict[str, set[str]] = {}
+    checked: dict[str, int] = {}
+    assert plan.display_messages is not None
+    for message in islice(plan.display_messages(), CONNECTION_MESSAGES):
+        seen = lost.setdefault(message.topic, set())
+        checked[message.topic] = checked.get(message.topic, 0) + 1
+        if message.msgtype in IMAGES or checked[message.topic] > 2:
+            continue  # images: drawn in their own 2D views
+        try:
+            decoded = decode(message.msgtype, message.data)
+        except MsgError:
+            continue
+        parts = [decoded] if isinstance(decoded, Decoded) else [op.decoded for op in decoded if op.decoded]
+        seen.update(d.frame_id for d in parts if d.frame_id not in reached)
+    return [
+        f"{topic}: No transform from [{'], ['.join(sorted(frames - {''}))}] to "
+        f"[{fixed}]: nothing joins them in the bag's transforms; not shown (RViz says the same)"
+        for topic, frames in sorted(lost.items())
+        if frames - {""}
+    ]
 
 
 def _flat_images(displays: dict[str, str]) -> tuple[str, ...]:

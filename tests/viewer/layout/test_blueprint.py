@@ -178,3 +178,14 @@ def test_decay_reaches_the_entities_a_recording_draws_on(tmp_path) -> None:
     # the bag's 3 odometry messages fill slots 0..2 of the 4; the scans are all on /scan
     assert drawn == {"/scan", "/odom/0", "/odom/1", "/odom/2"}
     assert drawn <= set(ranges) and set(ranges) == {"/scan", *(f"/odom/{k}" for k in range(4))}
+
+
+def test_images_without_a_pinhole_are_left_out_of_the_3d_view(tmp_path) -> None:
+    from r2d2_viz.viewer.layout.blueprint import Layout
+
+    path = tmp_path / "flat.rbl"
+    generate_blueprint(layout=Layout(flat_images=("/bare/image",))).save("r2d2_viz", path)
+    components = blueprint_components(path)
+    view = _view(components, "3D")
+    # the 3D view cannot place an image without a pinhole ("2D visualizers require a pinhole ancestor"): out
+    assert components[f"{view}/ViewContents"]["ViewContents:query"][-1] == "- /bare/image/**"
