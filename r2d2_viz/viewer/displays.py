@@ -2,7 +2,7 @@
 
 A message's drawings go on its topic's entity (one item) or on ``<entity>/<i>`` (several); the item pose
 ``T_frame_item`` is an ``InstancePoses3D``. Markers go on ``<entity>/<ns>/<id>`` (``_`` for an empty ns); DELETE,
-DELETEALL and an expired lifetime are recursive ``Clear``s, the expiry logged at its own time.
+DELETEALL and an expired lifetime ``Clear`` the markers shown (recursively), the expiry at its own time.
 
 Every entity stays in a TF frame at every time of the run, drawn or not (an entity without one is in Rerun's
 implicit ``tf#/<path>`` frame, which no transform reaches: the view reports it): a marker entity sits in the
@@ -36,6 +36,8 @@ class MarkerBook:
     live: dict[str, int | None] = field(default_factory=dict)
     frames: dict[str, str] = field(default_factory=dict)
     """Every marker entity drawn so far → the frame it was last drawn in."""
+    drawn: set[str] = field(default_factory=set)
+    """The marker entities drawn and not cleared since."""
     anchor: tuple[int, str] | None = None
     """(time, frame) where the topic's entities were placed before their first message (the display feed's)."""
 
@@ -179,16 +181,17 @@ def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, tim
         del book.live[entity]
 
 
-def _clear(rec: rr.RecordingStream, prefix: str, book: MarkerBook, *, topic: bool = False) -> None:
-    """Clear ``prefix`` and what lies below it (``topic``: the topic's own entity), each marker entity put back in
-    the anchor's frame (the fixed frame; without an anchor, its own): it draws nothing, and the view can place it
-    (an entity with no frame is in Rerun's implicit ``tf#/<path>``, which the view reports)."""
-    rec.log(prefix, rr.Clear(recursive=True))
-    placed = [e for e in book.frames if e == prefix or e.startswith(prefix + "/")]
-    for entity in [*placed, prefix] if topic else placed:
+def _clear(rec: rr.RecordingStream, prefix: str, book: MarkerBook) -> None:
+    """Clear the drawn marker entities at and below ``prefix``, one by one (those cleared already stay so: a
+    tracker's DELETEALL costs as many rows as it has markers shown, however many ids it has used), each put back
+    in the anchor's frame (the fixed frame; without an anchor, its own): it draws nothing, and the view can place
+    it (an entity with no frame is in Rerun's implicit ``tf#/<path>``, which the view reports)."""
+    for entity in sorted(e for e in book.drawn if e == prefix or e.startswith(prefix + "/")):
+        rec.log(entity, rr.Clear(recursive=True))
         frame = book.anchor[1] if book.anchor is not None else book.frames.get(entity)
         if frame:
             rec.log(entity, rr.CoordinateFrame(frame))
+        book.drawn.discard(entity)
 
 
 def _place(rec: rr.RecordingStream, entity: str, frame: str, book: MarkerBook, when: tuple[str, int, Clock]) -> None:
@@ -200,6 +203,7 @@ def _place(rec: rr.RecordingStream, entity: str, frame: str, book: MarkerBook, w
         rec.log(entity, rr.CoordinateFrame(book.anchor[1]))
         set_time(rec, timeline, time_ns, clock)
     book.frames[entity] = frame
+    book.drawn.add(entity)
 
 
 def _log_markers(
@@ -213,7 +217,7 @@ def _log_markers(
     for op in ops:
         if op.action == "deleteall":
             prefix = marker_entity(entity_path, op.ns) if op.ns else entity_path
-            _clear(rec, prefix, book, topic=not op.ns)
+            _clear(rec, prefix, book)
             for entity in [e for e in book.live if e == prefix or e.startswith(prefix + "/")]:
                 del book.live[entity]
             continue
