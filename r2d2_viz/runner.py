@@ -196,6 +196,7 @@ def _record(config: RunConfig, plan: Replay, on_ready: Callable[[str], None] | N
                     start_ns=int(plan.moving_tf.times_ns.min())
                     if plan.moving_tf is not None and len(plan.moving_tf)
                     else None,
+                    tf=[r for r in (plan.static_tf, plan.moving_tf) if r is not None],
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
             feeds = Feeds(TfFeed(recorded, plan.moving_tf), displays)

@@ -62,8 +62,10 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "Decay Time",
         "each entity the display draws on (`/scan`; Odometry's `/odom/<k>`) gets a view override "
         "`VisibleTimeRanges(timeline=time, start=cursor − N s, end=cursor)`: the messages of the last N seconds "
-        "stay drawn; 0 (RViz's default): only the latest. RViz's own displays have it on clouds and scans only; "
-        "Marker displays have none (each marker's lifetime applies): not mapped on markers",
+        "stay drawn (0, RViz's default: only the latest), each where it was received: their points, lines and "
+        "arrows are logged in the fixed frame (Rerun places a range's rows at the cursor's transforms). RViz's own "
+        "displays have it on clouds and scans only; Marker displays have none (each marker's lifetime applies): "
+        "not mapped on markers",
     ),
     ("Map", "Color Scheme", "map, costmap or raw colours (RViz's palettes)"),
     ("Odometry", "Keep, Covariance", "the last Keep poses stay drawn (`/odom/<k>`); the covariance ellipsoid"),

@@ -9,7 +9,7 @@ go round ``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import rerun as rr
@@ -18,7 +18,8 @@ from r2d2_viz.msgs.registry import decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import TopicMessage
-from r2d2_viz.sources.base import Clock
+from r2d2_viz.sources.base import Clock, TfRecords
+from r2d2_viz.viewer.decay import FixedFramePlacer
 from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
@@ -37,6 +38,8 @@ class DisplayStyle:
     options: DecodeOptions = field(default_factory=DecodeOptions)
     keep: int | None = None
     """History length (Odometry's Keep); None: the type's default."""
+    decay: bool = False
+    """RViz's Decay Time is set: the drawings are logged in the fixed frame (:mod:`r2d2_viz.viewer.decay`)."""
 
 
 @dataclass
@@ -63,6 +66,7 @@ class DisplayFeed:
         timeline: str = TIMELINE,
         topics: Mapping[str, str] | None = None,
         start_ns: int | None = None,
+        tf: Sequence[TfRecords] = (),
     ) -> None:
         self.notices, self.rec = notices, notices.rec
         self._messages = messages
@@ -75,6 +79,8 @@ class DisplayFeed:
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
         self._anchored: tuple[int, str] | None = None
+        decayed = tf and any(style.decay for style in self.styles.values())
+        self._placer = FixedFramePlacer(tf, fixed_frame) if decayed else None
         self._pull()
         if self._next is not None and topics:  # from the run's start (its first transform) when that is earlier
             first = self._next.time_ns
@@ -135,6 +141,8 @@ class DisplayFeed:
             )
             return
         decoded = self._placed(message.topic, decoded)
+        if style.decay and self._placer is not None and isinstance(decoded, Decoded):
+            decoded = self._placer.place(decoded, message.time_ns)
         time_ns = message.time_ns
         if self.header_time:
             stamp = decoded.stamp_ns if isinstance(decoded, Decoded) else _first_stamp(decoded)

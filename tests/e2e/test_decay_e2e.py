@@ -1,15 +1,17 @@
 """RViz's Decay Time in the real native viewer (Xvfb, lavapipe), checked from the pixels.
 
-The bag (written by rosbags) has two lasers beside each other in ``odom``: ``laser_a`` at y = +1.5 m and
-``laser_b`` at y = -1.5 m (/tf_static). Each publishes one scan a second, at T0 + k s for k = 0..9; scan k is a
-short arc (61 beams over ±0.15 rad, all of one range) at r_k = 1 + 0.35 k m straight ahead (+x). The config
-(``--rviz``) draws /scan_a flat red with Decay Time 5 and /scan_b flat green with none (RViz's default 0: only
-the latest scan), from straight above (TopDownOrtho: +x to the right of the picture, +y up).
+The bag (written by rosbags) has two lasers driving side by side along +x of ``odom`` at 0.35 m/s (/tf):
+``laser_a`` at y = +1.5 m, ``laser_b`` at y = -1.5 m. Each publishes one scan a second, at T0 + k s for
+k = 0..9 (the laser then at x = 0.35 k); scan k is a short arc (61 beams over ±0.15 rad, all 1 m) straight ahead,
+at x = 1 + 0.35 k in ``odom``. The config (``--rviz``) draws /scan_a flat red with Decay Time 5 and /scan_b flat
+green with none (RViz's default 0: only the latest scan), from straight above (TopDownOrtho: +x to the right of
+the picture, +y up).
 
 At 9.5 s, RViz keeps the scans received in the last 5 s (``PointCloudCommon``: dropped once now - received >
-decay), k = 5..9: five red arcs side by side, the rightmost at r_9; one green arc, at r_9 too. Counted as runs of
-red (green) columns in the upper (lower) half of the 3D view. The control: the same bag with Decay Time 0 on
-/scan_a must show one red arc. The viewer's own view reports must hold no error.
+decay), k = 5..9, each where it was received: five red arcs side by side, the rightmost at x = 1 + 0.35 * 9;
+one green arc, there too. Counted as runs of red (green) columns in the upper (lower) half of the 3D view. The
+control: the same bag with Decay Time 0 on /scan_a must show one red arc. The viewer's own view reports must
+hold no error.
 """
 
 from __future__ import annotations
@@ -36,8 +38,7 @@ WINDOW = (1600, 1000)
 VIEW3D: viewers.Region = (0.14, 0.08, 0.62, 0.95)  # inside the 3D view (the side panel is the warnings log)
 
 
-def radius(k: int) -> float:
-    return 1.0 + 0.35 * k
+STEP = 0.35  # m a second
 
 
 def _scan(frame: str, k: int) -> bytes:
@@ -52,24 +53,23 @@ def _scan(frame: str, k: int) -> bytes:
             scan_time=1.0,
             range_min=0.1,
             range_max=10.0,
-            ranges=np.full(n, radius(k), dtype=np.float32),
+            ranges=np.full(n, 1.0, dtype=np.float32),
             intensities=np.zeros(0, np.float32),
         )
     )
 
 
 def write_decay_bag(path: Path) -> Path:
-    types = {"/tf_static": "tf2_msgs/msg/TFMessage"}
+    types = {"/tf": "tf2_msgs/msg/TFMessage"}
     types |= {"/scan_a": "sensor_msgs/msg/LaserScan", "/scan_b": "sensor_msgs/msg/LaserScan"}
     spec = BagSpec(types=types)
-    lasers = [
-        (T0, "odom", "laser_a", (0.0, 1.5, 0.0), (0, 0, 0, 1)),
-        (T0, "odom", "laser_b", (0.0, -1.5, 0.0), (0, 0, 0, 1)),
-    ]
-    spec.add("/tf_static", T0, tf_message(lasers))
     for k in range(SCANS):
-        spec.add("/scan_a", T0 + k * S + 1, _scan("laser_a", k))
-        spec.add("/scan_b", T0 + k * S + 2, _scan("laser_b", k))
+        t = T0 + k * S
+        lasers = [(t, "odom", "laser_a", (STEP * k, 1.5, 0.0), (0, 0, 0, 1))]
+        lasers.append((t, "odom", "laser_b", (STEP * k, -1.5, 0.0), (0, 0, 0, 1)))
+        spec.add("/tf", t, tf_message(lasers))
+        spec.add("/scan_a", t + 1, _scan("laser_a", k))
+        spec.add("/scan_b", t + 2, _scan("laser_b", k))
     spec.messages.sort(key=lambda m: m[1])
     return write_bag(path, spec, storage="mcap")
 
@@ -156,8 +156,8 @@ def test_decay_time_keeps_the_last_seconds_of_scans(
         assert len(red) == 1, found
         return
     assert len(red) == 5, found  # k = 5..9: received in the last 5 s before 9.5 s
-    # the newest red arc is scan 9, as far out as the green one (both lasers at x = 0); the red arcs step outwards
-    # evenly (0.35 m apart), so they are scans 5..9
+    # the newest red arc is scan 9, level with the green one (the lasers drive side by side); the red arcs step
+    # evenly (0.35 m apart, where the laser was at each scan), so they are scans 5..9
     centres = [(a + b) / 2 for a, b in red]
     green = sum(found["green"][0]) / 2
     steps = np.diff(centres)

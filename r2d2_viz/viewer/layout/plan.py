@@ -164,7 +164,9 @@ def _styles(spec: ViewSpec) -> dict[str, DisplayStyle]:
         if s.covariance is not None:
             changes["odometry_covariance"] = s.covariance
         keep = s.keep if s.keep and s.keep > 0 else None
-        styles[display.topic] = DisplayStyle(dataclasses.replace(DecodeOptions(), **changes), keep=keep)
+        decay = s.decay_time is not None and s.decay_time > 0 and display.enabled
+        options = dataclasses.replace(DecodeOptions(), **changes)
+        styles[display.topic] = DisplayStyle(options, keep=keep, decay=decay)
     return styles
 
 
