@@ -216,6 +216,10 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     styles=view.display_styles,
                     source_name=str(config.bag),
                     topics=plan.displays,
+                    start_ns=int(plan.moving_tf.times_ns.min())
+                    if plan.moving_tf is not None and len(plan.moving_tf)
+                    else None,
+                    tf=[r for r in (plan.static_tf, plan.moving_tf) if r is not None],
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.push(plan.seek_messages)

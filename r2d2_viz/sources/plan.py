@@ -78,7 +78,8 @@ class RunPlan:
     preview_joints: SampleChunk | None = None
     """The first joint states (the view is fitted to the robot in them)."""
     preview_messages: tuple[TopicMessage, ...] = ()
-    """The first display messages (the view frames what they draw)."""
+    """The first display messages, and the first two of each topic in the look-ahead (the view frames what they
+    draw; their frames are checked against the TF tree)."""
     seek_messages: tuple[TopicMessage, ...] = ()
     """Shown first: the latest maps before a seek."""
 
@@ -246,13 +247,18 @@ def _tf_preview(bag: Bag, time: TimeSource, start: int, stop: int) -> TfRecords 
 
 
 def _preview(preview: BagPass) -> tuple[SampleChunk | None, tuple[TopicMessage, ...]]:
-    """The look-ahead's joint states and its first display messages."""
+    """The look-ahead's joint states, and its first display messages with the first two of every topic (the
+    view frames what they draw; their frames are checked against the TF tree)."""
     chunks: list[SampleChunk] = []
     messages: list[TopicMessage] = []
+    per_topic: dict[str, int] = {}
     for window in preview.windows(10_000):
         if window.joints is not None:
             chunks.append(window.joints)
-        messages += window.displays[: PREVIEW_MESSAGES - len(messages)]
+        for message in window.displays:
+            per_topic[message.topic] = per_topic.get(message.topic, 0) + 1
+            if len(messages) < PREVIEW_MESSAGES or per_topic[message.topic] <= 2:
+                messages.append(message)
     if not chunks or preview.joints is None:
         return None, tuple(messages)
     state = JointState(preview.joints.joints)

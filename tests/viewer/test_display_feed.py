@@ -66,7 +66,10 @@ def test_a_bags_displays_land_in_their_frames_at_their_times(tmp_path: Path, sto
     assert grid.temporal["InstancePoses3D:translations"][at] == [[-1, -0.5, 0]]
     # markers: the cube kept its 1 s lifetime, the sphere was deleted
     cube, ball = recording["/markers/boxes/1"], recording["/markers/balls/7"]
-    assert cube.times[0] == MARKER_TIME and cube.temporal["InstancePoses3D:translations"][0] == [[1, 1, 0]]
+    drawn_at = cube.times.index(MARKER_TIME)
+    assert cube.temporal["InstancePoses3D:translations"][drawn_at] == [[1, 1, 0]]
+    # each marker entity sits in its frame from the first display message on, like the topics' entities below
+    assert cube.times[0] == T0 and cube.temporal["CoordinateFrame:frame"][0] == ["odom"]
     assert _clears(cube) == [MARKER_TIME + CUBE_LIFETIME_S * S]
     assert _clears(ball) == [SPHERE_DELETED]
     # odometry keeps RViz's history (Keep 100): three poses on three entities, each still drawn

@@ -21,7 +21,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
-from r2d2_viz.rviz.spec import Camera, ViewSpec
+from r2d2_viz.rviz.spec import Camera, TopicDisplay, ViewSpec
 from r2d2_viz.viewer.entities import APP_ID, JOINTS_CONTINUOUS, JOINTS_LIMITED, LIMITS, TF, TIMELINE, WARNINGS, path
 
 DEFAULT_BLUEPRINT_PATH = Path("blueprints/r2d2.rbl")
@@ -45,6 +45,9 @@ class Layout:
     """False hides the TF arrows (robots with many frames)."""
     fixed_frame: str | None = None
     """The run's fixed frame, instead of the config's (a bag's TF root)."""
+    flat_images: tuple[str, ...] = ()
+    """Image topics without a camera (no CameraInfo, so no pinhole): kept out of the 3D view, which cannot place
+    them (RViz's 3D view draws none either; each has its 2D view)."""
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
@@ -62,15 +65,17 @@ def generate_blueprint(
     spec = spec or tutorial_spec()
     layout = layout or Layout()
     fixed = layout.fixed_frame or spec.fixed_frame
+    overrides: dict[str, rrb.EntityBehavior | rrb.VisibleTimeRanges] = {**_hidden(spec, layout, hidden_links)}
+    overrides.update(_decay(spec))
     scene = rrb.Spatial3DView(
         name=f"3D: {fixed} (Grid · TF · RobotModel)",
         origin="/",
-        contents=["+ /**", "- /joints/**", f"- {WARNINGS}"],
+        contents=["+ /**", "- /joints/**", f"- {WARNINGS}", *(f"- {topic}/**" for topic in layout.flat_images)],
         background=rrb.Background(color=spec.background),
         line_grid=_grid(spec),
         spatial_information=rrb.SpatialInformation(target_frame=fixed, show_axes=False, show_bounding_box=False),
         eye_controls=_eye(layout.camera or spec.camera),
-        overrides=_hidden(spec, layout, hidden_links),  # type: ignore[arg-type]  # EntityBehavior is accepted
+        overrides=overrides,  # type: ignore[arg-type]  # str keys are entity paths
     )
     parts: dict[str, rrb.View | rrb.Container] = {"scene": scene}
     side: list[rrb.View] = []
@@ -172,6 +177,47 @@ def _hidden(spec: ViewSpec, layout: Layout, hidden_links: Sequence[str]) -> dict
         hidden.extend(["/tf_arrows", TF])  # the arrows on /tf; its transforms still place every frame
     hidden.extend(topic.topic for topic in spec.topics if not topic.enabled and topic.topic.startswith("/"))
     return {entity: rrb.EntityBehavior(visible=False) for entity in dict.fromkeys(hidden)}
+
+
+ODOMETRY_KEEP = 100
+"""RViz's Odometry Keep by default (:data:`r2d2_viz.viewer.display_feed.KEEP`)."""
+TWO_ITEMS = ("PoseWithCovariance", "Wrench", "Twist")
+"""Displays whose message draws two things, logged on ``<topic>/0`` and ``<topic>/1``."""
+
+
+def decay_entities(display: TopicDisplay) -> tuple[str, ...]:
+    """The entities a topic display's messages are drawn on (:mod:`r2d2_viz.viewer.display_feed`): the topic's
+    own, ``<topic>/<i>`` for a message drawn as several things, ``<topic>/<k>`` for Odometry's Keep slots.
+    Markers go on ``<topic>/<ns>/<id>``, known only from the data: none here."""
+    topic, style = display.topic, display.style
+    if display.kind in ("Marker", "MarkerArray", "Image", "Camera"):
+        return ()
+    if display.kind == "Odometry":
+        keep = style.keep if style.keep and style.keep > 0 else ODOMETRY_KEEP
+        slots = [f"{topic}/{k}" for k in range(keep)] if keep > 1 else [topic]
+        return tuple(f"{s}/{i}" for s in slots for i in (0, 1)) if style.covariance else tuple(slots)
+    if display.kind in TWO_ITEMS:
+        return (f"{topic}/0", f"{topic}/1")
+    return (topic,)
+
+
+def _decay(spec: ViewSpec) -> dict[str, rrb.VisibleTimeRanges]:
+    """RViz's Decay Time (seconds; 0: only the latest message) as each drawn entity's visible time range: the
+    messages of the last N seconds before the time cursor, both ends included (``PointCloudCommon``: a cloud is
+    dropped once ``now - received > decay``). An override on a topic's entity does not reach the entities below
+    it, so each entity gets its own."""
+    out: dict[str, rrb.VisibleTimeRanges] = {}
+    for display in spec.topics:
+        seconds = display.style.decay_time
+        if not display.enabled or not display.topic.startswith("/") or seconds is None or seconds <= 0:
+            continue
+        ranges = rrb.VisibleTimeRanges(
+            timeline=TIMELINE,
+            start=rrb.TimeRangeBoundary.cursor_relative(seconds=-seconds),
+            end=rrb.TimeRangeBoundary.cursor_relative(),
+        )
+        out.update(dict.fromkeys(decay_entities(display), ranges))
+    return out
 
 
 def save_blueprint(path: Path = DEFAULT_BLUEPRINT_PATH, spec: ViewSpec | None = None) -> Path:
