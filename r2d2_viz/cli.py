@@ -66,7 +66,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="samples per second (default 30)")
     bags = parser.add_argument_group("replaying a ROS 2 bag (a rosbag2 directory, a .mcap or a .db3 file)")
-    bags.add_argument("--bag", type=Path, default=None, metavar="PATH", help="replay this bag instead of a motion")
+    bags.add_argument(
+        "--bag",
+        type=Path,
+        nargs="+",
+        default=None,
+        metavar="PATH",
+        help="replay this bag instead of a motion; several with --save-dir",
+    )
     bags.add_argument(
         "--speed", type=_number, default=1.0, metavar="FACTOR", help="replay speed, like ros2 bag play --rate"
     )
@@ -81,6 +88,31 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="FRAME",
         help="the 3D view's frame (default: the TF tree's root, or odom)",
+    )
+    fleet = parser.add_argument_group("fleets: many bags, one Rerun dataset")
+    fleet.add_argument(
+        "--save-dir", type=Path, default=None, metavar="DIR", help="convert every --bag to DIR/<bag name>.rrd"
+    )
+    fleet.add_argument("--jobs", type=int, default=None, metavar="N", help="bags converted at once (default: cores)")
+    fleet.add_argument("--force", action="store_true", help="convert again the bags whose output is up to date")
+    fleet.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="convert as Ray tasks: a running cluster (auto, HOST:PORT) or, without ADDRESS, a local Ray",
+    )
+    fleet.add_argument(
+        "--dataset", type=Path, default=None, metavar="DIR", help="serve DIR's recordings as one dataset"
+    )
+    fleet.add_argument(
+        "--summary",
+        nargs="?",
+        const="-",
+        default=None,
+        metavar="OUT",
+        help="with --dataset: print one row per recording, or write it to OUT (.csv, .parquet)",
     )
     ros = parser.add_argument_group("joining a running ROS 2 graph (Cyclone DDS; ROS_DOMAIN_ID and friends apply)")
     ros.add_argument(
@@ -110,7 +142,9 @@ def build_parser() -> argparse.ArgumentParser:
     sinks.add_argument("--headless", action="store_true", help="compute everything, show nothing (checks a URDF)")
     sinks.add_argument("--realtime", action="store_true", help="pace --save to the wall clock like a live run")
     sinks.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address --serve listens on")
-    sinks.add_argument("--port", type=int, default=9876, help="gRPC port for --spawn / --serve (default 9876)")
+    sinks.add_argument(
+        "--port", type=int, default=None, help="gRPC port for --spawn / --serve (default 9876; --dataset: 51234)"
+    )
     sinks.add_argument("--web-port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
     return parser
 
@@ -139,6 +173,16 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from r2d2_viz.runner import RunConfig, print_summary, run
     from r2d2_viz.viewer.sinks import SinkConfig
 
+    if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
+        args.xacro_args = [*(str(b) for b in args.bag if ":=" in str(b)), *args.xacro_args]
+        args.bag = [b for b in args.bag if ":=" not in str(b)] or None
+    fleet = _fleet(args)
+    if fleet is not None:
+        return fleet
+    if args.bag is not None and len(args.bag) > 1:
+        raise UsageError(f"{len(args.bag)} bags: give --save-dir DIR to convert them (one .rrd each)")
+    args.bag = args.bag[0] if args.bag else None
+    args.port = 9876 if args.port is None else args.port
     if args.connect is not None and ":=" in args.connect:  # "--connect ur_type:=ur5e": a xacro argument, not a URL
         args.xacro_args = [args.connect, *args.xacro_args]
         args.connect = CONNECT_DEFAULT
@@ -196,6 +240,48 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     result = run(config, on_ready=lambda message: print(message, file=sys.stderr, flush=True))
     print_summary(result, config)
     return EXIT_OK
+
+
+def _fleet(args: argparse.Namespace) -> int | None:
+    """``--save-dir`` and ``--dataset`` (:mod:`r2d2_viz.fleet`); None: neither was asked for."""
+    from r2d2_viz.errors import UsageError
+
+    given = (("--jobs", args.jobs), ("--force", args.force or None), ("--ray", args.ray))
+    fleet_only = [flag for flag, value in given if value is not None]
+    if args.save_dir is None and args.dataset is None:
+        if fleet_only or args.summary is not None:
+            raise UsageError(f"{(fleet_only or ['--summary'])[0]} goes with --save-dir (or --summary with --dataset)")
+        return None
+    if args.save_dir is not None and args.dataset is not None:
+        raise UsageError("--save-dir converts bags and --dataset serves recordings: one at a time")
+    if args.save_dir is not None:
+        if not args.bag:
+            raise UsageError("--save-dir DIR: give the bags to convert with --bag BAG [BAG ...]")
+        others = [f for f, v in (("--save", args.save), ("--urdf", args.urdf), ("--motion", args.motion)) if v]
+        if others or args.xacro_args:
+            raise UsageError(f"--save-dir converts each bag as it is: {(others or ['xacro arguments'])[0]} not taken")
+        if args.jobs is not None and args.jobs < 1:
+            raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
+        from r2d2_viz.fleet.commands import convert_command
+
+        return convert_command(
+            args.bag, args.save_dir, jobs=args.jobs, force=args.force, ray=args.ray, use_ray=args.ray is not None
+        )
+    if args.bag or fleet_only:
+        raise UsageError(f"--dataset serves recordings; {'--bag' if args.bag else fleet_only[0]} goes with --save-dir")
+    live = [f for f, on in (("--spawn", args.spawn), ("--serve", args.serve), ("--headless", args.headless)) if on]
+    if len(live) > 1:
+        raise UsageError(f"choose one of {' and '.join(live)}")
+    from r2d2_viz.fleet.commands import dataset_command
+
+    return dataset_command(
+        args.dataset,
+        summary=args.summary,
+        bind=args.bind,
+        port=51234 if args.port is None else args.port,
+        viewer=live[0].lstrip("-") if live else "spawn",
+        web_port=args.web_port,
+    )
 
 
 def _list_topics() -> int:
