@@ -12,7 +12,8 @@ How each column is worked out (from what :mod:`r2d2_viz.viewer.catalog` reads):
   every time any edge of the chain moves (from when all of them are known), the chain composed (each edge's
   latest value), and the lengths of the steps summed; 0 when nothing moves it, empty without a robot;
 * ``max_joint_speed``, ``fastest_joint``: the largest |Δq| / Δt between consecutive samples of the joint plots
-  (``/joints/limited``, ``/joints/continuous``: rad/s, or m/s for prismatic joints), and its joint.
+  (``/joints/limited``, ``/joints/continuous``: rad/s, or m/s for prismatic joints), and its joint (of rows at one
+  time the last stands, as in the viewer).
 """
 
 from __future__ import annotations
@@ -76,11 +77,13 @@ def messages_per_type(topics: dict[str, list[object]]) -> dict[str, int]:
 
 def max_joint_speed(times_ns: np.ndarray, values: np.ndarray, names: list[str]) -> tuple[float | None, str | None]:
     """The largest |Δq| / Δt between consecutive samples, and whose (None: fewer than two samples)."""
+    order = np.argsort(times_ns, kind="stable")
+    times_ns, values = times_ns[order].astype(np.int64), values[order]
+    last = np.r_[times_ns[1:] != times_ns[:-1], True]  # several rows at one time: the last one stands
+    times_ns, values = times_ns[last], values[last]
     if len(times_ns) < 2 or not names:
         return None, None
-    dt = np.diff(times_ns.astype(np.int64)) / 1e9
-    keep = dt > 0
-    speeds = np.abs(np.diff(values, axis=0))[keep] / dt[keep, None]
+    speeds = np.abs(np.diff(values, axis=0)) / (np.diff(times_ns) / 1e9)[:, None]
     if not np.isfinite(speeds).any():
         return None, None
     flat = int(np.nanargmax(np.where(np.isfinite(speeds), speeds, -1.0)))
