@@ -20,7 +20,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-
 from bagmaker import T0, TS, BagSpec, Header, joint_state, stamp, string, tf_message, write_bag
 
 from r2d2_viz.robot.model import default_urdf_path

@@ -50,7 +50,8 @@ def convert_command(
         elif use_ray:
             from r2d2_viz.fleet.ray_run import run_ray
 
-            finished = run_ray(work, address=ray or None, on_done=on_done)
+            local = {"num_cpus": jobs} if jobs and not ray else None  # --jobs sizes a local Ray
+            finished = run_ray(work, address=ray or None, on_done=on_done, init=local)
         else:
             finished = run_local(work, workers=jobs or os.cpu_count() or 1, on_done=on_done)
     report.interrupted = not finished

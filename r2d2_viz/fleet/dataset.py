@@ -14,6 +14,7 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from urllib.parse import quote
 
 import pyarrow as pa
 
@@ -93,7 +94,7 @@ def _start_viewer(viewer: str, url: str, *, bind: str, web_port: int, say: Say) 
     else:
         command = [executable, "--serve-web", "--bind", bind, "--web-viewer-port", str(web_port), url]
         host = "localhost" if bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else bind
-        say(f"open http://{host}:{web_port}/?url={url} in a browser")
+        say(f"open http://{host}:{web_port}/?url={quote(url, safe='')} in a browser")
     try:
         return subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError as exc:

@@ -77,7 +77,7 @@ class FleetData:
     """segment → (times ns (n,), joint values (n, joints), joint names)."""
     edges: dict[str, list[tuple[str, str, np.ndarray, np.ndarray, np.ndarray]]] = field(default_factory=dict)
     """segment → every /tf and /tf_static row: (parent, child, times ns (n,) — empty for static, xyz (n, 3),
-    xyzw (n, 4))."""
+    xyzw (n, 4)). Rotations only as quaternions (as the app writes them; a matrix or axis-angle reads as none)."""
     links: dict[str, set[str]] = field(default_factory=dict)
     """segment → the robot's links (the frames its /robot/** shapes are drawn in)."""
 
@@ -167,20 +167,28 @@ def _transforms(
             continue
         if "Transform3D:child_frame" not in names:
             continue
-        parents = batch.column("Transform3D:parent_frame").to_pylist()
         children = batch.column("Transform3D:child_frame").to_pylist()
-        xyz = batch.column("Transform3D:translation").to_pylist()
-        quat = batch.column("Transform3D:quaternion").to_pylist()
+        parents = _column(batch, "Transform3D:parent_frame", None)
+        xyz = _column(batch, "Transform3D:translation", [0.0, 0.0, 0.0])
+        quat = _column(batch, "Transform3D:quaternion", [0.0, 0.0, 0.0, 1.0])
         times = batch.column("time").cast(pa.int64()).to_pylist() if "time" in names else [None] * batch.num_rows
         by_edge: dict[tuple[str, str], list[tuple[int | None, list[float], list[float]]]] = {}
         for p, c, t, v, q in zip(parents, children, times, xyz, quat, strict=True):
             for i in range(len(c or ())):  # one edge per row as the app logs them; several are read too
                 if p and v and q:
                     k = min(i, len(p) - 1), min(i, len(v) - 1), min(i, len(q) - 1)
-                    by_edge.setdefault((p[k[0]], c[i]), []).append((t, v[k[1]], q[k[2]]))
+                    if p[k[0]] is not None:  # (no parent frame: the entity tree's, not a TF edge)
+                        by_edge.setdefault((p[k[0]], c[i]), []).append((t, v[k[1]], q[k[2]]))
         for (parent, child), rows in by_edge.items():
             stamps = np.array([r[0] for r in rows if r[0] is not None], np.int64)
             edges.append(
                 (parent, child, stamps, np.array([r[1] for r in rows], float), np.array([r[2] for r in rows], float))
             )
     return edges, links
+
+
+def _column(batch: pa.RecordBatch, name: str, default: Any) -> list[Any]:
+    """Each row's values; a transform without this part has its identity (what the app writes has them all)."""
+    if name not in batch.schema.names:
+        return [[default]] * batch.num_rows
+    return [v if v else [default] for v in batch.column(name).to_pylist()]
