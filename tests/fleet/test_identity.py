@@ -44,7 +44,7 @@ def test_missing_and_non_bags_are_one_line(tmp_path: Path) -> None:
     with pytest.raises(UsageError, match="no such bag"):
         identify(tmp_path / "nope")
     (tmp_path / "empty").mkdir()
-    with pytest.raises(UsageError, match="no .mcap or .db3 file is not a bag"):
+    with pytest.raises(UsageError, match=r"no \.mcap or \.db3 file is not a bag"):
         identify(tmp_path / "empty")
 
 
