@@ -105,3 +105,17 @@ def test_bad_folders_are_one_line(fleet: Path, tmp_path: Path) -> None:
     assert result.returncode == 2 and "--spawn: no display" in result.stderr
     result = cli("--dataset", str(fleet), "--bag", str(fleet))
     assert result.returncode == 2 and "--bag goes with --save-dir" in result.stderr
+
+
+def test_the_example_sums_up_the_fleet(fleet: Path, tmp_path: Path) -> None:
+    example = Path(__file__).resolve().parents[2] / "examples" / "fleet_summary.py"
+    result = subprocess.run(
+        [sys.executable, str(example), str(fleet), "--csv", str(tmp_path / "f.csv")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    # still_bag: no transforms, so the base never moves (0 m); 3 samples 0.1 s apart
+    assert result.stdout.splitlines()[0] == "2 runs, 0.00 h, the robots' bases travelled 0.0 m in all"
+    assert "alpha" in result.stdout and "beta" in result.stdout and (tmp_path / "f.csv").exists()
