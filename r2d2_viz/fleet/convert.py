@@ -22,6 +22,7 @@ from pathlib import Path
 
 from r2d2_viz.errors import R2d2VizError, UsageError, one_line
 from r2d2_viz.fleet.identity import BagId, identify, is_up_to_date, output_path
+from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.viewer.catalog import MARKER_PROPERTY, TOPICS_PROPERTY, recording_marker
 
 KILL_ENV = "R2D2_VIZ_FLEET_KILL"
@@ -156,12 +157,12 @@ def remove_partials(jobs: Iterable[Job]) -> None:
 
 def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:
     """Convert ``jobs`` in ``workers`` processes; False if interrupted (finished outputs kept)."""
-    broken: list[Job] = []
     try:
-        broken = _pool(jobs, workers, on_done)
-        for job in broken:  # alone, once more: a dying worker takes the others in its pool down with it
-            if _pool([job], 1, on_done):
-                on_done(Outcome(job, "its worker process died (killed, or out of memory)"))
+        with sigterm_raises():  # SIGTERM stops it as Ctrl-C does
+            broken = _pool(jobs, workers, on_done)
+            for job in broken:  # alone, once more: a dying worker takes the others in its pool down with it
+                if _pool([job], 1, on_done):
+                    on_done(Outcome(job, "its worker process died (killed, or out of memory)"))
     except KeyboardInterrupt:
         for child in multiprocessing.active_children():
             child.terminate()  # the runner turns SIGTERM into a clean stop: its partial file removed

@@ -20,6 +20,7 @@ import pyarrow as pa
 
 from r2d2_viz.errors import SinkError, UsageError
 from r2d2_viz.fleet.summary import summarise
+from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.viewer.catalog import catalog_server, read_fleet, server_url
 from r2d2_viz.viewer.sinks import viewer_executable
 
@@ -68,9 +69,10 @@ def serve_dataset(
         process = _start_viewer(viewer, local, bind=bind, web_port=web_port, say=say)
         say(f"serving dataset {name!r} ({directory}) at {local}; Ctrl-C stops")
         try:
-            deadline = None if stop_after is None else time.monotonic() + stop_after
-            while deadline is None or time.monotonic() < deadline:
-                time.sleep(0.2)
+            with sigterm_raises():  # SIGTERM stops it as Ctrl-C does
+                deadline = None if stop_after is None else time.monotonic() + stop_after
+                while deadline is None or time.monotonic() < deadline:
+                    time.sleep(0.2)
         except KeyboardInterrupt:
             pass
         finally:

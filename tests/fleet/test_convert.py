@@ -138,7 +138,8 @@ def test_a_worker_that_dies_fails_its_bag_and_the_rest_finish(tmp_path: Path) ->
     assert sorted(p.name for p in out.iterdir()) == ["one.rrd", "three.rrd"]
 
 
-def test_ctrl_c_keeps_finished_recordings_and_leaves_no_partial_one(tmp_path: Path) -> None:
+@pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
+def test_ctrl_c_keeps_finished_recordings_and_leaves_no_partial_one(tmp_path: Path, how: str) -> None:
     bags = [still_bag(tmp_path / f"bag{k}", samples=20) for k in range(6)]
     out = tmp_path / "out"
     exe = str(Path(sys.executable).parent / "r2d2-viz")
@@ -152,12 +153,17 @@ def test_ctrl_c_keeps_finished_recordings_and_leaves_no_partial_one(tmp_path: Pa
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not list(out.glob("*.rrd")) and proc.poll() is None:
         time.sleep(0.05)
-    os.killpg(proc.pid, signal.SIGINT)  # as a terminal does: to the whole foreground group
+    if how == "ctrl-c":
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal does: to the whole foreground group
+    else:
+        proc.send_signal(signal.SIGTERM)  # to the app alone: it stops its workers
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
     finished = sorted(out.glob("*.rrd"))
     assert 1 <= len(finished) < 6 and not _hidden(out)
+    time.sleep(1)
+    assert not _hidden(out) and sorted(out.glob("*.rrd")) == finished  # no worker went on writing
     for rrd in finished:
         assert _recording_id(rrd) == _expected_id(tmp_path / rrd.stem)
 

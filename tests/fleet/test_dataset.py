@@ -51,8 +51,12 @@ def _start(*args: str) -> tuple[subprocess.Popen[str], str]:
     return proc, "".join(lines)
 
 
-def _stop(proc: subprocess.Popen[str]) -> int:
-    os.killpg(proc.pid, signal.SIGINT)
+def _stop(proc: subprocess.Popen[str], how: signal.Signals = signal.SIGINT) -> int:
+    """Ctrl-C as a terminal sends it (to the whole group), or SIGTERM to the app alone."""
+    if how == signal.SIGINT:
+        os.killpg(proc.pid, how)
+    else:
+        proc.send_signal(how)
     return proc.wait(timeout=30)
 
 
@@ -69,7 +73,7 @@ def test_a_catalog_client_sees_one_segment_per_recording(fleet: Path) -> None:
         expected = {str(RrdReader(p).recordings()[0].recording_id) for p in fleet.glob("*.rrd")}
         assert set(dataset.segment_ids()) == expected and len(expected) == 2
     finally:
-        code = _stop(proc)
+        code = _stop(proc, signal.SIGTERM)
     assert code == 0
     assert not listening_addresses(port)
 
