@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Fleet conversion (issue 25): 12 bags, ``--jobs 2`` beside ``--jobs 1``, side by side in one run.
 
-    python benchmarks/fleet.py                  # 12 bags of 60 s (R2D2 at 100 Hz, /tf at 50 Hz), 3 rounds
+    python benchmarks/fleet.py                  # 12 bags of 15 min (R2D2 at 100 Hz, /tf at 50 Hz), 3 rounds
     python benchmarks/fleet.py --smoke          # 12 bags of 3 s, one round: a CI smoke run, no threshold
     python benchmarks/fleet.py --ray            # and a third column: --ray on a local Ray (two CPUs)
 
@@ -96,7 +96,7 @@ def convert(bags: list[Path], out: Path, how: list[str]) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--smoke", action="store_true", help="12 bags of 3 s, one round (CI)")
-    parser.add_argument("--seconds", type=float, default=60.0, help="length of each bag (default 60)")
+    parser.add_argument("--seconds", type=float, default=900.0, help="length of each bag (default 900)")
     parser.add_argument("--rounds", type=int, default=3, help="rounds of each job count (default 3)")
     parser.add_argument("--ray", action="store_true", help="also --ray on a local Ray with two CPUs")
     args = parser.parse_args()

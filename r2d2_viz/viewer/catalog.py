@@ -27,6 +27,9 @@ MARKER_PROPERTY = "r2d2_viz"
 TOPICS_PROPERTY = "bag_topics"
 """JSON ``{topic: [type, message count]}`` from the bag's index, written by the fleet conversion."""
 INSTALL_CATALOG = "pip install 'r2d2-viz[catalog]'"
+PROPERTY_CHUNKS = 16
+"""How far into a recording its properties are looked for (a fleet recording's are its first chunks): checking
+whether an output of gigabytes is up to date reads kilobytes."""
 
 
 def recording_marker(path: Path) -> tuple[str, str | None] | None:
@@ -38,11 +41,14 @@ def recording_marker(path: Path) -> tuple[str, str | None] | None:
             return None
         store = stores[0]
         marker = None
-        for chunk in reader.stream(store=store).filter(content=f"/__properties/{MARKER_PROPERTY}"):
-            batch = chunk.to_record_batch()
-            if "value" in batch.schema.names:
-                values = batch.column("value").to_pylist()
-                marker = values[-1][0] if values and values[-1] else marker
+        for k, chunk in enumerate(reader.stream(store=store)):  # the properties come first: read no further
+            if chunk.entity_path == f"/__properties/{MARKER_PROPERTY}":
+                batch = chunk.to_record_batch()
+                if "value" in batch.schema.names:
+                    values = batch.column("value").to_pylist()
+                    marker = values[-1][0] if values and values[-1] else marker
+            elif k >= PROPERTY_CHUNKS or not chunk.entity_path.startswith("/__properties"):
+                break
         return str(store.recording_id), marker
     except Exception:  # a torn or foreign file: not up to date, converted again
         return None
