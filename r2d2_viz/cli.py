@@ -176,9 +176,11 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
         args.xacro_args = [*(str(b) for b in args.bag if ":=" in str(b)), *args.xacro_args]
         args.bag = [b for b in args.bag if ":=" not in str(b)] or None
-    fleet = _fleet(args)
-    if fleet is not None:
-        return fleet
+    fleet = (args.save_dir, args.dataset, args.jobs, args.ray, args.summary)
+    if args.force or any(value is not None for value in fleet):
+        from r2d2_viz.fleet.commands import fleet_main
+
+        return fleet_main(args)
     if args.bag is not None and len(args.bag) > 1:
         raise UsageError(f"{len(args.bag)} bags: give --save-dir DIR to convert them (one .rrd each)")
     args.bag = args.bag[0] if args.bag else None
@@ -240,48 +242,6 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     result = run(config, on_ready=lambda message: print(message, file=sys.stderr, flush=True))
     print_summary(result, config)
     return EXIT_OK
-
-
-def _fleet(args: argparse.Namespace) -> int | None:
-    """``--save-dir`` and ``--dataset`` (:mod:`r2d2_viz.fleet`); None: neither was asked for."""
-    from r2d2_viz.errors import UsageError
-
-    given = (("--jobs", args.jobs), ("--force", args.force or None), ("--ray", args.ray))
-    fleet_only = [flag for flag, value in given if value is not None]
-    if args.save_dir is None and args.dataset is None:
-        if fleet_only or args.summary is not None:
-            raise UsageError(f"{(fleet_only or ['--summary'])[0]} goes with --save-dir (or --summary with --dataset)")
-        return None
-    if args.save_dir is not None and args.dataset is not None:
-        raise UsageError("--save-dir converts bags and --dataset serves recordings: one at a time")
-    if args.save_dir is not None:
-        if not args.bag:
-            raise UsageError("--save-dir DIR: give the bags to convert with --bag BAG [BAG ...]")
-        others = [f for f, v in (("--save", args.save), ("--urdf", args.urdf), ("--motion", args.motion)) if v]
-        if others or args.xacro_args:
-            raise UsageError(f"--save-dir converts each bag as it is: {(others or ['xacro arguments'])[0]} not taken")
-        if args.jobs is not None and args.jobs < 1:
-            raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
-        from r2d2_viz.fleet.commands import convert_command
-
-        return convert_command(
-            args.bag, args.save_dir, jobs=args.jobs, force=args.force, ray=args.ray, use_ray=args.ray is not None
-        )
-    if args.bag or fleet_only:
-        raise UsageError(f"--dataset serves recordings; {'--bag' if args.bag else fleet_only[0]} goes with --save-dir")
-    live = [f for f, on in (("--spawn", args.spawn), ("--serve", args.serve), ("--headless", args.headless)) if on]
-    if len(live) > 1:
-        raise UsageError(f"choose one of {' and '.join(live)}")
-    from r2d2_viz.fleet.commands import dataset_command
-
-    return dataset_command(
-        args.dataset,
-        summary=args.summary,
-        bind=args.bind,
-        port=51234 if args.port is None else args.port,
-        viewer=live[0].lstrip("-") if live else "spawn",
-        web_port=args.web_port,
-    )
 
 
 def _list_topics() -> int:

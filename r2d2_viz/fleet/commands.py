@@ -5,6 +5,7 @@ overall progress bar on a terminal (bags and bytes done, ETA; off a terminal onl
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 import time
@@ -13,6 +14,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from r2d2_viz.errors import UsageError
 from r2d2_viz.fleet.convert import FleetReport, Outcome, Progress, plan_jobs, run_local
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
@@ -20,6 +22,40 @@ EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
 
 def _say(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
+
+
+def fleet_main(args: argparse.Namespace) -> int:
+    """``--save-dir`` and ``--dataset`` and their flags, checked; the exit code."""
+    given = (("--jobs", args.jobs), ("--force", args.force or None), ("--ray", args.ray))
+    fleet_only = [flag for flag, value in given if value is not None]
+    if args.save_dir is None and args.dataset is None:
+        raise UsageError(f"{(fleet_only or ['--summary'])[0]} goes with --save-dir (or --summary with --dataset)")
+    if args.save_dir is not None and args.dataset is not None:
+        raise UsageError("--save-dir converts bags and --dataset serves recordings: one at a time")
+    if args.save_dir is not None:
+        if not args.bag:
+            raise UsageError("--save-dir DIR: give the bags to convert with --bag BAG [BAG ...]")
+        others = [f for f, v in (("--save", args.save), ("--urdf", args.urdf), ("--motion", args.motion)) if v]
+        if others or args.xacro_args:
+            raise UsageError(f"--save-dir converts each bag as it is: {(others or ['xacro arguments'])[0]} not taken")
+        if args.jobs is not None and args.jobs < 1:
+            raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
+        return convert_command(
+            args.bag, args.save_dir, jobs=args.jobs, force=args.force, ray=args.ray, use_ray=args.ray is not None
+        )
+    if args.bag or fleet_only:
+        raise UsageError(f"--dataset serves recordings; {'--bag' if args.bag else fleet_only[0]} goes with --save-dir")
+    live = [f for f, on in (("--spawn", args.spawn), ("--serve", args.serve), ("--headless", args.headless)) if on]
+    if len(live) > 1:
+        raise UsageError(f"choose one of {' and '.join(live)}")
+    return dataset_command(
+        args.dataset,
+        summary=args.summary,
+        bind=args.bind,
+        port=51234 if args.port is None else args.port,
+        viewer=live[0].lstrip("-") if live else "spawn",
+        web_port=args.web_port,
+    )
 
 
 def convert_command(
