@@ -32,8 +32,10 @@ def run_ray(jobs: list[Job], *, address: str | None, on_done: Progress, init: di
     started_here = not ray.is_initialized()
     if started_here:
         try:
-            local = {} if address else {"include_dashboard": False}
-            ray.init(address=address, logging_level="ERROR", log_to_driver=False, **{**local, **(init or {})})
+            local = {} if address else {"include_dashboard": False}  # "local": a new Ray, never one found running
+            ray.init(
+                address=address or "local", logging_level="ERROR", log_to_driver=False, **{**local, **(init or {})}
+            )
         except Exception as exc:
             where = f"--ray {address}" if address else "--ray"
             raise UsageError(f"{where}: cannot start or join Ray: {one_line(exc)}") from None
