@@ -44,6 +44,10 @@ class SinkConfig:
     bind: str = "127.0.0.1"
     port: int = DEFAULT_GRPC_PORT
     web_port: int = DEFAULT_WEB_PORT
+    recording_id: str | None = None
+    """None: a random one (Rerun's default); fleet conversions give each bag its own stable id."""
+    properties: tuple[tuple[str, str], ...] = ()
+    """Recording properties, ``/__properties/<name>`` text values (what a fleet recording says of its bag)."""
 
     @property
     def live(self) -> bool:
@@ -100,7 +104,9 @@ def open_recording(
     """
     if config.headless:
         return Recording(rr.RecordingStream(APP_ID, default_enabled=False))
-    rec = rr.RecordingStream(APP_ID, send_properties=True)
+    rec = rr.RecordingStream(APP_ID, recording_id=config.recording_id, send_properties=True)
+    for name, value in config.properties:
+        rec.send_property(name, rr.AnyValues(value=value))
     sinks: list[rr.FileSink | rr.GrpcSink] = []
     server: subprocess.Popen[bytes] | None = None
     if config.spawn:
