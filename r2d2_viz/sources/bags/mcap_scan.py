@@ -2,7 +2,8 @@
 (summary: channels, schemas, statistics, one chunk index per chunk; each chunk's message indexes): chunks that hold
 none of the wanted topics, or lie outside the time asked for, are never read, and a chunk's wanted messages are
 found from its message indexes as numpy arrays, not record by record. A file without a summary (a recorder that was
-killed leaves none) is read from the start, record by record, up to the first damage. The file is memory-mapped:
+killed leaves none) is walked once when opened, record by record, up to the first damage, and the places, times
+and channels of its chunks noted: later reads go through that index as through the file's own. The file is mmapped:
 uncompressed chunks are handed on as views of the file's pages, not copies. MCAP: https://mcap.dev/spec; lz4 and zstd
 come with ``rosbags``.
 
@@ -30,6 +31,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     OP_MESSAGE,
     OP_SCHEMA,
     OP_STATISTICS,
+    U64,
     BrokenError,
     Channel,
     ChunkIndex,
@@ -63,7 +65,8 @@ class McapScan:
         self.channels: dict[int, Channel] = {}
         self.schemas: dict[int, Schema] = {}
         self.chunks: list[ChunkIndex] | None = None
-        """The chunk index (None: the file has no usable summary and is read from the start)."""
+        """The chunk index: the summary's, or the one noted by the walk of a file without one (None: messages lie
+        outside chunks, and every read walks the file from the start)."""
         self._counts: dict[int, int] = {}
         self._span: tuple[int, int] | None = None
         with path.open("rb") as f:
@@ -167,16 +170,10 @@ class McapScan:
     # --- files without a summary ----------------------------------------------------------------------------------
 
     def _scan_everything(self) -> None:
-        """Channels, schemas, counts and span of a file without a summary: one walk up to its first damage."""
-        first, last, total = 2**64, -1, 0
-        for op, _, body, start, end in self._walk_file():
-            if op != OP_CHUNK:
-                continue
-            for channel_id, t in message_times(body, start, end):
-                self._counts[channel_id] = self._counts.get(channel_id, 0) + 1
-                first, last, total = min(first, t), max(last, t), total + 1
-        if total:
-            self._span = (first, last)
+        """Channels, schemas, counts and span of a file without a summary: one walk up to its first damage. Its
+        chunks' places, times and channels are noted as it goes: later reads go through that index (each a stretch
+        or a few topics) instead of walking the file again, as long as no message lies outside a chunk."""
+        self._counts, self._span, total, self.chunks = _scan_index(self._walk_file(), self._map)
         if self.note:
             self.note = f"{self.note}: recovered {total} messages"
 
@@ -254,3 +251,31 @@ def _topics(channels: dict[int, Channel], schemas: dict[int, Schema], counts: di
         count = (old.count if old else 0) + counts.get(channel.id, 0)
         topics[channel.topic] = TopicInfo(channel.topic, schema.name, count, schema.data, schema.encoding)
     return topics
+
+
+def _scan_index(
+    walked: Iterator[tuple[int, int, memoryview, int, int]], buf: mmap.mmap
+) -> tuple[dict[int, int], tuple[int, int] | None, int, list[ChunkIndex] | None]:
+    """Counts per channel, span, message total and chunk index of a walk through a file (:meth:`McapScan._walk_file`);
+    the index is None when a message lies outside chunks."""
+    counts: dict[int, int] = {}
+    first, last, total = 2**64, -1, 0
+    chunks: list[ChunkIndex] | None = []
+    for op, offset, body, start, end in walked:
+        if op != OP_CHUNK:
+            continue
+        times: list[int] = []
+        channels: set[int] = set()
+        for channel_id, t in message_times(body, start, end):
+            counts[channel_id] = counts.get(channel_id, 0) + 1
+            times.append(t)
+            channels.add(channel_id)
+        if times:
+            first, last, total = min(first, *times), max(last, *times), total + len(times)
+            if chunks is not None and start == 0:  # a chunk's records (start != 0: a message outside chunks)
+                (size,) = U64.unpack_from(buf, offset + 1)
+                chunks.append(ChunkIndex(min(times), max(times), offset, 9 + size, {}, frozenset(channels)))
+            elif start != 0:
+                chunks = None
+    index = sorted(chunks, key=lambda c: (c.start_ns, c.offset)) if chunks is not None else None
+    return counts, ((first, last) if total else None), total, index
