@@ -307,3 +307,60 @@ def test_junk_gives_nothing(tmp_path: Path) -> None:
     huge.write_bytes(b"\x89MCAP0\r\n" + b"\x06" + b"\xff" * 8 + b"\x00" * 50)
     scan = McapScan(huge)
     assert scan.topics == {} and scan.span is None and _read(scan, ["/joint_states"]) == []
+
+
+def _mcap_string(text: str) -> bytes:
+    return struct.pack("<I", len(text)) + text.encode()
+
+
+def test_messages_outside_chunks_are_read_by_a_walk(tmp_path: Path) -> None:
+    """A valid MCAP file whose messages are records of the data section itself (no chunks, no summary), laid out
+    by hand from the spec: Header, Schema, Channel, Message records, Data End, a Footer with summary start 0."""
+    definition = "string data"
+    messages = [(T0 + 30, 1, string("c")), (T0 + 10, 1, string("a")), (T0 + 20, 2, joint_state(T0, ["j"], [1.5]))]
+    records = [
+        _record_bytes(0x01, _mcap_string("ros2") + _mcap_string("by hand")),
+        _record_bytes(
+            0x03,
+            struct.pack("<H", 1)
+            + _mcap_string("std_msgs/msg/String")
+            + _mcap_string("ros2msg")
+            + _mcap_string(definition),
+        ),
+        _record_bytes(
+            0x03,
+            struct.pack("<H", 2)
+            + _mcap_string("sensor_msgs/msg/JointState")
+            + _mcap_string("ros2msg")
+            + _mcap_string(""),
+        ),
+        _record_bytes(
+            0x04, struct.pack("<HH", 1, 1) + _mcap_string("/chatter") + _mcap_string("cdr") + struct.pack("<I", 0)
+        ),
+        _record_bytes(
+            0x04, struct.pack("<HH", 2, 2) + _mcap_string("/joint_states") + _mcap_string("cdr") + struct.pack("<I", 0)
+        ),
+        *(_record_bytes(0x05, struct.pack("<HIQQ", c, k, t, t) + d) for k, (t, c, d) in enumerate(messages)),
+        _record_bytes(0x0F, struct.pack("<I", 0)),
+        _record_bytes(0x02, struct.pack("<QQI", 0, 0, 0)),
+    ]
+    file = tmp_path / "loose.mcap"
+    file.write_bytes(b"\x89MCAP0\r\n" + b"".join(records) + b"\x89MCAP0\r\n")
+    scan = McapScan(file)
+    assert scan.note == "" and scan.chunks is None and scan.span == (T0 + 10, T0 + 30)
+    assert {t: (i.msgtype, i.count, i.definition) for t, i in scan.topics.items()} == {
+        "/chatter": ("std_msgs/msg/String", 2, definition),
+        "/joint_states": ("sensor_msgs/msg/JointState", 1, ""),
+    }
+    assert _read(scan, ["/chatter", "/joint_states"]) == [
+        (T0 + 10, "/chatter", string("a")),
+        (T0 + 20, "/joint_states", joint_state(T0, ["j"], [1.5])),
+        (T0 + 30, "/chatter", string("c")),
+    ]
+    assert _read(scan, ["/chatter"], start_ns=T0 + 11) == [(T0 + 30, "/chatter", string("c"))]
+    assert scan.last("/chatter") == (T0 + 30, string("c"))
+    assert scan.last("/chatter", before_ns=T0 + 30) == (T0 + 10, string("a"))
+
+
+def _record_bytes(op: int, body: bytes) -> bytes:
+    return bytes([op]) + struct.pack("<Q", len(body)) + body
