@@ -78,7 +78,8 @@ def convert_command(
                 report.converted.append(outcome)
             else:
                 report.failed.append((outcome.job.bag, outcome.error))
-                _say(f"error: {outcome.job.bag}: {outcome.error}")
+                error = outcome.error
+                _say(f"error: {error}" if str(outcome.job.bag) in error else f"error: {outcome.job.bag}: {error}")
             advance(outcome)
 
         if not work:

@@ -151,8 +151,10 @@ def convert_one(job: Job) -> Outcome:
 def remove_partials(jobs: Iterable[Job]) -> None:
     """What killed workers left: the hidden temporary files of these outputs (and the runner's own, inside)."""
     for job in jobs:
-        for leftover in job.out.parent.glob(f".{job.out.name}.fleet-*.partial*"):
-            leftover.unlink(missing_ok=True)
+        mine = f".{job.out.name}.fleet-*.partial"
+        for pattern in (mine, f".{mine}.*.partial"):  # ours, and the runner's own beside it (".<ours>.<pid>.partial")
+            for leftover in job.out.parent.glob(pattern):
+                leftover.unlink(missing_ok=True)
 
 
 def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:

@@ -84,7 +84,7 @@ class Bag:
             except Exception as exc:
                 raise BagError(f"{file}: cannot read this bag: {_problem(exc)}") from None
             self._files.append(storage)
-            if storage.note:
+            if storage.note and any(t.count for t in storage.topics.values()):  # nothing read: the error says it
                 listed = sum(expected.values()) if len(files) == 1 else 0
                 self.warn(f"{file}: {storage.note}" + (f" (the metadata lists {listed})" if listed else ""))
         topics: dict[str, TopicInfo] = {}
