@@ -201,19 +201,30 @@ def _converter(own: Typestore, msgtype: str, humble: Typestore) -> Convert:
     return convert
 
 
-@functools.cache
 def to_humble(msgtype: str, definition: str, encoding: str) -> Convert | None:
     """How the messages of a topic of ``msgtype`` whose bag gives ``definition`` (``encoding``: ``ros1msg``,
     ``ros2msg``, ``ros2idl``; "" with none) become decodable as Humble's: None when their CDR bytes already are
     (the same layout, no definition, or a type the app does not decode), else a function converting each message's
-    CDR bytes. Raises ``MsgError`` (once per topic, cached) when the definition cannot be used."""
+    CDR bytes. Raises ``MsgError`` when the definition cannot be used (the answer, or the error, is worked out once
+    per definition)."""
+    convert, error = _to_humble(msgtype, definition, encoding)
+    if error is not None:
+        raise MsgError(str(error))
+    return convert
+
+
+@functools.cache
+def _to_humble(msgtype: str, definition: str, encoding: str) -> tuple[Convert | None, MsgError | None]:
     humble = typestore()
     if not definition or msgtype not in humble.fielddefs:
-        return None
-    own = own_store(msgtype, definition, encoding)
+        return None, None
+    try:
+        own = own_store(msgtype, definition, encoding)
+    except MsgError as exc:
+        return None, exc
     if same_layout(own, msgtype, humble, msgtype):
-        return None
-    return _converter(own, msgtype, humble)
+        return None, None
+    return _converter(own, msgtype, humble), None
 
 
 @functools.cache

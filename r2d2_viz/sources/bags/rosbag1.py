@@ -16,6 +16,8 @@ import struct
 from collections.abc import Collection, Iterator
 from pathlib import Path
 
+import numpy as np
+
 from r2d2_viz.msgs.definitions import Convert, from_ros1
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.rosbag1_records import (
@@ -24,8 +26,10 @@ from r2d2_viz.sources.bags.rosbag1_records import (
     BrokenError,
     Chunk,
     Connection,
+    IndexRows,
     RecordFile,
     chunk_records,
+    message_spans,
     op_of,
     time_ns,
     u32,
@@ -118,6 +122,9 @@ class Rosbag1:
         """``(time, topic, CDR bytes)`` of the messages in ``chunk`` on ``conns`` received in ``[start, stop)``; one
         that does not fit its definition is left out and counted in :attr:`bad_messages`."""
         buf = self._records.chunk_data(chunk.pos, partial=True)
+        index = self._records.chunk_index(chunk)
+        if index is not None:
+            return self._indexed_messages(buf, index, conns, start, stop)
         view = memoryview(buf)
         out: list[tuple[int, str, bytes | memoryview]] = []
         for header, s, e in chunk_records(buf):
@@ -129,12 +136,41 @@ class Rosbag1:
                 continue
             t = time_ns(header.get(b"time", b""))
             if start <= t < stop:
-                try:
-                    out.append((t, conns[c], self._converters[c](view[s:e])))
-                except MsgError as exc:
-                    n, first = self.bad_messages.get(conns[c], (0, str(exc)))
-                    self.bad_messages[conns[c]] = (n + 1, first)
+                self._convert(out, t, c, conns[c], view[s:e])
         return out
+
+    def _indexed_messages(
+        self, buf: bytes, index: dict[int, IndexRows], conns: dict[int, str], start: int, stop: int
+    ) -> list[tuple[int, str, bytes | memoryview]]:
+        """As :meth:`_messages`, the records found through the chunk's index records (no header parsed)."""
+        wanted = [c for c in index if c in conns]
+        if not wanted:
+            return []
+        rows = np.concatenate([index[c] for c in wanted])
+        conn_ids = np.repeat(np.array(wanted, dtype=np.int64), [len(index[c]) for c in wanted])
+        keep = (rows[:, 0] >= start) & (rows[:, 0] < stop)
+        rows, conn_ids = rows[keep], conn_ids[keep]
+        starts, ends, ok = message_spans(np.frombuffer(buf, dtype=np.uint8), rows[:, 1])
+        for c in conn_ids[~ok].tolist():
+            n, first = self.bad_messages.get(conns[c], (0, "its index points outside its chunk"))
+            self.bad_messages[conns[c]] = (n + 1, first)
+        view = memoryview(buf)
+        out: list[tuple[int, str, bytes | memoryview]] = []
+        for t, c, s, e in zip(
+            rows[ok, 0].tolist(), conn_ids[ok].tolist(), starts[ok].tolist(), ends[ok].tolist(), strict=True
+        ):
+            self._convert(out, t, c, conns[c], view[s:e])
+        return out
+
+    def _convert(
+        self, out: list[tuple[int, str, bytes | memoryview]], t: int, conn: int, topic: str, raw: memoryview
+    ) -> None:
+        """Appends ``(t, topic, CDR bytes)``; a message that does not fit its definition is counted instead."""
+        try:
+            out.append((t, topic, self._converters[conn](raw)))
+        except MsgError as exc:
+            n, first = self.bad_messages.get(topic, (0, str(exc)))
+            self.bad_messages[topic] = (n + 1, first)
 
     @property
     def span(self) -> tuple[int, int] | None:

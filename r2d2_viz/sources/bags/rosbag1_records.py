@@ -14,6 +14,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import BinaryIO
 
+import numpy as np
+
 MAGIC = b"#ROSBAG V2.0\n"
 OP_MSG, OP_BAG_HEADER, OP_INDEX, OP_CHUNK, OP_CHUNK_INFO, OP_CONNECTION = 2, 3, 4, 5, 6, 7
 RENAMED_TYPES = {"tf/msg/tfMessage": "tf2_msgs/msg/TFMessage"}
@@ -85,6 +87,13 @@ class Chunk:
     end_ns: int
     """Receive time of its last message (inclusive)."""
     counts: dict[int, int] = field(default_factory=dict)
+    indexed: bool = True
+    """Index records (times and offsets of its messages) follow it in the file."""
+
+
+IndexRows = np.ndarray
+"""Rows of (receive time in ns, offset of the message record in the chunk's data), int64, shape (n, 2)."""
+_INDEX_ENTRY = np.dtype([("sec", "<u4"), ("nsec", "<u4"), ("offset", "<u4")])
 
 
 def connection(header: dict[bytes, bytes], data: bytes) -> Connection:
@@ -116,6 +125,28 @@ def decompress(compression: bytes, data: bytes, size: int) -> bytes:
 
         return bytes(LZ4FrameDecompressor().decompress(data, max_length=size))
     raise ValueError(f"chunk compression {compression.decode('utf-8', 'replace')!r} is not supported")
+
+
+def u32_at(buf: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The little-endian uint32 at each offset ``at`` of the bytes ``buf`` (offsets checked by the caller)."""
+    b = buf[at[:, None] + np.arange(4)].astype(np.int64)
+    return np.asarray(b[:, 0] | (b[:, 1] << 8) | (b[:, 2] << 16) | (b[:, 3] << 24))
+
+
+def message_spans(buf: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For message records at ``offsets`` of a chunk's bytes ``buf``: where each one's data starts and ends, and
+    which of them lie wholly inside ``buf`` (a damaged index may point anywhere)."""
+    n = len(buf)
+    ok = (offsets >= 0) & (offsets + 8 <= n)
+    header_len = np.zeros(len(offsets), dtype=np.int64)
+    header_len[ok] = u32_at(buf, offsets[ok])
+    data_at = offsets + 4 + header_len
+    ok &= data_at + 4 <= n
+    data_len = np.zeros(len(offsets), dtype=np.int64)
+    data_len[ok] = u32_at(buf, data_at[ok])
+    starts = data_at + 4
+    ends = starts + data_len
+    return starts, ends, ok & (ends <= n)
 
 
 def chunk_records(buf: bytes) -> Iterator[tuple[dict[bytes, bytes], int, int]]:
@@ -251,7 +282,30 @@ class RecordFile:
             if not times:
                 return
             chunk.counts, chunk.start_ns, chunk.end_ns = counts, min(times), max(times)
+            chunk.indexed = False
         self.chunks.append(chunk)
+
+    def chunk_index(self, chunk: Chunk) -> dict[int, IndexRows] | None:
+        """Per connection, the times and offsets of the chunk's messages, from the index records that follow it
+        (rosbag writes one per connection after each chunk); None when they are not all there."""
+        if not chunk.indexed:
+            return None
+        try:
+            _, _, _, pos = self.read(chunk.pos, data=False)
+            out: dict[int, IndexRows] = {}
+            for _ in chunk.counts:
+                header, data, _, pos = self.read(pos)
+                count = u32(header, b"count")
+                if op_of(header) != OP_INDEX or len(data) < 12 * count:
+                    return None
+                entries = np.frombuffer(data, dtype=_INDEX_ENTRY, count=count)
+                rows = np.empty((count, 2), dtype=np.int64)
+                rows[:, 0] = entries["sec"].astype(np.int64) * 1_000_000_000 + entries["nsec"]
+                rows[:, 1] = entries["offset"]
+                out[u32(header, b"conn")] = rows
+        except (BrokenError, struct.error):
+            return None
+        return out if set(out) == set(chunk.counts) else None
 
     def chunk_data(self, pos: int, *, partial: bool = False) -> bytes:
         """The decompressed records of the chunk at ``pos`` (``partial``: what there is of one cut short)."""

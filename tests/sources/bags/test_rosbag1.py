@@ -252,3 +252,70 @@ def test_several_types_on_one_topic_keep_the_first(tmp_path: Path) -> None:
     bag = Rosbag1(path)
     assert "/x: connections with other types" in bag.note
     assert [m.header.stamp.sec for _, _, m in _all(bag, ["/x"])] == [1]
+
+
+REAL = Path(__file__).parents[2] / "data" / "bags" / "ros1"
+
+
+def test_a_real_bag_recorded_by_rosbag() -> None:
+    """turtlesim and the tf2 demo, recorded by ROS 1's rosbag (tests/data/bags/ros1/README.md): every /tf and
+    /turtle1/cmd_vel value as rosbags' own reader and ROS 1 deserializer give it."""
+    from rosbags.highlevel import AnyReader
+
+    path = REAL / "example-lz4.bag"
+    expected: dict[str, list[tuple[int, Any]]] = {"/tf": [], "/turtle1/cmd_vel": []}
+    with AnyReader([path]) as reader:
+        conns = [c for c in reader.connections if c.topic in expected]
+        for conn, t, data in reader.messages(conns):
+            expected[conn.topic].append((t, reader.deserialize(data, conn.msgtype)))
+    bag = Rosbag1(path)
+    assert bag.note == ""
+    assert bag.topics["/tf"].msgtype == "tf2_msgs/msg/TFMessage" and bag.topics["/tf"].count == 2688
+    assert bag.topics["/turtle1/pose"].msgtype == "turtlesim/msg/Pose"  # not in Humble: its bag's definition
+    got = _all(bag, list(expected))
+    tf = [(t, m) for t, topic, m in got if topic == "/tf"]
+    assert [t for t, _ in tf] == [t for t, _ in expected["/tf"]]
+    for (_, ours), (_, theirs) in zip(tf, expected["/tf"], strict=True):
+        a, b = ours.transforms[0], theirs.transforms[0]
+        assert (a.header.frame_id, a.child_frame_id, a.header.stamp.nanosec) == (
+            b.header.frame_id,
+            b.child_frame_id,
+            b.header.stamp.nanosec,
+        )
+        assert (a.transform.translation.x, a.transform.translation.y) == (b.transform.translation.x,
+                                                                           b.transform.translation.y)  # fmt: skip
+    twists = [m.linear.x for _, topic, m in got if topic == "/turtle1/cmd_vel"]
+    assert twists == [m.linear.x for _, m in expected["/turtle1/cmd_vel"]] and len(twists) == 357
+
+
+def test_a_real_bag_whose_chunks_are_out_of_time_order() -> None:
+    bag = Rosbag1(REAL / "example-unsorted-chunks.bag")
+    got = _all(bag, ["/foo"])
+    assert [t for t, _, _ in got] == [1_000_000_000, 2_000_000_000, 3_000_000_000]
+    assert bag.span == (1_000_000_000, 3_000_000_000)
+    assert (bag.last("/foo", before_ns=2_500_000_000) or (0, b""))[0] == 2_000_000_000
+
+
+def test_messages_are_found_through_the_index_records_and_a_bad_offset_is_counted(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = _write(tmp_path / "a.bag", "lz4")
+    bag = Rosbag1(path)
+    records = bag._records
+    _, _, _, pos = records.read(records.chunks[0].pos, data=False)
+    _, _, data_at, _ = records.read(pos)  # the first index record after the first chunk
+    bag.close()
+    data = bytearray(path.read_bytes())
+    data[data_at + 8 : data_at + 12] = struct.pack("<I", 0xFFFFFF00)  # its first message's offset, far outside
+    damaged = tmp_path / "damaged.bag"
+    damaged.write_bytes(bytes(data))
+
+    def no_parsing(buf: bytes) -> Any:
+        raise AssertionError("the chunk's records were parsed: its index records were not used")
+
+    monkeypatch.setattr("r2d2_viz.sources.bags.rosbag1.chunk_records", no_parsing)
+    bag = Rosbag1(damaged)
+    got = _all(bag, ["/joint_states", "/tf"])
+    assert len(got) == 599
+    ((count, why),) = bag.bad_messages.values()
+    assert count == 1 and "outside its chunk" in why
