@@ -55,7 +55,13 @@ class Rosbag1:
     def _open(self) -> None:
         size = os.fstat(self._bio.fileno()).st_size
         self._records = RecordFile(self._bio, size)
-        if self._bio.read(len(MAGIC)) != MAGIC:
+        magic = self._bio.read(len(MAGIC))
+        if magic != MAGIC:
+            if magic.startswith(b"#ROSBAG V"):
+                version = magic[9:].split(b"\n")[0].decode("ascii", "replace")
+                raise ValueError(
+                    f"{self.path.name}: ROS 1 bag format {version}: only 2.0 is read (`rosbag fix` converts)"
+                )
             raise ValueError(f"{self.path.name}: not a ROS 1 bag (no '#ROSBAG V2.0' at its start)")
         try:
             header, _, _, first = self._records.read(len(MAGIC), data=False)

@@ -214,11 +214,14 @@ def test_a_bag_cut_anywhere_gives_what_can_be_read(tmp_path: Path) -> None:
 
 
 def test_not_a_bag(tmp_path: Path) -> None:
-    for content in (b"", b"#ROSBAG V1.2\n", b"hello world, not a bag at all", b"#ROSBAG V2.0\n\xff\xff\xff\xff"):
+    for content in (b"", b"hello world, not a bag at all", b"#ROSBAG V2.0\n\xff\xff\xff\xff"):
         path = tmp_path / "x.bag"
         path.write_bytes(content)
         with pytest.raises(ValueError, match=r"x\.bag"):
             Rosbag1(path)
+    (tmp_path / "old.bag").write_bytes(b"#ROSBAG V1.2\n" + bytes(100))
+    with pytest.raises(ValueError, match=r"old\.bag: ROS 1 bag format 1\.2: only 2\.0"):
+        Rosbag1(tmp_path / "old.bag")
     with pytest.raises(OSError):
         Rosbag1(tmp_path / "missing.bag")
 
@@ -319,3 +322,63 @@ def test_messages_are_found_through_the_index_records_and_a_bad_offset_is_counte
     assert len(got) == 599
     ((count, why),) = bag.bad_messages.values()
     assert count == 1 and "outside its chunk" in why
+
+
+def test_a_noetic_marker_array_decodes_through_its_own_definition(tmp_path: Path) -> None:
+    """The issue's case in a ROS 1 bag: Noetic's Marker (no texture fields) → CDR in the bag's layout →
+    ``to_humble`` → the usual decoder, with the values written."""
+    from r2d2_viz.msgs.definitions import to_humble
+    from r2d2_viz.msgs.markers import decode_marker_array
+    from r2d2_viz.msgs.shapes import Boxes, DecodeOptions
+
+    t = NOETIC.types
+    marker = t["visualization_msgs/msg/Marker"](
+        header=_header(3, "odom"),
+        ns="n",
+        id=4,
+        type=1,
+        action=0,
+        pose=t["geometry_msgs/msg/Pose"](
+            position=t["geometry_msgs/msg/Point"](x=1.0, y=2.0, z=3.0),
+            orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+        ),
+        scale=t["geometry_msgs/msg/Vector3"](x=2.0, y=4.0, z=6.0),
+        color=t["std_msgs/msg/ColorRGBA"](r=0.0, g=1.0, b=0.0, a=1.0),
+        lifetime=t["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
+        frame_locked=False,
+        points=[],
+        colors=[],
+        text="",
+        mesh_resource="",
+        mesh_use_embedded_materials=False,
+    )
+    array = t["visualization_msgs/msg/MarkerArray"](markers=[marker])
+    path = tmp_path / "markers.bag"
+    with Writer(path) as writer:
+        c = writer.add_connection("markers", "visualization_msgs/msg/MarkerArray", typestore=NOETIC)
+        writer.write(c, T0, NOETIC.serialize_ros1(array, "visualization_msgs/msg/MarkerArray"))
+    bag = Rosbag1(path)
+    info = bag.topics["/markers"]
+    convert = to_humble(info.msgtype, info.definition, info.encoding)
+    assert convert is not None  # Noetic's layout is not Humble's
+    ((_, data),) = next(iter(bag.blocks(["/markers"]))).pairs()
+    (op,) = decode_marker_array(convert(data), DecodeOptions())
+    assert (op.ns, op.id, op.action) == ("n", 4, "add")
+    assert op.decoded is not None and (op.decoded.frame_id, op.decoded.stamp_ns) == ("odom", 3_000_000_005)
+    (box,) = op.decoded.items
+    assert isinstance(box, Boxes)
+    np.testing.assert_allclose(box.half_sizes, [[1.0, 2.0, 3.0]])
+    np.testing.assert_array_equal(box.colors[0], [0, 255, 0, 255])
+
+
+def test_a_topic_whose_definition_cannot_be_used_is_named_once(tmp_path: Path) -> None:
+    path = tmp_path / "bad-def.bag"
+    with Writer(path) as writer:
+        bad = writer.add_connection("/odd", "odd_msgs/msg/Odd", msgdef="this is } not a definition", md5sum="0" * 32)
+        good = writer.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=NOETIC)
+        writer.write(bad, T0, b"\x00\x00\x00\x00")
+        writer.write(good, T0 + 1, _joint_state(2))
+    bag = Rosbag1(path)
+    assert bag.note.count("/odd") == 1 and "cannot be used" in bag.note
+    assert set(bag.topics) == {"/joint_states"}
+    assert [m.header.stamp.sec for _, _, m in _all(bag, ["/joint_states", "/odd"])] == [2]
