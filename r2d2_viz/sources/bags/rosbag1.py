@@ -15,11 +15,13 @@ import os
 import struct
 from collections.abc import Collection, Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from r2d2_viz.msgs.definitions import Convert, from_ros1
 from r2d2_viz.msgs.typestore import MsgError
+from r2d2_viz.sources.bags.rosbag1_cdr import convert_runs
 from r2d2_viz.sources.bags.rosbag1_records import (
     MAGIC,
     OP_BAG_HEADER,
@@ -80,6 +82,7 @@ class Rosbag1:
                 + (f"; it breaks off at byte {cut_at} of {size}, what follows is lost" if cut_at is not None else "")
             )
         self._converters: dict[int, Convert] = {}
+        self._conn_types: dict[int, tuple[str, str]] = {}
         self.bad_messages: dict[str, tuple[int, str]] = {}
         """Per topic: messages left out because they do not fit their definition (how many, the first error)."""
         self.topics: dict[str, TopicInfo] = {}
@@ -110,6 +113,7 @@ class Rosbag1:
                 notes.append(f"{topic}: {exc}")
                 continue
             ids = [k.id for k in same]
+            self._conn_types.update(dict.fromkeys(ids, (first.msgtype, first.definition)))
             self._converters.update(dict.fromkeys(ids, convert))
             self._topic_conns[topic] = ids
             self.topics[topic] = TopicInfo(
@@ -158,25 +162,27 @@ class Rosbag1:
         rows, conn_ids = rows[keep], conn_ids[keep]
         starts, ends, ok = message_spans(np.frombuffer(buf, dtype=np.uint8), rows[:, 1])
         for c in conn_ids[~ok].tolist():
-            n, first = self.bad_messages.get(conns[c], (0, "its index points outside its chunk"))
-            self.bad_messages[conns[c]] = (n + 1, first)
+            self._bad(conns[c], "its index points outside its chunk")
+        rows, conn_ids, starts, ends = rows[ok], conn_ids[ok], starts[ok], ends[ok]
+        done = convert_runs(np.frombuffer(buf, dtype=np.uint8), conn_ids, starts, ends, self._conn_types)
         view = memoryview(buf)
         out: list[tuple[int, str, bytes | memoryview]] = []
-        for t, c, s, e in zip(
-            rows[ok, 0].tolist(), conn_ids[ok].tolist(), starts[ok].tolist(), ends[ok].tolist(), strict=True
-        ):
-            self._convert(out, t, c, conns[c], view[s:e])
+        columns = (rows[:, 0].tolist(), conn_ids.tolist(), starts.tolist(), ends.tolist())
+        for i, (t, c, s, e) in enumerate(zip(*columns, strict=True)):
+            self._convert(out, t, c, conns[c], view[s:e], done.get(i))
         return out
 
-    def _convert(
-        self, out: list[tuple[int, str, bytes | memoryview]], t: int, conn: int, topic: str, raw: memoryview
-    ) -> None:
-        """Appends ``(t, topic, CDR bytes)``; a message that does not fit its definition is counted instead."""
+    def _convert(self, out: list[Any], t: int, conn: int, topic: str, raw: memoryview, cdr: Any = None) -> None:
+        """Appends ``(t, topic, CDR bytes)`` (``cdr`` when converted already); a message that does not fit its
+        definition is counted instead."""
         try:
-            out.append((t, topic, self._converters[conn](raw)))
+            out.append((t, topic, self._converters[conn](raw) if cdr is None else cdr))
         except MsgError as exc:
-            n, first = self.bad_messages.get(topic, (0, str(exc)))
-            self.bad_messages[topic] = (n + 1, first)
+            self._bad(topic, str(exc))
+
+    def _bad(self, topic: str, why: str) -> None:
+        n, first = self.bad_messages.get(topic, (0, why))
+        self.bad_messages[topic] = (n + 1, first)
 
     @property
     def span(self) -> tuple[int, int] | None:

@@ -382,3 +382,37 @@ def test_a_topic_whose_definition_cannot_be_used_is_named_once(tmp_path: Path) -
     assert bag.note.count("/odd") == 1 and "cannot be used" in bag.note
     assert set(bag.topics) == {"/joint_states"}
     assert [m.header.stamp.sec for _, _, m in _all(bag, ["/joint_states", "/odd"])] == [2]
+
+
+def test_runs_of_one_shape_are_converted_together_and_agree_with_rosbags(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One chunk of 300 JointStates and 300 tf messages (two child names of one length): all converted as runs,
+    every byte as rosbags' reader and conversion give it."""
+    from rosbags.rosbag1 import Reader
+
+    import r2d2_viz.sources.bags.rosbag1 as module
+
+    path = _write(tmp_path / "one-chunk.bag", "none", threshold=1 << 20)
+    batched: list[int] = []
+    original = module.convert_runs
+    monkeypatch.setattr(module, "convert_runs", lambda *a: batched.append(len(r := original(*a))) or r)
+    convert = get_typestore(Stores.EMPTY)
+    convert.register(
+        {**NOETIC.fielddefs, "std_msgs/msg/Header": get_typestore(Stores.ROS2_HUMBLE).fielddefs["std_msgs/msg/Header"]}
+    )
+    with Reader(path) as reader:
+        expected = {
+            (t, bytes(convert.ros1_to_cdr(d, "sensor_msgs/msg/JointState")))
+            for c, t, d in reader.messages()
+            if c.topic == "joint_states"
+        }
+    bag = Rosbag1(path)
+    got = {
+        (t, bytes(d))
+        for b in bag.blocks(["/joint_states", "/tf"])
+        for t, topic, d in b.messages()
+        if topic == "/joint_states"
+    }
+    assert got == expected and len(got) == 300
+    assert batched == [600]
