@@ -169,3 +169,24 @@ def test_ros1_bytes_to_cdr_with_a_pre_2010_header() -> None:
         assert (got.point.x, got.point.y, got.point.z) == (0.5, 1.5, 2.5)
     with pytest.raises(MsgError, match="cannot convert from ROS 1"):
         from_ros1("geometry_msgs/msg/PointStamped", definition)(bytes(raw)[:-3])
+
+
+def test_which_distros_definitions_need_converting() -> None:
+    """Known history of the message packages: Humble added Marker's texture and mesh_file fields (Foxy and Noetic
+    lack them); Jazzy added Range's ``variance``. Everything else the app decodes kept its layout."""
+    from r2d2_viz.msgs.registry import DECODERS
+
+    expected = {
+        Stores.ROS2_HUMBLE: set(),
+        Stores.ROS2_JAZZY: {"sensor_msgs/msg/Range"},
+        Stores.ROS2_FOXY: {"visualization_msgs/msg/Marker", "visualization_msgs/msg/MarkerArray"},
+        Stores.ROS1_NOETIC: {"visualization_msgs/msg/Marker", "visualization_msgs/msg/MarkerArray"},
+    }
+    for distro, differing in expected.items():
+        store, ros1 = get_typestore(distro), distro == Stores.ROS1_NOETIC
+        got = set()
+        for msgtype in [*DECODERS, "sensor_msgs/msg/JointState"]:
+            definition, _ = store.generate_msgdef(msgtype, ros_version=1 if ros1 else 2)
+            if to_humble(msgtype, definition, "ros1msg" if ros1 else "ros2msg") is not None:
+                got.add(msgtype)
+        assert got == differing, distro
