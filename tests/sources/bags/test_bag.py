@@ -94,7 +94,9 @@ def _error(path: Path) -> str:
 def test_missing_and_wrong_paths(tmp_path: Path) -> None:
     assert "no such file" in _error(tmp_path / "nothing.mcap")
     (tmp_path / "notes.txt").write_text("hi")
-    assert "not a ROS 2 bag" in _error(tmp_path / "notes.txt")
+    assert "not a bag (expected a rosbag2 directory, a .mcap or .db3 file, or a ROS 1 .bag file)" in _error(
+        tmp_path / "notes.txt"
+    )
     (tmp_path / "dir").mkdir()
     (tmp_path / "dir" / "notes.txt").write_text("hi")
     assert "not a ROS 2 bag (no metadata.yaml, no .db3 or .mcap file" in _error(tmp_path / "dir")
