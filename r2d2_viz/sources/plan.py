@@ -161,7 +161,9 @@ def plan_bag(
     joints, messages = _preview(preview)
     if robot is None:
         what = "its transforms and display topics" if shown else "a TF-only replay (frames, axes, arrows)"
-        notes.append(f"{bag.path}: no --urdf and no /robot_description: no robot, {what}")
+        ros1 = any(f.suffix == ".bag" for f in bag.files) and JOINTS in bag.topics
+        why = " (in ROS 1, robot_description is a parameter, not a topic: give the robot with --urdf)" if ros1 else ""
+        notes.append(f"{bag.path}: no --urdf and no /robot_description: no robot, {what}{why}")
     frame = fixed_frame or tf_root(records) or _one_display_frame(records, robot, messages) or ODOM
     skip: frozenset[tuple[str, str]] = frozenset()
     if tree is not None:
