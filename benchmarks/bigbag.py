@@ -24,11 +24,10 @@ Every figure is a whole command in a subprocess, side by side in the same run, a
   through ``mmap``, shared libraries) are not counted: they are the page cache's, not the program's;
 * the same for a 30 s bag of the same kind (the goal: the 150 s bag ≤ 500 MB and ≤ 1.25× (+50 MB) of it);
 * a live replay's **time to first data**: ``r2d2-viz --bag BAG --save x.rrd --realtime`` with
-  ``R2D2_VIZ_PACING_LOG=path`` (the pacing hook of ``r2d2_viz/pacing.py``), from process start to when the
-  pacing log appears (it is opened when paced sending begins: the first sample goes out as soon as it is
-  ready) and to its first bytes (an upper bound: the log is block-buffered, so its first bytes appear after a
-  few hundred samples unless the hook flushes); the run is stopped with SIGINT after ``--live-seconds``, and
-  its peak RssAnon over that window is reported;
+  ``R2D2_VIZ_PACING_LOG=path`` (the pacing hook of ``r2d2_viz/pacing.py``), from process start to the log's first
+  line (the hook flushes it as soon as the first sample has gone out), and to when the log appears (paced sending
+  begins); the run is stopped with SIGINT after ``--live-seconds``, and its peak RssAnon over that window is
+  reported;
 * ``--start-offset`` (10 s before the end) and ``--topics /scan /tf /tf_static`` walls as fractions of the full
   conversion's (rows skipped, with a note, when the CLI does not know the flag);
 * the 1 h × 100 Hz JointState bag of ``benchmarks/bags.py`` (its writer, reused): the work beyond the import
@@ -460,6 +459,10 @@ def _med(xs: list[float]) -> float:
     return float(statistics.median(xs))
 
 
+def _seconds(value: float, limit: float) -> str:
+    return f"{value:.1f} s" if value == value else f"not within {limit:g} s"
+
+
 def _unknown_flag(run: Run) -> bool:
     return run.returncode == 2 and "unrecognized arguments" in run.stderr
 
@@ -513,7 +516,7 @@ def main() -> None:
     parser.add_argument("--smoke", action="store_true", help="3 s and 1 s bags, every row once, no thresholds")
     args = parser.parse_args()
     if args.smoke:
-        args.seconds, args.small_seconds, args.rounds, args.live_seconds, args.arm_minutes = 3.0, 1.0, 1, 2.0, 0.5
+        args.seconds, args.small_seconds, args.rounds, args.live_seconds, args.arm_minutes = 3.0, 1.0, 1, 8.0, 0.5
     rerun = _rerun()
     with tempfile.TemporaryDirectory(prefix="r2d2-bigbag-") as tmp:
         scratch = Path(tmp)
@@ -599,16 +602,16 @@ def main() -> None:
             creates.append(run.marks.get("created", float("nan")))
             firsts.append(run.marks.get("first", float("nan")))
             live_mem.append(run.peak_anon_mb)
-        created, first = _med(creates), _med(firsts)
+        created, first = _med(creates), _med(firsts)  # nan: not within --live-seconds
         table.figures |= {"live_pacing_starts_s": created, "live_first_log_bytes_s": first}
         table.add(
-            "live replay (`--save --realtime`): time to first data (pacing starts)",
-            f"{created:.1f} s",
+            "live replay (`--save --realtime`): time to first data (the pacing log's first line)",
+            _seconds(first, args.live_seconds),
             "",
             "",
-            "≤ 2 s" + _verdict(created <= 2.0, smoke),
+            "≤ 2 s" + _verdict(first <= 2.0, smoke),
         )
-        table.add("live replay: first bytes of the (buffered) pacing log", f"{first:.1f} s")
+        table.add("live replay: pacing starts (the pacing log is created)", _seconds(created, args.live_seconds))
         table.add(
             f"live replay: peak RssAnon over its first {args.live_seconds:g} s",
             f"{_med(live_mem):,.0f} MB",

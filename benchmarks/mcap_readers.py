@@ -8,9 +8,9 @@
 Each reader runs in its own subprocess and touches every message it yields (counts it, adds up its length), for
 every message of the bag and for one topic (``/scan``: 20 Hz, 2.9 kB a message, in every chunk of the file):
 
-* ours: ``r2d2_viz.sources.bags.mcap_scan.McapScan`` (a record scan from byte 0). Its ``messages`` takes one
-  topic, so "every message" is one scan per topic, which is how the app read bags before issue 23; if the scan
-  offers several topics in one call (``messages(topics)``), that is used instead;
+* ours: ``r2d2_viz.sources.bags.mcap_scan.McapScan``: since issue 23 ``blocks(topics)``, one pass through the
+  summary's chunk index and the chunks' message indexes (each message touched through ``Block.data``); before it,
+  ``messages(topic)``, a record scan from byte 0 per topic (so "every message" was one scan per topic);
 * ``mcap`` (PyPI ``mcap``, the format's reference reader; not a dependency: ``pip install mcap``, else its rows are
   left out): ``make_reader(f).iter_messages(topics=…)`` — with a
   seekable file this is its ``SeekingReader``, which reads the summary, then only the chunks the chunk index says
@@ -36,18 +36,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bigbag
 
 OURS = """
-import inspect, sys
+import sys
 from pathlib import Path
 from r2d2_viz.sources.bags.mcap_scan import McapScan
 scan = McapScan(Path(sys.argv[1]))
-topics = sys.argv[2:] or list(scan.topics())
 n = size = 0
-params = list(inspect.signature(scan.messages).parameters)
-if len(topics) > 1 and params and params[0] in ("topics", "wanted"):
-    for item in scan.messages(topics):
-        n += 1; size += len(item[-1])
-else:
-    for topic in topics:
+if hasattr(scan, "blocks"):  # issue 23: several topics in one pass, through the chunk and message indexes
+    for block in scan.blocks(sys.argv[2:] or list(scan.topics)):
+        for i in range(len(block)):
+            n += 1; size += len(block.data(i))
+else:  # before: one scan from byte 0 per topic
+    for topic in sys.argv[2:] or list(scan.topics()):
         for _, data in scan.messages(topic):
             n += 1; size += len(data)
 print(n, size)
@@ -93,7 +92,7 @@ def main() -> None:
         bag = args.bag or bigbag.sensor_bag(args.data or Path(tmp), args.seconds)
         py = bigbag.PY
         readers = {
-            "ours: McapScan.messages": ([py, "-c", OURS, str(bag)], []),
+            "ours: McapScan": ([py, "-c", OURS, str(bag)], []),
             "mcap: make_reader (index)": ([py, "-c", MCAP, str(bag), "index"], []),
             "mcap: NonSeekingReader (no index)": ([py, "-c", MCAP, str(bag), "scan"], []),
             "rosbags: Reader.messages": ([py, "-c", ROSBAGS, str(bag.parent)], []),
