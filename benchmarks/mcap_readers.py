@@ -5,7 +5,9 @@
     python benchmarks/mcap_readers.py --bag some.mcap --topic /scan
     python benchmarks/mcap_readers.py --smoke                     # a 3 s bag, one round
 
-Each reader runs in its own subprocess and touches every message it yields (counts it, adds up its length), for
+Each reader runs in its own subprocess and touches every message it yields (counts it, adds up its length, and
+reads one byte in every 4 kB of it, so that a reader handing out views of a mapped file pays for the pages it
+maps as the others pay for the bytes they copy), for
 every message of the bag and for one topic (``/scan``: 20 Hz, 2.9 kB a message, in every chunk of the file):
 
 * ours: ``r2d2_viz.sources.bags.mcap_scan.McapScan``: since issue 23 ``blocks(topics)``, one pass through the
@@ -40,15 +42,15 @@ import sys
 from pathlib import Path
 from r2d2_viz.sources.bags.mcap_scan import McapScan
 scan = McapScan(Path(sys.argv[1]))
-n = size = 0
+n = size = touched = 0
 if hasattr(scan, "blocks"):  # issue 23: several topics in one pass, through the chunk and message indexes
     for block in scan.blocks(sys.argv[2:] or list(scan.topics)):
         for i in range(len(block)):
-            n += 1; size += len(block.data(i))
+            data = block.data(i); n += 1; size += len(data); touched += len(bytes(data[::4096]))
 else:  # before: one scan from byte 0 per topic
     for topic in sys.argv[2:] or list(scan.topics()):
         for _, data in scan.messages(topic):
-            n += 1; size += len(data)
+            n += 1; size += len(data); touched += len(bytes(data[::4096]))
 print(n, size)
 """
 
@@ -58,9 +60,9 @@ from mcap.reader import NonSeekingReader, make_reader
 topics = sys.argv[3:] or None
 with open(sys.argv[1], "rb") as f:
     reader = make_reader(f) if sys.argv[2] == "index" else NonSeekingReader(f)
-    n = size = 0
+    n = size = touched = 0
     for _, _, message in reader.iter_messages(topics=topics):
-        n += 1; size += len(message.data)
+        n += 1; size += len(message.data); touched += len(bytes(message.data[::4096]))
 print(n, size)
 """
 
@@ -70,9 +72,9 @@ from rosbags.rosbag2 import Reader
 with Reader(sys.argv[1]) as reader:
     wanted = set(sys.argv[2:])
     connections = [c for c in reader.connections if not wanted or c.topic in wanted]
-    n = size = 0
+    n = size = touched = 0
     for _, _, data in reader.messages(connections=connections):
-        n += 1; size += len(data)
+        n += 1; size += len(data); touched += len(bytes(data[::4096]))
 print(n, size)
 """
 
