@@ -98,8 +98,8 @@ def open_recording(
     """A recording stream with the configured sinks and ``blueprint`` as its default blueprint.
 
     ``save_to`` is the file actually written (the caller renames it into place when done). Every file
-    gets its footer (the chunk manifest the viewer pages it from disk with), written when the recording
-    is closed, live runs included. Rerun keeps the manifest in memory until then: ~3 kB per chunk written
+    gets its footer (the chunk manifest: where every chunk is, so a reader need not scan the file), written
+    when the recording is closed, live runs included. Rerun keeps the manifest in memory until then: ~3 kB per chunk written
     (a live run sends a chunk per frame: ~7 MB a minute at 30 Hz, ~95 MB a minute at 1 kHz).
     """
     if config.headless:
