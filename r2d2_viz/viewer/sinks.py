@@ -99,8 +99,8 @@ def open_recording(
 
     ``save_to`` is the file actually written (the caller renames it into place when done). Every file
     gets its footer (the chunk manifest: where every chunk is, so a reader need not scan the file), written
-    when the recording is closed, live runs included. Rerun keeps the manifest in memory until then: ~3 kB per chunk written
-    (a live run sends a chunk per frame: ~7 MB a minute at 30 Hz, ~95 MB a minute at 1 kHz).
+    when the recording is closed, live runs included. Rerun keeps the manifest in memory until then: ~3 kB
+    per chunk written (a live run sends a chunk per frame: ~7 MB a minute at 30 Hz, ~95 MB at 1 kHz).
     """
     if config.headless:
         return Recording(rr.RecordingStream(APP_ID, default_enabled=False))
