@@ -136,7 +136,7 @@ def run_on(
     model = _Model(config)
     batches = _settle(source, model, deadline)
     plan, view = _plan(config, model.robot, batches)
-    output = _Output(config.sink, endless=deadline.end is None or config.sink.live)
+    output = _Output(config.sink)
     lateness = LatenessLog.from_env()
     try:
         recording = output.open(view, on_ready)
@@ -224,25 +224,22 @@ def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> 
 
 
 class _Output:
-    """Where a live run is written: the sinks, ``--save out.rrd`` (beside the target, renamed when done; without a
-    footer when ``endless``: its manifest would grow in memory) or ``--save out.mcap`` (what was received)."""
+    """Where a live run is written: the sinks, ``--save out.rrd`` (beside the target, renamed when done, with its
+    footer) or ``--save out.mcap`` (what was received)."""
 
-    def __init__(self, sink: SinkConfig, *, endless: bool) -> None:
+    def __init__(self, sink: SinkConfig) -> None:
         save = sink.save
         self.bag_path = save if save is not None and save.suffix == ".mcap" else None
         self.rrd = save if self.bag_path is None else None
         self.sink = dataclasses.replace(sink, save=None, headless=not sink.live) if self.bag_path else sink
         self.tmp = self.rrd.with_name(f".{self.rrd.name}.{os.getpid()}.partial") if self.rrd is not None else None
-        self.endless = endless
         self.recording: Recording | None = None
         self.bag: LiveBagRecorder | None = None
 
     def open(self, view: ViewPlan, on_ready: Callable[[str], None] | None) -> Recording:
         self.bag = LiveBagRecorder(self.bag_path) if self.bag_path is not None else None
         blueprint = generate_blueprint(view.spec, layout=view.layout)
-        self.recording = open_recording(
-            self.sink, save_to=self.tmp, live=self.endless, on_ready=on_ready, blueprint=blueprint
-        )
+        self.recording = open_recording(self.sink, save_to=self.tmp, on_ready=on_ready, blueprint=blueprint)
         return self.recording
 
     def close(self) -> None:

@@ -185,7 +185,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
-        recording = open_recording(config.sink, save_to=tmp, live=config.live, on_ready=on_ready, blueprint=blueprint)
+        recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         try:
             rec = recording.rec
             streamer = None
