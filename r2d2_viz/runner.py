@@ -28,7 +28,7 @@ from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.base import Clock, Source
 from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
-from r2d2_viz.sources.playback import Window, read_ahead
+from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, read_ahead
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import plan_view
@@ -255,7 +255,11 @@ def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> 
         size = _live_block(config)
     else:
         size = batch_chunk_samples(len(plan.tree.moving) if plan.tree is not None else 0)
-    windows = plan.windows(size, predecode=displays.decode if displays is not None else None)
+    windows = plan.windows(
+        size,
+        predecode=displays.decode if displays is not None else None,
+        max_bytes=LIVE_WINDOW_BYTES if config.live else WINDOW_BYTES,
+    )
     return read_ahead(windows) if plan.replay is not None else windows
 
 

@@ -26,7 +26,16 @@ from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.base import JointState, SampleChunk, Source, TfRecords, tf_root
 from r2d2_viz.sources.motion import ODOM
-from r2d2_viz.sources.playback import JOINTS, TF, BagPass, Segment, Window, bag_topics_read, source_windows
+from r2d2_viz.sources.playback import (
+    JOINTS,
+    TF,
+    WINDOW_BYTES,
+    BagPass,
+    Segment,
+    Window,
+    bag_topics_read,
+    source_windows,
+)
 from r2d2_viz.sources.tf_check import disagreement, urdf_edges
 
 S = 1_000_000_000
@@ -101,7 +110,11 @@ class RunPlan:
         return self.source is not None
 
     def windows(
-        self, max_samples: int, *, predecode: Callable[[TopicMessage], TopicMessage] | None = None
+        self,
+        max_samples: int,
+        *,
+        predecode: Callable[[TopicMessage], TopicMessage] | None = None,
+        max_bytes: int = WINDOW_BYTES,
     ) -> Iterator[Window]:
         """The run, stretch by stretch (a bag's one pass, or a motion's chunks); ``predecode`` decodes each
         display message as it is read."""
@@ -111,7 +124,7 @@ class RunPlan:
             bag_pass = BagPass(
                 r.bag, r.segments, actuated=actuated, displays=self.displays, time=r.time, predecode=predecode
             )
-            yield from bag_pass.windows(max_samples)
+            yield from bag_pass.windows(max_samples, max_bytes)
         elif self.source is not None:
             yield from source_windows(self.source, max_samples)
 
