@@ -1,8 +1,9 @@
 """Shared fixtures: the installed CLI, the tutorial model, one recording made once per run.
 
-The suite runs on pytest-xdist workers (``-n auto --dist loadgroup`` in pyproject): anything expensive that
-several tests read is made once per run for all workers with :func:`made_once`, and every test that drives
-the web viewer in Chromium joins one ``xdist_group`` (one browser, one software renderer at a time).
+The suite runs on pytest-xdist workers (``-n auto --dist worksteal`` in pyproject), each test on whichever
+worker is free: session fixtures are made once per worker, and anything expensive that tests of several
+workers read is made once per run with :func:`made_once`. Nothing may assume it runs alone: ports are free
+ports, files go to ``tmp_path``, processes are found by their own pid or port.
 """
 
 from __future__ import annotations
@@ -93,15 +94,6 @@ def rerun_viewer() -> str | None:
     from r2d2_viz.viewer.sinks import viewer_executable
 
     return viewer_executable()
-
-
-@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Tests that drive Chromium share one worker (and so one browser): SwiftShader renders on every core, and
-    two pages rendering at once only slow each other down. The rest of the suite spreads over the workers."""
-    for item in items:
-        if "chromium_browser" in getattr(item, "fixturenames", ()):
-            item.add_marker(pytest.mark.xdist_group("chromium"))
 
 
 def pytest_configure(config: pytest.Config) -> None:

@@ -90,7 +90,7 @@ def toy_scene_problems(img: np.ndarray) -> list[str]:
 Shooter = Callable[[Path, Path], Path]
 
 
-@pytest.fixture(params=[pytest.param("web", marks=pytest.mark.xdist_group("chromium")), "native"])
+@pytest.fixture(params=["web", "native"])
 def shoot(request: pytest.FixtureRequest, artifacts_dir: Path) -> Shooter:
     """shoot(rrd, png) -> png, through the viewer named by the parameter."""
     if request.param == "web":
