@@ -145,7 +145,7 @@ def test_web_viewer(case: str, recordings: dict[str, Path], chromium_browser, ar
         png,
         browser=chromium_browser,
         viewport=WEB_VIEWPORT,
-        timeout=120,
+        timeout=240,  # bounded; 120 s ran out beside a second xdist worker on a busy 2-core box
         log_dir=artifacts_dir,
         ready=(lambda img: not any("joint plot" in p for p in layout_problems(img))) if ours else None,
     )
