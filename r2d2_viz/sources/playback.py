@@ -190,20 +190,24 @@ def read_ahead(windows: Iterator[Window], depth: int = 2) -> Iterator[Window]:
     out: queue.Queue[object] = queue.Queue(maxsize=depth)
     stop = threading.Event()
 
+    def hand(item: object) -> bool:
+        """Queue ``item`` unless the consumer has stopped (then nobody would take it)."""
+        while not stop.is_set():
+            try:
+                out.put(item, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
     def read() -> None:
         try:
             for window in windows:
-                while not stop.is_set():
-                    try:
-                        out.put(window, timeout=0.1)
-                        break
-                    except queue.Full:
-                        continue
-                if stop.is_set():
+                if not hand(window):
                     return
-            out.put(_DONE)
+            hand(_DONE)
         except BaseException as exc:  # handed to the consumer, raised there
-            out.put(exc)
+            hand(exc)
 
     thread = threading.Thread(target=read, name="r2d2-viz bag reader", daemon=True)
     thread.start()
