@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from r2d2_viz.errors import listed
 from r2d2_viz.kinematics.transforms import quat_to_matrix
 from r2d2_viz.msgs.extent import extent_points
 from r2d2_viz.msgs.registry import decode
@@ -18,6 +19,7 @@ from r2d2_viz.msgs.shapes import Decoded, DecodeOptions
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, TopicDisplay, ViewSpec, missing_fixed_frame, orbit_eye
+from r2d2_viz.sources.bag_displays import frames_of
 from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.plan import RunPlan
@@ -69,11 +71,19 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
         yaw, pitch = _orbit_angles(spec)
         camera = Camera("Orbit", orbit_eye(fit.center, fit.distance(), yaw, pitch), fit.center)
     frame = fixed_frame or (plan.fixed_frame if rviz is None else spec.fixed_frame)
-    frames = {plan.fixed_frame, *(tree.links if tree is not None else ())}
+    known = {*(tree.links if tree is not None else ())}  # the frames the run has
     for records in (plan.static_tf, plan.moving_tf):
         if records is not None:
-            frames |= {*records.parents, *records.children}
+            known |= {*records.parents, *records.children}
+    frames = {plan.fixed_frame, *known}
     missing = missing_fixed_frame(spec, frames) if rviz is not None and fixed_frame is None else None
+    if fixed_frame is not None and plan.replay is not None:  # --fixed-frame on a bag: said once, as RViz says it
+        known |= frames_of(plan.preview_messages)
+        if fixed_frame not in known:
+            missing = (
+                f"--fixed-frame {fixed_frame}: Fixed Frame [{fixed_frame}] does not exist in the bag's first "
+                f"transforms (its frames: {listed(sorted(known))}); the view opens on it all the same"
+            )
     if missing:
         notes.append(missing)
     elif plan.preview_messages:  # (a fixed frame that does not exist is said already)

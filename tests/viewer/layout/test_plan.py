@@ -110,3 +110,19 @@ def test_image_topics_without_a_camera_info_stay_out_of_the_3d_view() -> None:
     }
     plan = RunPlan(None, "odom", displays=displays)
     assert plan_view(plan, rviz=None, fixed_frame=None).layout.flat_images == ("/bare/image",)
+
+
+def test_a_fixed_frame_the_bag_lacks_is_said_once(tmp_path: Path) -> None:
+    # issue 26: `--bag … --fixed-frame map` on a bag without `map` said nothing (RViz: "Fixed Frame [map] does not
+    # exist"); a frame the bag has says nothing
+    from bagmaker import T0, BagSpec, tf_message, write_bag
+    from conftest import cli
+
+    spec = BagSpec().add("/tf", T0, tf_message([(T0, "odom", "base_link", (1, 0, 0), (0, 0, 0, 1))]))
+    bag = write_bag(tmp_path / "b", spec)
+    missing = cli("--bag", str(bag), "--fixed-frame", "map", "--save", str(tmp_path / "a.rrd"))
+    assert missing.returncode == 0, missing.stderr
+    said = [line for line in missing.stderr.splitlines() if "Fixed Frame [map] does not exist" in line]
+    assert len(said) == 1 and "its frames: base_link, odom" in said[0], missing.stderr
+    present = cli("--bag", str(bag), "--fixed-frame", "odom", "--save", str(tmp_path / "b.rrd"))
+    assert present.returncode == 0 and "does not exist" not in present.stderr, present.stderr
