@@ -44,7 +44,9 @@ LOOKAHEAD_NS = 2 * S
 TF_SAMPLES, TF_SAMPLE_NS = 16, S // 5
 """…and /tf at this many times spread over the bag, this long each (the view follows the robot's trajectory)."""
 PREVIEW_MESSAGES = 16
-"""Display messages the view is fitted to (the first ones)."""
+"""Display messages the view is fitted to (the first ones)…"""
+PREVIEW_BYTES = 64 << 20
+"""…looked for past the look-ahead in at most this many bytes of display messages (displays that start late)."""
 PREROLL_NS = 5 * S
 """A seek replays the transforms and joint states of this long before the offset (their latest values apply)."""
 SEEK_LATEST = ("nav_msgs/msg/OccupancyGrid",)
@@ -172,6 +174,8 @@ def plan_bag(
     lookahead = [Segment(bag_topics_read(bag, actuated, shown), start, min(stop, start + LOOKAHEAD_NS))]
     preview = BagPass(bag, lookahead, actuated=actuated, displays=shown, time=time, quiet=True)
     joints, messages = _preview(preview)
+    if len(messages) < PREVIEW_MESSAGES and shown and stop > start + LOOKAHEAD_NS:
+        messages += _first_messages(bag, shown, start + LOOKAHEAD_NS, stop, PREVIEW_MESSAGES - len(messages))
     if robot is None:
         what = "its transforms and display topics" if shown else "a TF-only replay (frames, axes, arrows)"
         ros1 = any(f.suffix == ".bag" for f in bag.files) and JOINTS in bag.topics
@@ -279,6 +283,22 @@ def _preview(preview: BagPass) -> tuple[SampleChunk | None, tuple[TopicMessage, 
     state = JointState(preview.joints.joints)
     rows = np.vstack([state.update(c) for c in chunks])
     return SampleChunk(np.concatenate([c.times_ns for c in chunks]), state.joints, rows), tuple(messages)
+
+
+def _first_messages(bag: Bag, shown: dict[str, str], start: int, stop: int, wanted: int) -> tuple[TopicMessage, ...]:
+    """The first ``wanted`` display messages after the look-ahead (a bag whose displays start late), reading no
+    more than PREVIEW_BYTES of them."""
+    found: list[TopicMessage] = []
+    seen = 0
+    for block in bag.blocks(tuple(shown), start_ns=start, stop_ns=stop):
+        for t, topic, data in block.messages():
+            found.append(TopicMessage(t, topic, shown[topic], bytes(data)))
+            if len(found) >= wanted:
+                return tuple(found)
+        seen += block.nbytes
+        if seen > PREVIEW_BYTES:
+            break
+    return tuple(found)
 
 
 def _one_display_frame(records: list[TfRecords], robot: Robot | None, messages: Sequence[TopicMessage]) -> str | None:
