@@ -14,7 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Iterable
 from contextlib import nullcontext
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TextIO
 
 import numpy as np
@@ -23,7 +23,7 @@ from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.base import SampleChunk
 from r2d2_viz.sources.playback import Window
 from r2d2_viz.viewer.display_feed import DisplayFeed
-from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.tf_recorded import TfFeed
 
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
@@ -40,23 +40,33 @@ class Feeds:
 
     tf: TfFeed
     displays: DisplayFeed | None = None
+    robots: list[RobotFeed] = field(default_factory=list)
+    """Several robots: the second, third… (the first is the run's streamer)."""
 
     def push(self, window: Window) -> None:
         """A stretch's transforms and display messages, logged by :meth:`until` when due."""
         self.tf.push(window.tf)
         if self.displays is not None and window.displays:
             self.displays.push(window.displays)
+        for robot, chunk in zip(self.robots, window.more_joints, strict=False):
+            robot.push(chunk)
 
     @property
     def next_time_ns(self) -> int | None:
         tf = self.tf.next_time_ns
         shown = self.displays.next_time_ns if self.displays is not None else None
-        return shown if tf is None else tf if shown is None else min(tf, shown)
+        first = shown if tf is None else tf if shown is None else min(tf, shown)
+        for robot in self.robots:
+            t = robot.next_time_ns
+            first = t if first is None else first if t is None else min(first, t)
+        return first
 
     def until(self, time_ns: int | None = None) -> None:
         self.tf.until(time_ns)
         if self.displays is not None:
             self.displays.until(time_ns)
+        for robot in self.robots:
+            robot.until(time_ns)
 
     @property
     def sent(self) -> int:

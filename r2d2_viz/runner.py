@@ -31,10 +31,10 @@ from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
 from r2d2_viz.sources.playback import Window, read_ahead
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
-from r2d2_viz.viewer.layout.plan import plan_view
+from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
-from r2d2_viz.viewer.sinks import SinkConfig, close_recording, open_recording
-from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
+from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
@@ -173,18 +173,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
         recording = open_recording(config.sink, save_to=tmp, live=config.live, on_ready=on_ready, blueprint=blueprint)
         try:
             rec = recording.rec
-            streamer = None
-            if tree is not None:
-                streamer = RobotStream(
-                    rec,
-                    tree,
-                    frames=plan.source.frames if plan.source is not None else (),
-                    clock=clock,
-                    fixed_frame=plan.fixed_frame,
-                    root_placed=plan.root_placed,
-                    axis_length=view.axis_length,
-                    show_names=view.show_names,
-                )
+            streamers = _robot_streams(recording, plan, view, clock) if tree is not None else []
+            streamer = streamers[0] if streamers else None
             notices = streamer.notices if streamer is not None else Notices(rec)
             for note in (*plan.notes, *view.notes):
                 notices.report(note)
@@ -204,9 +194,9 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.push(plan.seek_messages)
-            feeds = Feeds(TfFeed(recorded), displays)
-            if streamer is not None:
-                streamer.log_static()
+            feeds = Feeds(TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]])
+            for robot in streamers:
+                robot.log_static()
             with progress_bar(plan, config) as shown:
                 windows = _windows(plan, config, displays)
                 if config.live:
@@ -217,8 +207,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             _other_topics(plan, config, notices)
             if displays is not None:
                 displays.finish()
-            if streamer is not None:
-                streamer.finish()
+            for robot in streamers:
+                robot.finish()
         finally:
             close_recording(recording)
         if tmp is not None and save is not None:
@@ -228,6 +218,42 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             tmp.unlink(missing_ok=True)
         raise
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
+
+
+def _robot_streams(recording: Recording, plan: RunPlan, view: ViewPlan, clock: Clock) -> list[RobotStream]:
+    """A stream per robot: the plan's one, or each of several (:mod:`r2d2_viz.sources.robots`), its shapes and
+    plots under ``/robots/<namespace>/`` when there are several."""
+    rec = recording.rec
+    if plan.tree is None:
+        return []
+    if not plan.robots:
+        return [
+            RobotStream(
+                rec,
+                plan.tree,
+                frames=plan.source.frames if plan.source is not None else (),
+                clock=clock,
+                fixed_frame=plan.fixed_frame,
+                root_placed=plan.root_placed,
+                axis_length=view.axis_length,
+                show_names=view.show_names,
+            )
+        ]
+    several = len(plan.robots) > 1
+    return [
+        RobotStream(
+            rec,
+            robot.tree,
+            clock=clock,
+            fixed_frame=plan.fixed_frame,
+            root_placed=plan.placed(robot.tree.robot.root),
+            axis_length=view.axis_length,
+            show_names=view.show_names,
+            robot_name=robot.namespace if several else "",
+            frame_prefix=robot.prefix,
+        )
+        for robot in plan.robots
+    ]
 
 
 def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> Iterator[Window]:
@@ -264,7 +290,7 @@ def _batch(
         if progress is not None:
             progress(window)
     feed.until(None)
-    return samples or feed.sent
+    return (samples + sum(r.sent for r in feed.robots)) or feed.sent
 
 
 def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:

@@ -21,12 +21,22 @@ from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.sources.bag_displays import TopicMessage, display_topics, frames_of
-from r2d2_viz.sources.bag_joints import TimeSource, read_robot_description
+from r2d2_viz.sources.bag_joints import JOINT_STATE, TimeSource, read_robot_description
 from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.base import JointState, SampleChunk, Source, TfRecords, tf_root
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.playback import JOINTS, TF, BagPass, Segment, Window, bag_topics_read, source_windows
+from r2d2_viz.sources.robots import (
+    SHARED_FRAMES,
+    RobotPlan,
+    description_namespaces,
+    plan_robots,
+    renamed,
+    tf_frames,
+    tf_topics,
+    unreached,
+)
 from r2d2_viz.sources.tf_check import disagreement, urdf_edges
 
 S = 1_000_000_000
@@ -51,6 +61,9 @@ class BagReplay:
     time: TimeSource
     span: tuple[int, int]
     """The replayed stretch, ``(first, last)`` receive time in ns (progress)."""
+    tf_topics: tuple[tuple[str, str], ...] = ((TF, ""),)
+    """The TF topics read and the prefix their frames take (several robots: :mod:`r2d2_viz.sources.robots`)."""
+    shared_frames: tuple[str, ...] = SHARED_FRAMES
 
 
 @dataclass(frozen=True)
@@ -81,22 +94,26 @@ class RunPlan:
     """The first display messages (the view frames what they draw)."""
     seek_messages: tuple[TopicMessage, ...] = ()
     """Shown first: the latest maps before a seek."""
+    robots: tuple[RobotPlan, ...] = ()
+    """Several robots (namespaces with a robot_description; the first is ``tree``); empty for one robot."""
+
+    def placed(self, root: str) -> bool:
+        """Whether the recorded TF gives the frame ``root`` a parent (or it is the fixed frame)."""
+        return root == self.fixed_frame or any(
+            root in r.children for r in (self.static_tf, self.moving_tf) if r is not None
+        )
 
     @property
     def root_placed(self) -> bool:
         """Whether the recorded /tf gives the robot's root a parent (then it is not pinned to the fixed frame)."""
-        if self.tree is None:
-            return True
-        root = self.tree.robot.root
-        if root == self.fixed_frame:
-            return True
-        return any(root in r.children for r in (self.static_tf, self.moving_tf) if r is not None)
+        return self.tree is None or self.placed(self.tree.robot.root)
 
     @property
     def moves_robot(self) -> bool:
         """Whether something drives the robot's joints (a motion, or a bag's joint states)."""
         if self.replay is not None:
-            return self.tree is not None and any(JOINTS in s.topics for s in self.replay.segments)
+            topic = self.robots[0].joints_topic if self.robots else JOINTS
+            return self.tree is not None and any(topic in s.topics for s in self.replay.segments)
         return self.source is not None
 
     def windows(
@@ -108,7 +125,15 @@ class RunPlan:
             r = self.replay
             actuated = self.tree.actuated if self.tree is not None else None
             bag_pass = BagPass(
-                r.bag, r.segments, actuated=actuated, displays=self.displays, time=r.time, predecode=predecode
+                r.bag,
+                r.segments,
+                actuated=actuated,
+                displays=self.displays,
+                time=r.time,
+                predecode=predecode,
+                robots=[(x.joints_topic, x.tree.actuated) for x in self.robots],
+                tf_topics=dict(r.tf_topics),
+                shared=r.shared_frames,
             )
             yield from bag_pass.windows(max_samples)
         elif self.source is not None:
@@ -132,6 +157,7 @@ def plan_bag(
     fixed_frame: str | None = None,
     packages: PackageIndex | None = None,
     choice: BagChoice = BagChoice(),
+    shared_frames: Sequence[str] = SHARED_FRAMES,
 ) -> RunPlan:
     """Read what a replay must know before its first frame (see the module docstring)."""
     span = bag.span
@@ -142,21 +168,55 @@ def plan_bag(
     robot = load_robot() if load_robot is not None else None
     notes: list[str] = []
     text = None
-    if robot is None:
+    namespaces = description_namespaces(bag.topics) if robot is None else []
+    if robot is None and namespaces == [""]:
         text = read_robot_description(bag)
         if text is not None:
             name = f"{bag.path.name}:/robot_description"
             robot = parse_urdf(text, source=name, base_dir=bag.path.parent, packages=packages)
-    tree = compile_tree(robot) if robot is not None else None
     shown, undisplayed = display_topics(bag)
     shown = {t: m for t, m in shown.items() if t in selected}
     undisplayed = {t: m for t, m in undisplayed.items() if t in selected}
     static = _static_tf(bag) if "/tf_static" in selected else None
     moving = _tf_preview(bag, time, start, stop) if TF in selected else None
+    robots: tuple[RobotPlan, ...] = ()
+    tf_read: tuple[tuple[str, str], ...] = ((TF, ""),)
+    shared = tuple(shared_frames)
+    if robot is None and any(namespaces):  # several robots, or one in a namespace
+        robots = _namespaced_robots(bag, namespaces, tf_frames((static, moving)), packages)
+        robot, text = (robots[0].tree.robot, robots[0].description) if robots else (None, None)
+        static_read = tf_topics(robots, selected, "tf_static")
+        tf_read = tuple(tf_topics(robots, selected, "tf").items())
+        static = concatenate([r for r in [static, *_static_tf_of(bag, static_read, shared)] if r is not None])
+        moving = concatenate(
+            [r for r in [moving, *_tf_preview_of(bag, tf_read[1:], shared, time, start, stop)] if r is not None]
+        )
+    tree = robots[0].tree if robots else compile_tree(robot) if robot is not None else None
     records = [r for r in (static, moving) if r is not None]
     actuated = tree.actuated if tree is not None and JOINTS in selected else None
-    lookahead = [Segment(bag_topics_read(bag, actuated, shown), start, min(stop, start + LOOKAHEAD_NS))]
-    preview = BagPass(bag, lookahead, actuated=actuated, displays=shown, time=time, quiet=True)
+    if robots:
+        actuated = None  # the robots' own joint-states topics
+    joint_topics: list[tuple[str, tuple[str, ...] | None]] = [
+        (
+            r.joints_topic,
+            r.tree.actuated if r.joints_topic in selected and bag.require_type(r.joints_topic, JOINT_STATE) else None,
+        )
+        for r in robots
+    ]
+    robot_topics = (*(t for t, a in joint_topics if a), *(t for t, _ in tf_read[1:]))
+    read = (*bag_topics_read(bag, None if robots else actuated, shown), *robot_topics)
+    lookahead = [Segment(read, start, min(stop, start + LOOKAHEAD_NS))]
+    preview = BagPass(
+        bag,
+        lookahead,
+        actuated=actuated,
+        displays=shown,
+        time=time,
+        quiet=True,
+        robots=joint_topics,
+        tf_topics=dict(tf_read),
+        shared=shared,
+    )
     joints, messages = _preview(preview)
     if robot is None:
         what = "its transforms and display topics" if shown else "a TF-only replay (frames, axes, arrows)"
@@ -164,13 +224,16 @@ def plan_bag(
     frame = fixed_frame or tf_root(records) or _one_display_frame(records, robot, messages) or ODOM
     skip: frozenset[tuple[str, str]] = frozenset()
     if tree is not None:
-        skip = frozenset(e for r in records for e in r.edges() if e in urdf_edges(tree))
+        trees = [r.tree for r in robots] or [tree]
+        skip = frozenset(e for r in records for e in r.edges() if any(e in urdf_edges(t) for t in trees))
         message = _check(tree, joints, records) if skip else None
         if message:
             notes.append(f"{bag.path}: {message}")
-    segments = [Segment(bag_topics_read(bag, actuated, shown), start, stop)]
+    if len(robots) > 1:
+        notes += [f"{bag.path}: {line}" for r in robots if (line := unreached(r, frame, records))]
+    segments = [Segment(read, start, stop)]
     if start > span[0]:  # a seek: the state before it
-        before = tuple(t for t in (JOINTS, TF) if t in segments[0].topics)
+        before = tuple(t for t in (JOINTS, TF, *robot_topics) if t in segments[0].topics)
         segments.insert(0, Segment(before, max(span[0], start - PREROLL_NS), start))
     seek = tuple(
         TopicMessage(found[0], topic, msgtype, found[1])
@@ -180,7 +243,7 @@ def plan_bag(
     return RunPlan(
         tree,
         frame,
-        replay=BagReplay(bag, tuple(segments), time, (start, min(stop, span[1]))),
+        replay=BagReplay(bag, tuple(segments), time, (start, min(stop, span[1])), tf_read, shared),
         static_tf=static,
         moving_tf=moving,
         skip_edges=skip,
@@ -192,7 +255,42 @@ def plan_bag(
         preview_joints=joints,
         preview_messages=messages,
         seek_messages=seek,
+        robots=robots,
     )
+
+
+def _namespaced_robots(
+    bag: Bag, namespaces: Sequence[str], frames: set[str], packages: PackageIndex | None
+) -> tuple[RobotPlan, ...]:
+    """Every namespace's robot (see :mod:`r2d2_viz.sources.robots`)."""
+    found = []
+    for namespace in namespaces:
+        topic = f"{namespace}/robot_description"
+        text = read_robot_description(bag, topic)
+        if text is not None:
+            robot = parse_urdf(text, source=f"{bag.path.name}:{topic}", base_dir=bag.path.parent, packages=packages)
+            found.append((namespace, robot, text))
+    return plan_robots(found, bag.topics, frames, compile_tree)
+
+
+def _static_tf_of(bag: Bag, topics: dict[str, str], shared: Sequence[str]) -> list[TfRecords]:
+    """The robots' own ``/<ns>/tf_static``, their frames prefixed."""
+    out = []
+    for topic, prefix in topics.items():
+        if prefix and (records := _static_tf(bag, topic)) is not None:
+            out.append(renamed(records, prefix, shared))
+    return out
+
+
+def _tf_preview_of(
+    bag: Bag, topics: Sequence[tuple[str, str]], shared: Sequence[str], time: TimeSource, start: int, stop: int
+) -> list[TfRecords]:
+    """The robots' own ``/<ns>/tf`` as far as the plan reads it, their frames prefixed."""
+    out = []
+    for topic, prefix in topics:
+        if (records := _tf_preview(bag, time, start, stop, topic)) is not None:
+            out.append(renamed(records, prefix, shared))
+    return out
 
 
 def _stretch(bag: Bag, span: tuple[int, int], choice: BagChoice) -> tuple[int, int]:
@@ -217,27 +315,27 @@ def _selected(bag: Bag, topics: Sequence[str] | None) -> set[str]:
     return {*topics, "/robot_description"}
 
 
-def _static_tf(bag: Bag) -> TfRecords | None:
-    if not bag.require_type("/tf_static", TF_MESSAGE):
+def _static_tf(bag: Bag, topic: str = "/tf_static") -> TfRecords | None:
+    if not bag.require_type(topic, TF_MESSAGE):
         return None
     decoder = TfDecoder(bag.deserialize, static=True, time="receive")
-    parts = [decoder.decode(block.pairs()) for block in bag.blocks(["/tf_static"])]
+    parts = [decoder.decode(block.pairs()) for block in bag.blocks([topic])]
     if decoder.bad:
-        bag.warn(f"{bag.path}: /tf_static: skipped {decoder.bad} messages that cannot be decoded")
+        bag.warn(f"{bag.path}: {topic}: skipped {decoder.bad} messages that cannot be decoded")
     return concatenate([p for p in parts if len(p)])
 
 
-def _tf_preview(bag: Bag, time: TimeSource, start: int, stop: int) -> TfRecords | None:
+def _tf_preview(bag: Bag, time: TimeSource, start: int, stop: int, topic: str = TF) -> TfRecords | None:
     """/tf at the start of the stretch and at a few times spread over it."""
-    if not bag.require_type(TF, TF_MESSAGE):
+    if not bag.require_type(topic, TF_MESSAGE):
         return None
     decoder = TfDecoder(bag.deserialize, static=False, time=time)
     parts = [
-        decoder.decode(b.pairs()) for b in bag.blocks([TF], start_ns=start, stop_ns=min(stop, start + LOOKAHEAD_NS))
+        decoder.decode(b.pairs()) for b in bag.blocks([topic], start_ns=start, stop_ns=min(stop, start + LOOKAHEAD_NS))
     ]
     end = min(stop, (bag.span or (start, start))[1])
     for t in np.linspace(start + LOOKAHEAD_NS, end, TF_SAMPLES).astype(np.int64) if end > start + LOOKAHEAD_NS else ():
-        for block in bag.blocks([TF], start_ns=int(t), stop_ns=int(t) + TF_SAMPLE_NS):
+        for block in bag.blocks([topic], start_ns=int(t), stop_ns=int(t) + TF_SAMPLE_NS):
             parts.append(decoder.decode(block.pairs()))
             break
     return concatenate([p for p in parts if len(p)])

@@ -14,6 +14,7 @@ Named frames are the URDF link names plus the fixed frame (``odom``). Quaternion
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -71,7 +72,8 @@ class RobotStream:
 
     ``joints`` and ``frames`` are the source's (:class:`r2d2_viz.sources.base.Source`); ``clock`` says whether
     sample times are durations since the start or timestamps. ``root_placed``: something else (a bag's /tf)
-    gives the root its parent frame, so the stream does not pin it to the fixed frame's origin."""
+    gives the root its parent frame, so the stream does not pin it to the fixed frame's origin. ``robot_name``: the
+    robot's namespace when a run shows several (its shapes and plots under ``/robots/<namespace>/``)."""
 
     def __init__(
         self,
@@ -86,13 +88,16 @@ class RobotStream:
         root_placed: bool = False,
         axis_length: float = AXIS_LENGTH,
         show_names: bool = False,
+        robot_name: str = "",
+        frame_prefix: str = "",
     ) -> None:
         self.rec, self.tree, self.clock, self.timeline = rec, tree, clock, timeline
         self.fixed_frame = fixed_frame
         self.notices = Notices(rec, warn=warn, timeline=timeline)
         self.state = JointState(tree.actuated)
         self.tf = TfRows(tree, tracks=tuple(frames), fixed_frame=fixed_frame)
-        self.plots = JointPlots(tree, timeline=timeline, clock=clock)
+        self.plots = JointPlots(tree, timeline=timeline, clock=clock, robot=robot_name)
+        self.robot_name, self.frame_prefix = robot_name, frame_prefix
         self._root_is_static = not root_placed and not any(child == tree.robot.root for _, child in frames)
         self.axis_length, self.show_names = axis_length, show_names
         self._pending: PreparedSamples | None = None
@@ -112,6 +117,8 @@ class RobotStream:
             root_is_static=self._root_is_static,
             axis_length=self.axis_length,
             show_names=self.show_names,
+            robot_name=self.robot_name,
+            frame_prefix=self.frame_prefix,
         )
         self.tf.log_static(self.rec, entities.TF)
         self.plots.log_styles(self.rec)
@@ -200,3 +207,40 @@ class RobotStream:
         self._flush_plots()
         if self._last_ns is not None:
             self.plots.log_limits(self.rec, self._last_ns)
+
+
+class RobotFeed:
+    """Another robot's joint states, sent by its own :class:`RobotStream` in time order as far as a run has got
+    (several robots: the first is the run's streamer, the others feeds beside the recorded transforms): a run
+    :meth:`push` es each stretch's chunk, and :meth:`until` sends the samples due."""
+
+    def __init__(self, stream: RobotStream) -> None:
+        self.stream = stream
+        self._pending: deque[tuple[PreparedSamples, int]] = deque()
+        self.sent = 0
+
+    def push(self, chunk: SampleChunk | None) -> None:
+        if chunk is not None and len(chunk):
+            self._pending.append((self.stream.prepare(chunk), 0))
+
+    @property
+    def next_time_ns(self) -> int | None:
+        if not self._pending:
+            return None
+        prepared, at = self._pending[0]
+        return int(prepared.times_ns[at])
+
+    def until(self, time_ns: int | None = None) -> None:
+        """Send the pending samples up to ``time_ns`` (inclusive; all of them when None)."""
+        while self._pending:
+            prepared, at = self._pending[0]
+            n = len(prepared)
+            stop = n if time_ns is None else int(np.searchsorted(prepared.times_ns, time_ns, side="right"))
+            if stop <= at:
+                return
+            self.stream.send(prepared, at, stop)
+            self.sent += stop - at
+            if stop < n:
+                self._pending[0] = (prepared, stop)
+                return
+            self._pending.popleft()

@@ -1,0 +1,164 @@
+"""Several robots in one run: every namespace with a ``robot_description`` is a robot, drawn from its own description,
+moved by its own ``joint_states``, its frames kept apart from the other robots' by a prefix.
+
+Two conventions are found in the wild, and both end in the same frames (``robot2/base_link``):
+
+* (A) one ``/tf`` whose frames already carry the prefix (robot_state_publisher's ``frame_prefix``), beside
+  ``/robot1/robot_description`` and ``/robot1/joint_states``;
+* (B) namespaced ``/robot2/tf`` and ``/robot2/tf_static`` with bare frames: those topics are read with every frame
+  renamed ``robot2/<frame>``, except the frames robots share (``map``, ``world``, ``earth``: ``--shared-frames``).
+
+Which one a robot follows is read from the recording: its root link prefixed among the frames of ``/tf`` is (A); its
+own TF topics are (B). The robot's links are renamed with the same prefix, so its kinematics and the recorded
+transforms name the same frames. Pure: no rerun import.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, replace
+
+from r2d2_viz.kinematics.tree import KinematicTree
+from r2d2_viz.robot.model import Robot
+from r2d2_viz.sources.base import TfRecords
+
+DESCRIPTION = "robot_description"
+SHARED_FRAMES = ("map", "world", "earth")
+"""Frames every robot's tree may hang from; never prefixed (``--shared-frames`` changes them)."""
+
+
+@dataclass(frozen=True)
+class RobotPlan:
+    """One robot of a run: its namespace (``""`` for the root one), kinematics, joint-states topic and frame prefix
+    (``""`` or ``"robot2/"``: the robot's links are named with it)."""
+
+    namespace: str
+    tree: KinematicTree
+    joints_topic: str
+    prefix: str = ""
+    description: str | None = None
+
+    @property
+    def name(self) -> str:
+        """How messages name the robot: its namespace, or ``/`` for the root one."""
+        return self.namespace or "/"
+
+
+def description_namespaces(topics: Iterable[str]) -> list[str]:
+    """The namespaces (``""``, ``/robot1``) of the topics named ``<namespace>/robot_description``, sorted."""
+    suffix = "/" + DESCRIPTION
+    return sorted(t[: -len(suffix)] for t in topics if t.endswith(suffix))
+
+
+def topic(namespace: str, name: str) -> str:
+    """``/robot2`` + ``tf`` → ``/robot2/tf``."""
+    return f"{namespace}/{name}"
+
+
+def prefix_of(namespace: str) -> str:
+    """The frame prefix of a namespace: ``/robot2`` → ``robot2/``."""
+    return namespace.strip("/") + "/" if namespace.strip("/") else ""
+
+
+def prefixed_robot(robot: Robot, prefix: str) -> Robot:
+    """``robot`` with every link (hence every frame it names) prefixed; joints keep their names (joint states name
+    them bare)."""
+    if not prefix:
+        return robot
+    links = tuple(replace(link, name=prefix + link.name) for link in robot.links)
+    joints = tuple(replace(j, parent=prefix + j.parent, child=prefix + j.child) for j in robot.joints)
+    return Robot(robot.name, robot.source, prefix + robot.root, links, joints, robot.warnings)
+
+
+def renamed(records: TfRecords, prefix: str, shared: Sequence[str] = SHARED_FRAMES) -> TfRecords:
+    """Convention (B): ``records`` with every frame but the shared ones named ``<prefix><frame>`` (a leading ``/``,
+    as tf1 wrote, dropped; a frame that already carries the prefix kept)."""
+    if not prefix:
+        return records
+    keep = set(shared)
+    cache: dict[str, str] = {}
+
+    def name(frame: str) -> str:
+        if (new := cache.get(frame)) is None:
+            bare = frame.lstrip("/")
+            new = bare if bare in keep or bare.startswith(prefix) else prefix + bare
+            cache[frame] = new
+        return new
+
+    return replace(
+        records, parents=tuple(name(p) for p in records.parents), children=tuple(name(c) for c in records.children)
+    )
+
+
+def tf_frames(records: Iterable[TfRecords | None]) -> set[str]:
+    return {f for r in records if r is not None for f in (*r.parents, *r.children)}
+
+
+def choose_prefix(namespace: str, root: str, *, own_tf: bool, frames: set[str], several: bool) -> str:
+    """The frame prefix of the robot in ``namespace`` whose root link is ``root``: none for the root namespace; (A)
+    when ``/tf`` names its root prefixed, (B) when it has TF topics of its own; a lone namespaced robot whose bare
+    root is in ``/tf`` (only its description namespaced) keeps bare frames; otherwise prefixed (never two robots on
+    one name)."""
+    prefix = prefix_of(namespace)
+    if not prefix or prefix + root in frames or own_tf:
+        return prefix
+    return "" if root in frames and not several else prefix
+
+
+def parent_chain(frame: str, records: Sequence[TfRecords | None]) -> list[str]:
+    """``frame`` and its ancestors in the recorded transforms, up to the root of its tree."""
+    parent: dict[str, str] = {}
+    for r in records:
+        if r is not None:
+            parent.update(zip(r.children, r.parents, strict=True))
+    chain = [frame]
+    while (up := parent.get(chain[-1])) is not None and up not in chain:
+        chain.append(up)
+    return chain
+
+
+def unreached(robot: RobotPlan, fixed_frame: str, records: Sequence[TfRecords | None]) -> str | None:
+    """One line naming ``robot`` when its tree does not reach ``fixed_frame`` through the recorded transforms."""
+    root = robot.tree.robot.root
+    chain = parent_chain(root, records)
+    if fixed_frame in chain or root == fixed_frame:
+        return None
+    if len(chain) == 1:
+        return (
+            f"robot {robot.name}: no recorded transform places its root {root!r}; it is drawn at the fixed frame "
+            f"{fixed_frame!r}'s origin"
+        )
+    return (
+        f"robot {robot.name}: its tree ends at {chain[-1]!r}, not the fixed frame {fixed_frame!r}; "
+        "it is not shown in the 3D view"
+    )
+
+
+def plan_robots(
+    descriptions: Sequence[tuple[str, Robot, str]],
+    topics: Iterable[str],
+    frames: set[str],
+    compile_tree: Callable[[Robot], KinematicTree],
+) -> tuple[RobotPlan, ...]:
+    """The robots of ``descriptions`` (namespace, robot, URDF text), each with its prefix (see
+    :func:`choose_prefix`); ``topics``: the bag's, ``frames``: those of its ``/tf`` and ``/tf_static``."""
+    present = set(topics)
+    several = len(descriptions) > 1
+    out = []
+    for namespace, robot, text in descriptions:
+        own_tf = bool(namespace) and any(topic(namespace, n) in present for n in ("tf", "tf_static"))
+        prefix = choose_prefix(namespace, robot.root, own_tf=own_tf, frames=frames, several=several)
+        tree = compile_tree(prefixed_robot(robot, prefix))
+        out.append(RobotPlan(namespace, tree, topic(namespace, "joint_states"), prefix, text))
+    return tuple(out)
+
+
+def tf_topics(robots: Sequence[RobotPlan], topics: Iterable[str], name: str) -> dict[str, str]:
+    """``/tf`` (or ``/tf_static``: ``name``) and the robots' own namespaced ones present in ``topics`` → the prefix
+    their frames take (convention B; ``""`` for the shared one)."""
+    present = set(topics)
+    out = {"/" + name: ""}
+    for r in robots:
+        if r.namespace and topic(r.namespace, name) in present:
+            out[topic(r.namespace, name)] = r.prefix
+    return out

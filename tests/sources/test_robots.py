@@ -1,0 +1,165 @@
+"""Several robots in one bag, one of each convention: (A) ``/robot1/robot_description`` with its frames prefixed on the
+shared ``/tf`` (robot_state_publisher's ``frame_prefix``), (B) ``/robot2/robot_description`` with its own ``/robot2/tf``
+and ``/robot2/tf_static`` and bare frames. Bags written by rosbags (tests/bagmaker.py), replayed by the real CLI, link
+poses read back from the recording and checked against yourdfpy's forward kinematics of each robot's own joint
+states (an independent library); plus the pure helpers of :mod:`r2d2_viz.sources.robots`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yourdfpy
+from bagmaker import T0, TYPES, BagSpec, joint_state, string, tf_message, write_bag
+from conftest import REPO, cli
+from rrd import frame_edges_at, pose_in, read_recording
+
+from r2d2_viz.robot.model import parse_urdf
+from r2d2_viz.sources.base import TfRecords
+from r2d2_viz.sources.robots import (
+    choose_prefix,
+    description_namespaces,
+    prefixed_robot,
+    renamed,
+)
+
+ARM = REPO / "examples" / "arm6.urdf"
+# robot2 is another arm: a longer upper arm, so each robot must be drawn from its own description
+ARM2_TEXT = ARM.read_text().replace(
+    '<child link="forearm"/><origin xyz="0 0 0.4"/>', '<child link="forearm"/><origin xyz="0 0 0.55"/>'
+)
+JOINTS = ("base_yaw", "shoulder_pitch", "elbow", "wrist_pitch", "wrist_roll", "tool_slide")
+MS = 1_000_000
+ID = (0, 0, 0, 1)
+
+
+def _two_robot_bag(path: Path, *, n: int = 40, third: bool = False) -> dict[str, list[tuple[int, dict[str, float]]]]:
+    """robot1 (A): base at x = 1 + 0.01 k in map on /tf as ``map → robot1/base_link``, and the fixed
+    ``robot1/base_link → robot1/shoulder`` its robot_state_publisher would publish; robot2 (B): ``map → odom`` on
+    /robot2/tf_static, ``odom → base_link`` at y = -1 - 0.02 k on /robot2/tf. Each at 50 Hz, its own joint
+    states."""
+    assert ARM2_TEXT != ARM.read_text()
+    spec = BagSpec(types={**TYPES})
+    for ns in ("/robot1", "/robot2", "/robot3"):
+        spec.types[f"{ns}/robot_description"] = TYPES["/robot_description"]
+        spec.types[f"{ns}/joint_states"] = TYPES["/joint_states"]
+    spec.types["/robot2/tf"] = spec.types["/robot2/tf_static"] = TYPES["/tf"]
+    spec.add("/robot1/robot_description", T0, string(ARM.read_text()))
+    spec.add("/robot2/robot_description", T0, string(ARM2_TEXT))
+    if third:  # a robot nothing places
+        spec.add("/robot3/robot_description", T0, string(ARM.read_text()))
+    spec.add("/robot2/tf_static", T0, tf_message([(T0, "map", "odom", (0, 0, 0), ID)]))
+    rng = np.random.default_rng(7)
+    states: dict[str, list[tuple[int, dict[str, float]]]] = {"robot1": [], "robot2": []}
+    for k in range(n):
+        t = T0 + (k + 1) * 20 * MS
+        for ns in ("robot1", "robot2"):
+            q = rng.uniform(-1, 1, len(JOINTS))
+            q[-1] = 0.02 * (k % 3)
+            ts = t + (MS if ns == "robot2" else 0)
+            spec.add(f"/{ns}/joint_states", ts, joint_state(ts, JOINTS, q))
+            states[ns].append((ts, dict(zip(JOINTS, q, strict=True))))
+        spec.add(
+            "/tf",
+            t,
+            tf_message(
+                [
+                    (t, "map", "robot1/base_link", (1 + 0.01 * k, 0, 0), ID),
+                    (t, "robot1/base_link", "robot1/shoulder", (0, 0, 0.1), ID),  # base_yaw at 0: ignored
+                ]
+            ),
+        )
+        spec.add("/robot2/tf", t, tf_message([(t, "odom", "base_link", (0, -1 - 0.02 * k, 0), ID)]))
+    write_bag(path, spec)
+    return states
+
+
+def test_two_robots_of_both_conventions_stand_in_one_view(tmp_path: Path) -> None:
+    bag = tmp_path / "two_robots"
+    states = _two_robot_bag(bag)
+    out = tmp_path / "two.rrd"
+    result = cli("--bag", str(bag), "--save", str(out))
+    assert result.returncode == 0, result.stderr
+    assert "no /robot_description" not in result.stderr
+    recording = read_recording(out)
+    worst = {}
+    for ns, text, base in (
+        ("robot1", ARM.read_text(), lambda k: (1 + 0.01 * k, 0.0)),
+        ("robot2", ARM2_TEXT, lambda k: (0.0, -1 - 0.02 * k)),
+    ):
+        urdf_file = tmp_path / f"{ns}.urdf"
+        urdf_file.write_text(text)
+        urdf = yourdfpy.URDF.load(str(urdf_file), load_meshes=False)
+        held = dict.fromkeys(JOINTS, 0.0)
+        worst[ns] = 0.0
+        for i, (t, values) in enumerate(states[ns]):
+            held.update(values)
+            urdf.update_cfg(held)
+            edges = frame_edges_at(recording, t)
+            T_map_base = np.eye(4)
+            T_map_base[:2, 3] = base(i)  # the latest base transform: sent at T0 + (i + 1) · 20 ms
+            for link in ("shoulder", "forearm", "tool"):
+                expected = T_map_base @ urdf.get_transform(frame_to=link, frame_from="base_link")
+                got = pose_in(edges, f"{ns}/{link}", "map")
+                worst[ns] = max(worst[ns], float(np.abs(got - expected).max()))
+    assert worst["robot1"] < 1e-5 and worst["robot2"] < 1e-5, worst
+    # both robots' shapes, each under its namespace; the shared frame stays bare, robot2's frames are prefixed
+    assert "/robots/robot1/visual/forearm/0" in recording and "/robots/robot2/visual/forearm/0" in recording
+    assert "/robots/robot1/joints/limited" in recording and "/robots/robot2/joints/limited" in recording
+    assert "/tf_axes/robot2\\/odom" in recording and "/tf_axes/map" in recording
+    assert "/tf_axes/odom" not in recording and "/robot/visual/forearm/0" not in recording
+
+
+def test_a_robot_that_does_not_reach_the_fixed_frame_is_named_once(tmp_path: Path) -> None:
+    bag = tmp_path / "three_robots"
+    _two_robot_bag(bag, n=5, third=True)
+    result = cli("--bag", str(bag), "--save", str(tmp_path / "three.rrd"))
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stderr.splitlines() if "robot /robot3" in line]
+    assert len(lines) == 1 and "'robot3/base_link'" in lines[0] and "'map'" in lines[0], result.stderr
+    assert "robot /robot1" not in result.stderr and "robot /robot2" not in result.stderr
+
+
+def test_description_namespaces() -> None:
+    topics = ["/robot_description", "/a/robot_description", "/a/joint_states", "/b/c/robot_description", "/tf"]
+    assert description_namespaces(topics) == ["", "/a", "/b/c"]
+
+
+def test_renamed_prefixes_all_but_the_shared_frames() -> None:
+    records = TfRecords(
+        np.zeros(3, dtype=np.int64),
+        ("map", "odom", "/base_link"),
+        ("odom", "base_link", "r2/laser"),
+        np.zeros((3, 3)),
+        np.tile([0.0, 0, 0, 1], (3, 1)),
+    )
+    out = renamed(records, "r2/", ("map",))
+    assert out.parents == ("map", "r2/odom", "r2/base_link")
+    assert out.children == ("r2/odom", "r2/base_link", "r2/laser")
+    assert renamed(records, "", ("map",)) is records
+
+
+@pytest.mark.parametrize(
+    ("namespace", "own_tf", "frames", "several", "expected"),
+    [
+        ("", False, {"base_link"}, True, ""),  # the root namespace: bare
+        ("/r1", False, {"map", "r1/base_link"}, True, "r1/"),  # (A) prefixed on /tf
+        ("/r2", True, {"map"}, True, "r2/"),  # (B) its own TF topics
+        ("/r1", False, {"odom", "base_link"}, False, ""),  # a lone robot, only its description namespaced
+        ("/r1", False, {"odom", "base_link"}, True, "r1/"),  # never two robots on one name
+        ("/r1", False, set(), False, "r1/"),  # nothing places it: prefixed anyway
+    ],
+)
+def test_choose_prefix(namespace: str, own_tf: bool, frames: set[str], several: bool, expected: str) -> None:
+    assert choose_prefix(namespace, "base_link", own_tf=own_tf, frames=frames, several=several) == expected
+
+
+def test_prefixed_robot_renames_links_not_joints() -> None:
+    robot = parse_urdf(ARM.read_text())
+    renamed_robot = prefixed_robot(robot, "r1/")
+    assert renamed_robot.root == "r1/base_link"
+    assert [link.name for link in renamed_robot.links] == [f"r1/{link.name}" for link in robot.links]
+    assert [j.name for j in renamed_robot.joints] == [j.name for j in robot.joints]
+    assert renamed_robot.joint("elbow").parent == "r1/upper_arm"
+    assert prefixed_robot(robot, "") is robot
