@@ -29,6 +29,7 @@ from r2d2_viz.sources.base import Clock, Source
 from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
 from r2d2_viz.sources.playback import Window, read_ahead
+from r2d2_viz.sources.robots import SHARED_FRAMES
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
@@ -74,6 +75,8 @@ class RunConfig:
     time: TimeSource = "receive"
     """A bag's times: when each message was received (recorded), or its header stamp."""
     fixed_frame: str | None = None
+    shared_frames: tuple[str, ...] | None = None
+    """Several robots: the frames they share, never prefixed (None: :data:`r2d2_viz.sources.robots.SHARED_FRAMES`)."""
     rviz: Path | None = None
     """Lay the viewer out as this RViz config does (default: the tutorial's r2d2.rviz, fitted to the robot)."""
     ros: bool = False
@@ -156,6 +159,7 @@ def _plan(config: RunConfig, inputs: ExitStack) -> RunPlan:
             fixed_frame=config.fixed_frame,
             packages=packages,
             choice=BagChoice(config.start_offset, config.duration, config.topics),
+            shared_frames=config.shared_frames or SHARED_FRAMES,
         )
     loaded = robot()
     return plan_motion(compile_tree(loaded), config.source(loaded), config.fixed_frame or ODOM)

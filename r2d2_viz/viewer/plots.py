@@ -28,15 +28,15 @@ class JointPlots:
     def __init__(self, tree: KinematicTree, *, timeline: str, clock: Clock, robot: str = "") -> None:
         self.tree, self.timeline, self.clock = tree, timeline, clock
         root = entities.joints_root(robot)
-        self.limits_entity = entities.LIMITS if not robot else f"{root}/limited/limits"
+        self.limits_entity = entities.LIMITS if not robot.strip("/") else f"{root}/limited/limits"
         self.limits = tree.limits
         limited = [m for m, name in enumerate(tree.moving) if name in self.limits]
         continuous = [m for m, name in enumerate(tree.moving) if name not in self.limits]
         self.series = [
             (entity, np.array(ms, dtype=np.intp))
             for entity, ms in (
-                (entities.JOINTS_LIMITED if not robot else f"{root}/limited", limited),
-                (entities.JOINTS_CONTINUOUS if not robot else f"{root}/continuous", continuous),
+                (entities.JOINTS_LIMITED if not robot.strip("/") else f"{root}/limited", limited),
+                (entities.JOINTS_CONTINUOUS if not robot.strip("/") else f"{root}/continuous", continuous),
             )
             if ms
         ]

@@ -106,7 +106,7 @@ def test_two_robots_of_both_conventions_stand_in_one_view(tmp_path: Path) -> Non
     assert worst["robot1"] < 1e-5 and worst["robot2"] < 1e-5, worst
     # both robots' shapes, each under its namespace; the shared frame stays bare, robot2's frames are prefixed
     assert "/robots/robot1/visual/forearm/0" in recording and "/robots/robot2/visual/forearm/0" in recording
-    assert "/robots/robot1/joints/limited" in recording and "/robots/robot2/joints/limited" in recording
+    assert "/joints/robot1/limited" in recording and "/joints/robot2/limited" in recording
     assert "/tf_axes/robot2\\/odom" in recording and "/tf_axes/map" in recording
     assert "/tf_axes/odom" not in recording and "/robot/visual/forearm/0" not in recording
 
@@ -163,3 +163,65 @@ def test_prefixed_robot_renames_links_not_joints() -> None:
     assert [j.name for j in renamed_robot.joints] == [j.name for j in robot.joints]
     assert renamed_robot.joint("elbow").parent == "r1/upper_arm"
     assert prefixed_robot(robot, "") is robot
+
+
+def test_shared_frames_are_configurable(tmp_path: Path) -> None:
+    bag = tmp_path / "two_robots"
+    _two_robot_bag(bag, n=5)
+    out = tmp_path / "two.rrd"
+    # with only `world` shared, robot2's `map` is its own (robot2/map): its tree no longer reaches robot1's map
+    result = cli("--bag", str(bag), "--save", str(out), "--shared-frames", "world", "--fixed-frame", "map")
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stderr.splitlines() if "robot /robot2" in line]
+    assert len(lines) == 1 and "'robot2/map'" in lines[0], result.stderr
+    assert "robot /robot1" not in result.stderr
+    recording = read_recording(out)
+    assert "/tf_axes/robot2\\/map" in recording
+    bad = cli("--bag", str(bag), "--save", str(out), "--shared-frames", " , ")
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--shared-frames" in bad.stderr
+
+
+RVIZ_TWO_ROBOTS = """Visualization Manager:
+  Displays:
+    - Class: rviz_default_plugins/RobotModel
+      Name: robot1
+      Enabled: true
+      Collision Enabled: true
+      Description Topic:
+        Depth: 5
+        Value: /robot1/robot_description
+      TF Prefix: robot1
+      Links:
+        tool:
+          Value: false
+    - Class: rviz_default_plugins/RobotModel
+      Name: robot2
+      Enabled: false
+      Description Topic:
+        Value: /robot2/robot_description
+      TF Prefix: robot_two
+  Global Options:
+    Fixed Frame: map
+"""
+
+
+def test_rviz_robot_model_displays_map_to_their_robots(tmp_path: Path) -> None:
+    from rrd import blueprint_components
+
+    bag = tmp_path / "two_robots"
+    _two_robot_bag(bag, n=5)
+    rviz = tmp_path / "two.rviz"
+    rviz.write_text(RVIZ_TWO_ROBOTS)
+    out = tmp_path / "two.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), "--rviz", str(rviz))
+    assert result.returncode == 0, result.stderr
+    # robot2's display names TF Prefix robot_two; its frames carry robot2/: said once
+    assert result.stderr.count("TF Prefix 'robot_two'") == 1, result.stderr
+    hidden = {
+        key.split("/ViewContents/overrides", 1)[1].removesuffix("/visualizers")
+        for key, values in blueprint_components(out).items()
+        if "/ViewContents/overrides/" in key and values.get("EntityBehavior:visible") == [False]
+    }
+    # robot1: collision shown, its tool unticked; robot2: its display is disabled
+    assert "/robots/robot1/visual/tool" in hidden and "/robots/robot2" in hidden
+    assert "/robots/robot1/collision" not in hidden and "/robots/robot1" not in hidden

@@ -23,7 +23,7 @@ from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
 from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle
-from r2d2_viz.viewer.layout.blueprint import Layout
+from r2d2_viz.viewer.layout.blueprint import Layout, robot_display
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
 
 PREVIEW_TIMES = 256
@@ -76,16 +76,33 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
     missing = missing_fixed_frame(spec, frames) if rviz is not None and fixed_frame is None else None
     if missing:
         notes.append(missing)
+    if rviz is not None:
+        notes += _prefix_notes(spec, plan)
     layout = Layout(
         limited=n_limited if tree is not None else 0,
         continuous=n_continuous,
         camera=camera,
         show_arrows=arrows,
         fixed_frame=frame,
+        robots=tuple(r.namespace for r in plan.robots) if len(plan.robots) > 1 else (),
     )
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
     return ViewPlan(spec, layout, axis_length, show_names, tuple(notes), styles)
+
+
+def _prefix_notes(spec: ViewSpec, plan: RunPlan) -> list[str]:
+    """A RobotModel display whose TF Prefix is not the one the recording gives its robot's frames."""
+    notes = []
+    for robot in plan.robots:
+        display = robot_display(spec, robot.namespace)
+        if display is not None and display.tf_prefix and display.tf_prefix + "/" != robot.prefix:
+            shown = robot.prefix.rstrip("/") or "none"
+            notes.append(
+                f"RobotModel ({display.description_topic}) / TF Prefix {display.tf_prefix!r}: the recording's frames "
+                f"of robot {robot.name} carry the prefix {shown!r}; shown with that"
+            )
+    return notes
 
 
 MAP_SCHEMES = ("map", "costmap", "raw")
