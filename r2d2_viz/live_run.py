@@ -37,6 +37,7 @@ from r2d2_viz.sources.live.dds import LiveGraph
 from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
+from r2d2_viz.sources.robots import choose_prefix, prefixed_robot
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
@@ -124,6 +125,70 @@ def wanted_topics(rviz: Path | None) -> set[str] | None:
     return {t.topic for t in load_rviz(rviz).topics if t.enabled and t.topic}
 
 
+class _LiveRobots:
+    """The namespaced robots of a live graph (``/<namespace>/robot_description``), each drawn from its description
+    and moved by its ``/<namespace>/joint_states`` by its own :class:`RobotStream`, its frames prefixed as
+    :func:`r2d2_viz.sources.robots.choose_prefix` says (the root namespace's robot is :class:`_LiveRun`'s own)."""
+
+    def __init__(self, run: _LiveRun, several: bool) -> None:
+        self.run, self.several = run, several
+        self.texts: dict[str, str] = {}
+        self.streams: dict[str, RobotStream] = {}
+        self.edges: set[tuple[str, str]] = set()
+
+    def describe(self, namespace: str, text: str) -> None:
+        """A (new) description of the robot in ``namespace``: (re)loaded, or one line when it does not parse."""
+        if self.texts.get(namespace) == text:
+            return
+        first = namespace not in self.texts
+        self.texts[namespace] = text
+        run, topic = self.run, f"{namespace}/robot_description"
+        try:
+            robot = parse_urdf(text, source=topic, packages=run.packages)
+        except R2d2VizError as exc:
+            run.notices.report(f"{exc} (robot {namespace} not shown)", key=f"description {hash(text)}")
+            return
+        subscribed = run.source.subscribed
+        own_tf = any(f"{namespace}/{name}" in subscribed for name in ("tf", "tf_static"))
+        prefix = choose_prefix(namespace, robot.root, own_tf=own_tf, frames=run.frames, several=True)
+        tree = compile_tree(prefixed_robot(robot, prefix))
+        if (old := self.streams.pop(namespace, None)) is not None:
+            old.finish()
+        if not first:
+            run.notices.report(f"{topic} changed: robot {robot.name!r} reloaded", key=f"loaded {hash(text)}")
+        stream = RobotStream(
+            run.rec,
+            tree,
+            clock="timestamp",
+            fixed_frame=run.fixed_frame,
+            root_placed=tree.robot.root == run.fixed_frame or tree.robot.root in run.children,
+            axis_length=run.view.axis_length,
+            show_names=run.view.show_names,
+            robot_name=namespace if self.several else "",
+            frame_prefix=prefix,
+        )
+        stream.notices = run.notices
+        stream.log_static()
+        self.streams[namespace] = stream
+        self.edges |= set(urdf_edges(tree))
+        run.recorded.skip |= self.edges
+        run.source.set_joints(tree.actuated, namespace)
+
+    def send(self, batch: LiveBatch) -> int:
+        """The batch's namespaced joint states; how many were sent."""
+        sent = 0
+        for namespace, chunk in batch.robot_joints.items():
+            if (stream := self.streams.get(namespace)) is not None:
+                stream.send(stream.prepare(chunk))
+                sent += len(chunk)
+                self.run.lateness.sent(f"{namespace}/joint_states", chunk.times_ns)
+        return sent
+
+    def finish(self) -> None:
+        for stream in self.streams.values():
+            stream.finish()
+
+
 class _LiveRun:
     def __init__(self, config: LiveConfig, graph: LiveGraph, stop: threading.Event) -> None:
         self.config, self.stop = config, stop
@@ -136,6 +201,9 @@ class _LiveRun:
         self.description: str | None = None
         self.children: set[str] = set()
         self.streamer: RobotStream | None = None
+        self.frames: set[str] = set()
+        """Frames the settle saw (which convention a namespaced robot follows)."""
+        self.robots = _LiveRobots(self, several=False)
         self.samples = 0
         self.lateness = LatenessLog(None)
 
@@ -165,6 +233,10 @@ class _LiveRun:
 
     def _plan(self, batches: list[LiveBatch]) -> tuple[RunPlan, ViewPlan]:
         records = [r for b in batches for r in b.tf]
+        self.frames = {f for r in records for f in (*r.parents, *r.children)}
+        namespaces = {ns for b in batches for ns, _ in b.robot_descriptions}
+        several = len(namespaces) + any(b.descriptions for b in batches) > 1
+        self.robots = _LiveRobots(self, several=several)
         static = next((r for r in records if r.static), None)
         moving = next((r for r in records if not r.static), None)
         tree = compile_tree(self.robot) if self.robot is not None else None
@@ -172,7 +244,11 @@ class _LiveRun:
         root = tree.robot.root if tree is not None else None
         frame = self.config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
         plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
-        return plan, plan_view(plan, rviz=self.config.rviz, fixed_frame=self.config.fixed_frame)
+        view = plan_view(plan, rviz=self.config.rviz, fixed_frame=self.config.fixed_frame)
+        if several:  # a plot per robot, each robot's shapes under /robots/<namespace>
+            names = sorted({*namespaces, *([""] if any(b.descriptions for b in batches) else [])})
+            view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=tuple(names)))
+        return plan, view
 
     def run(self, on_ready: Callable[[str], None] | None) -> tuple[int, bool, Path | None]:
         save = self.config.sink.save
@@ -261,7 +337,7 @@ class _LiveRun:
         )
         self.streamer.notices = self.notices
         self.streamer.log_static()
-        self.recorded.skip = set(urdf_edges(tree))
+        self.recorded.skip = set(urdf_edges(tree)) | self.robots.edges
         self.source.set_joints(tree.actuated)
 
     def _describe(self, text: str) -> None:
@@ -293,6 +369,8 @@ class _LiveRun:
             text = batch.descriptions[-1]
             if text != self.description:
                 self._describe(text)
+        for namespace, text in batch.robot_descriptions:
+            self.robots.describe(namespace, text)
         for records in batch.tf:
             self._tf(records)
         for topic in TF_TOPICS if batch.tf else ():
@@ -301,6 +379,7 @@ class _LiveRun:
             self.streamer.send(self.streamer.prepare(batch.joints))
             self.samples += len(batch.joints)
             self.lateness.sent("/joint_states", batch.joints.times_ns)
+        self.samples += self.robots.send(batch)
         for message in batch.displays:
             self.feed.log(message)
             self.lateness.sent(message.topic, (message.time_ns,))
@@ -315,5 +394,6 @@ class _LiveRun:
         self.feed.finish()
         if self.streamer is not None:
             self.streamer.finish()
+        self.robots.finish()
         received = ", ".join(f"{t} {n}" for t, n in sorted(self.source.received.items())) or "nothing"
         print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)
