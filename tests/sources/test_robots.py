@@ -225,3 +225,47 @@ def test_rviz_robot_model_displays_map_to_their_robots(tmp_path: Path) -> None:
     # robot1: collision shown, its tool unticked; robot2: its display is disabled
     assert "/robots/robot1/visual/tool" in hidden and "/robots/robot2" in hidden
     assert "/robots/robot1/collision" not in hidden and "/robots/robot1" not in hidden
+
+
+@pytest.mark.slow
+def test_two_live_robots_of_both_conventions(tmp_path: Path) -> None:
+    """Two real Kilted rclpy nodes, ``/robot1/…`` and ``/robot2/…`` (positions shifted by 0.5), robot1's base on /tf
+    with prefixed frames, robot2's on /robot2/tf with bare ones (cyclonedds peers); ``--ros --save`` a late joiner.
+    Link poses at recorded header stamps against yourdfpy's FK of what each node published."""
+    import json
+    import sys
+
+    from rrd import tf_by_child
+    from sources.live import ros_node
+    from sources.live.nodes.publish_robot import joint_names, joint_state_values
+
+    python = ros_node.require_live("kilted")
+    urdfs = [tmp_path / "robot1.urdf", tmp_path / "robot2.urdf"]
+    urdfs[0].write_text(ARM.read_text())
+    urdfs[1].write_text(ARM2_TEXT)
+    out = tmp_path / "live.rrd"
+    script = Path(ros_node.__file__).with_name("robots_scenario.py")
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    run = ["--save", str(out), "--duration", "9", "--time", "header"]
+    command = [sys.executable, str(script), "--ros-python", str(python), "--urdf", *map(str, urdfs), "--cli", str(exe)]
+    done = ros_node.in_netns([*command, "--run", json.dumps(run)], timeout=150)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["rc"] == 0, result["stderr"][-3000:]
+    recording = read_recording(out)
+    for ns, urdf_file, shift, base in (("robot1", urdfs[0], 0.0, (1.0, 0.0)), ("robot2", urdfs[1], 0.5, (0.0, -1.0))):
+        names = joint_names(urdf_file.read_text(), 0)
+        urdf = yourdfpy.URDF.load(str(urdf_file), load_meshes=False)
+        times = sorted(t for t in set(tf_by_child(recording)[f"{ns}/shoulder"].times) if t >= 1000 * 10**9)
+        assert len(times) >= 0.9 * 150, (ns, len(times))
+        for t in (times[0], times[len(times) // 2], times[-1]):
+            k = (t - 1000 * 10**9) // 1_000_000
+            _, _, position, _ = joint_state_values(int(k), len(names), shift)
+            urdf.update_cfg(dict(zip(names, position, strict=True)))
+            T_map_base = np.eye(4)
+            T_map_base[:2, 3] = base
+            edges = frame_edges_at(recording, t)
+            for link in ("forearm", "tool"):
+                expected = T_map_base @ urdf.get_transform(frame_to=link, frame_from="base_link")
+                np.testing.assert_allclose(pose_in(edges, f"{ns}/{link}", "map"), expected, atol=2e-6)
+    assert "/robots/robot1/visual/forearm/0" in recording and "/robots/robot2/visual/forearm/0" in recording
