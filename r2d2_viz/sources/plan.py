@@ -217,7 +217,7 @@ def plan_bag(
         tf_topics=dict(tf_read),
         shared=shared,
     )
-    joints, messages = _preview(preview)
+    joints, messages, more_joints = _preview(preview)
     if robot is None:
         what = "its transforms and display topics" if shown else "a TF-only replay (frames, axes, arrows)"
         notes.append(f"{bag.path}: no --urdf and no /robot_description: no robot, {what}")
@@ -226,9 +226,11 @@ def plan_bag(
     if tree is not None:
         trees = [r.tree for r in robots] or [tree]
         skip = frozenset(e for r in records for e in r.edges() if any(e in urdf_edges(t) for t in trees))
-        message = _check(tree, joints, records) if skip else None
-        if message:
-            notes.append(f"{bag.path}: {message}")
+        checked = [(r.tree, j, r.joints_topic) for r, j in zip(robots, (joints, *more_joints), strict=False)]
+        for checked_tree, checked_joints, topic in checked or [(tree, joints, JOINTS)]:
+            message = _check(checked_tree, checked_joints, records, topic) if skip else None
+            if message:
+                notes.append(f"{bag.path}: {message}")
     if len(robots) > 1:
         notes += [f"{bag.path}: {line}" for r in robots if (line := unreached(r, frame, records))]
     segments = [Segment(read, start, stop)]
@@ -341,19 +343,31 @@ def _tf_preview(bag: Bag, time: TimeSource, start: int, stop: int, topic: str = 
     return concatenate([p for p in parts if len(p)])
 
 
-def _preview(preview: BagPass) -> tuple[SampleChunk | None, tuple[TopicMessage, ...]]:
-    """The look-ahead's joint states and its first display messages."""
+def _preview(
+    preview: BagPass,
+) -> tuple[SampleChunk | None, tuple[TopicMessage, ...], tuple[SampleChunk | None, ...]]:
+    """The look-ahead's joint states, its first display messages, and the other robots' joint states."""
     chunks: list[SampleChunk] = []
     messages: list[TopicMessage] = []
+    more: list[list[SampleChunk]] = [[] for _ in preview.others]
     for window in preview.windows(10_000):
         if window.joints is not None:
             chunks.append(window.joints)
+        for i, chunk in enumerate(window.more_joints):
+            if chunk is not None:
+                more[i].append(chunk)
         messages += window.displays[: PREVIEW_MESSAGES - len(messages)]
-    if not chunks or preview.joints is None:
-        return None, tuple(messages)
-    state = JointState(preview.joints.joints)
+    others = tuple(_held(c, d.joints if d is not None else ()) for c, (_, d) in zip(more, preview.others, strict=True))
+    return _held(chunks, preview.joints.joints if preview.joints is not None else ()), tuple(messages), others
+
+
+def _held(chunks: list[SampleChunk], joints: Sequence[str]) -> SampleChunk | None:
+    """Chunks of joint states as one, every joint held at its last value (None: no chunks, or no joints)."""
+    if not chunks or not joints:
+        return None
+    state = JointState(joints)
     rows = np.vstack([state.update(c) for c in chunks])
-    return SampleChunk(np.concatenate([c.times_ns for c in chunks]), state.joints, rows), tuple(messages)
+    return SampleChunk(np.concatenate([c.times_ns for c in chunks]), state.joints, rows)
 
 
 def _one_display_frame(records: list[TfRecords], robot: Robot | None, messages: Sequence[TopicMessage]) -> str | None:
@@ -365,7 +379,9 @@ def _one_display_frame(records: list[TfRecords], robot: Robot | None, messages: 
     return frames.pop() if len(frames) == 1 else None
 
 
-def _check(tree: KinematicTree, joints: SampleChunk | None, records: list[TfRecords]) -> str | None:
+def _check(
+    tree: KinematicTree, joints: SampleChunk | None, records: list[TfRecords], topic: str = JOINTS
+) -> str | None:
     """Recorded /tf against the kinematics of the first joint states (one message, or None when they agree)."""
     if joints is None or not len(joints):
         return None
@@ -373,7 +389,7 @@ def _check(tree: KinematicTree, joints: SampleChunk | None, records: list[TfReco
     last = int(joints.times_ns[-1])
     for r in records:
         window = r if r.static else r.rows(np.flatnonzero(r.times_ns <= last))
-        message = disagreement(tree, window, joints.times_ns, q)
+        message = disagreement(tree, window, joints.times_ns, q, joints_topic=topic)
         if message:
             return message
     return None
