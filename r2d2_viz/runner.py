@@ -29,7 +29,7 @@ from r2d2_viz.sources.base import Clock, Source
 from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
 from r2d2_viz.sources.playback import Window, read_ahead
-from r2d2_viz.sources.robots import SHARED_FRAMES
+from r2d2_viz.sources.robots import SHARED_FRAMES, robots_read
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
@@ -123,6 +123,9 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
         if save is not None and save.suffix == ".mcap":
             from r2d2_viz.ros_out.bag_out import write_bag
 
+            if len(plan.robots) > 1:
+                first = plan.robots[0].name
+                print(f"warning: {config.bag}: several robots: {save} holds only the first, {first}", file=sys.stderr)
             with sigterm_raises():
                 samples = write_bag(save, plan, plan.description or _description_text(config))
             return RunResult(samples=samples, interrupted=False, saved=save)
@@ -304,7 +307,8 @@ def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:
     if plan.mcap_files and skipped and not config.live:
         from r2d2_viz.viewer.bag_topics import OURS, log_other_topics
 
-        result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=(*OURS, *plan.displays))
+        exclude = (*OURS, *plan.displays, *robots_read(plan.robots))
+        result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=exclude)
         for topic in result.logged:
             skipped.pop(topic, None)
     if skipped:

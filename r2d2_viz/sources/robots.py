@@ -153,6 +153,12 @@ def plan_robots(
     return tuple(out)
 
 
+def robots_read(robots: Sequence[RobotPlan]) -> set[str]:
+    """The topics the namespaced robots' pipeline reads (not left to other displays)."""
+    names = ("robot_description", "joint_states", "tf", "tf_static")
+    return {topic(r.namespace, n) for r in robots if r.namespace for n in names}
+
+
 def tf_topics(robots: Sequence[RobotPlan], topics: Iterable[str], name: str) -> dict[str, str]:
     """``/tf`` (or ``/tf_static``: ``name``) and the robots' own namespaced ones present in ``topics`` → the prefix
     their frames take (convention B; ``""`` for the shared one)."""

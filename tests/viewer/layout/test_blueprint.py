@@ -87,3 +87,15 @@ def test_the_layout_follows_the_robot(tmp_path) -> None:
     assert "- /joints/limited/limits" in query  # and the 60 limit lines are left out
     small = components(Layout(limited=5, continuous=0))
     assert f"{_view(small, 'TimeSeries', 'Joint states')}/PlotLegend" not in small
+
+
+def test_each_robot_takes_the_robot_model_display_of_its_description_topic() -> None:
+    from r2d2_viz.rviz.spec import RobotModel, ViewSpec
+    from r2d2_viz.viewer.layout.blueprint import robot_display
+
+    default = RobotModel()
+    two = RobotModel(collision=True, description_topic="/robot2/robot_description", tf_prefix="robot2")
+    spec = ViewSpec("x.rviz", robot=default, more_robots=(two,))
+    assert robot_display(spec, "/robot2") is two
+    assert robot_display(spec, "/robot1") is default  # a display for /robot_description draws the others
+    assert robot_display(ViewSpec("x.rviz", robot=two), "/robot1") is None  # no display draws robot1: hidden
