@@ -142,7 +142,8 @@ def _orbit_angles(spec: ViewSpec) -> tuple[float, float]:
 
 
 def _recorded_fit(plan: RunPlan) -> ViewFit | None:
-    """A bag's view: the robot (its size) along the trajectory its recorded TF gives its root, the TF frames of
+    """A bag's view: the robot (its size) along the trajectory its recorded TF gives its root (every robot's, when
+    there are several), the TF frames of
     a replay without a robot, and what the first display messages draw, all in the fixed frame."""
     records = [r for r in (plan.static_tf, plan.moving_tf) if r is not None]
     moving = plan.moving_tf.times_ns if plan.moving_tf is not None else np.zeros(0, dtype=np.int64)
@@ -153,8 +154,9 @@ def _recorded_fit(plan: RunPlan) -> ViewFit | None:
     if plan.tree is not None:
         own = fit_view(plan.tree, _preview(plan))
         robot_radius, frames = own.radius, max(frames, own.frames)
-        root = plan.tree.robot.root
-        points.append(frame_positions(records, plan.fixed_frame, [root], times).get(root, np.zeros((1, 3))))
+        roots = [r.tree.robot.root for r in plan.robots] or [plan.tree.robot.root]  # several robots: all of them
+        placed = frame_positions(records, plan.fixed_frame, roots, times)
+        points += [placed.get(root, np.zeros((1, 3))) for root in roots]
     else:
         children = sorted({c for r in records for c in r.children})
         points += list(frame_positions(records, plan.fixed_frame, children, times).values())
