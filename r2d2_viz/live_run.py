@@ -37,7 +37,7 @@ from r2d2_viz.sources.live.dds import LiveGraph
 from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
-from r2d2_viz.sources.robots import choose_prefix, prefixed_robot
+from r2d2_viz.sources.robots import RobotPlan, choose_prefix, prefixed_robot, unreached
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
@@ -134,6 +134,7 @@ class _LiveRobots:
         self.run, self.several = run, several
         self.texts: dict[str, str] = {}
         self.streams: dict[str, RobotStream] = {}
+        self.plans: dict[str, RobotPlan] = {}
         self.edges: set[tuple[str, str]] = set()
 
     def describe(self, namespace: str, text: str) -> None:
@@ -170,6 +171,7 @@ class _LiveRobots:
         stream.notices = run.notices
         stream.log_static()
         self.streams[namespace] = stream
+        self.plans[namespace] = RobotPlan(namespace, tree, f"{namespace}/joint_states", prefix, text)
         self.edges |= set(urdf_edges(tree))
         run.recorded.skip |= self.edges
         run.source.set_joints(tree.actuated, namespace)
@@ -183,6 +185,16 @@ class _LiveRobots:
                 sent += len(chunk)
                 self.run.lateness.sent(f"{namespace}/joint_states", chunk.times_ns)
         return sent
+
+    def check(self) -> None:
+        """One line for each robot (when there are several) whose tree does not reach the fixed frame (said once)."""
+        if not self.several:
+            return
+        run = self.run
+        for namespace, robot in self.plans.items():
+            line = unreached(robot, run.fixed_frame, run.parents)
+            if line is not None:
+                run.notices.report(line, key=f"unreached {namespace}")
 
     def finish(self) -> None:
         for stream in self.streams.values():
@@ -202,6 +214,8 @@ class _LiveRun:
         self.children: set[str] = set()
         self.streamer: RobotStream | None = None
         self.frames: set[str] = set()
+        self.parents: dict[str, str] = {}
+        """Child frame → parent of the transforms received."""
         """Frames the settle saw (which convention a namespaced robot follows)."""
         self.robots = _LiveRobots(self, several=False)
         self.samples = 0
@@ -274,6 +288,7 @@ class _LiveRun:
                 if k < latest:  # a description the settle's latest one replaced: not worth a word
                     batch.descriptions.clear()
                 self._handle(batch, bag)
+            self.robots.check()
             flushed = time.monotonic()
             while not self._done():
                 self._handle(self.source.poll(), bag)
@@ -386,6 +401,7 @@ class _LiveRun:
 
     def _tf(self, records: TfRecords) -> None:
         self.children.update(records.children)
+        self.parents.update(zip(records.children, records.parents, strict=True))
         self.recorded.log(records)
 
     def _finish(self) -> None:
@@ -394,6 +410,7 @@ class _LiveRun:
         self.feed.finish()
         if self.streamer is not None:
             self.streamer.finish()
+        self.robots.check()
         self.robots.finish()
         received = ", ".join(f"{t} {n}" for t, n in sorted(self.source.received.items())) or "nothing"
         print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)

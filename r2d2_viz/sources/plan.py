@@ -31,6 +31,7 @@ from r2d2_viz.sources.robots import (
     SHARED_FRAMES,
     RobotPlan,
     description_namespaces,
+    parents_of,
     plan_robots,
     renamed,
     robots_read,
@@ -233,7 +234,8 @@ def plan_bag(
             if message:
                 notes.append(f"{bag.path}: {message}")
     if len(robots) > 1:
-        notes += [f"{bag.path}: {line}" for r in robots if (line := unreached(r, frame, records))]
+        parents = parents_of(records)
+        notes += [f"{bag.path}: {line}" for r in robots if (line := unreached(r, frame, parents))]
     segments = [Segment(read, start, stop)]
     if start > span[0]:  # a seek: the state before it
         before = tuple(t for t in (JOINTS, TF, *robot_topics) if t in segments[0].topics)

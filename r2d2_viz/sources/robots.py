@@ -15,7 +15,7 @@ transforms name the same frames. Pure: no rerun import.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 from r2d2_viz.kinematics.tree import KinematicTree
@@ -105,22 +105,28 @@ def choose_prefix(namespace: str, root: str, *, own_tf: bool, frames: set[str], 
     return "" if root in frames and not several else prefix
 
 
-def parent_chain(frame: str, records: Sequence[TfRecords | None]) -> list[str]:
-    """``frame`` and its ancestors in the recorded transforms, up to the root of its tree."""
+def parents_of(records: Iterable[TfRecords | None]) -> dict[str, str]:
+    """Child frame → its parent in the recorded transforms (the last one recorded)."""
     parent: dict[str, str] = {}
     for r in records:
         if r is not None:
             parent.update(zip(r.children, r.parents, strict=True))
+    return parent
+
+
+def parent_chain(frame: str, parent: Mapping[str, str]) -> list[str]:
+    """``frame`` and its ancestors (``parent``: :func:`parents_of`), up to the root of its tree."""
     chain = [frame]
     while (up := parent.get(chain[-1])) is not None and up not in chain:
         chain.append(up)
     return chain
 
 
-def unreached(robot: RobotPlan, fixed_frame: str, records: Sequence[TfRecords | None]) -> str | None:
-    """One line naming ``robot`` when its tree does not reach ``fixed_frame`` through the recorded transforms."""
+def unreached(robot: RobotPlan, fixed_frame: str, parents: Mapping[str, str]) -> str | None:
+    """One line naming ``robot`` when its tree does not reach ``fixed_frame`` through the recorded transforms
+    (``parents``: :func:`parents_of`)."""
     root = robot.tree.robot.root
-    chain = parent_chain(root, records)
+    chain = parent_chain(root, parents)
     if fixed_frame in chain or root == fixed_frame:
         return None
     if len(chain) == 1:

@@ -235,7 +235,8 @@ def test_rviz_robot_model_displays_map_to_their_robots(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_two_live_robots_of_both_conventions(tmp_path: Path) -> None:
     """Two real Kilted rclpy nodes, ``/robot1/…`` and ``/robot2/…`` (positions shifted by 0.5), robot1's base on /tf
-    with prefixed frames, robot2's on /robot2/tf with bare ones (cyclonedds peers); ``--ros --save`` a late joiner.
+    with prefixed frames, robot2's on /robot2/tf with bare ones (cyclonedds peers), robot3 with no TF (one line);
+    ``--ros --save`` a late joiner.
     Link poses at recorded header stamps against yourdfpy's FK of what each node published."""
     import json
     import sys
@@ -245,9 +246,10 @@ def test_two_live_robots_of_both_conventions(tmp_path: Path) -> None:
     from sources.live.nodes.publish_robot import joint_names, joint_state_values
 
     python = ros_node.require_live("kilted")
-    urdfs = [tmp_path / "robot1.urdf", tmp_path / "robot2.urdf"]
+    urdfs = [tmp_path / "robot1.urdf", tmp_path / "robot2.urdf", tmp_path / "robot3.urdf"]
     urdfs[0].write_text(ARM.read_text())
     urdfs[1].write_text(ARM2_TEXT)
+    urdfs[2].write_text(ARM.read_text())  # robot3: no transform places it
     out = tmp_path / "live.rrd"
     script = Path(ros_node.__file__).with_name("robots_scenario.py")
     exe = Path(sys.executable).parent / "r2d2-viz"
@@ -257,6 +259,9 @@ def test_two_live_robots_of_both_conventions(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr[-3000:]
     result = json.loads(done.stdout.strip().splitlines()[-1])
     assert result["rc"] == 0, result["stderr"][-3000:]
+    # robot1's and robot2's trees reach map; robot3's is one line
+    lines = [line for line in result["stderr"].splitlines() if "robot /robot" in line]
+    assert len(lines) == 1 and "robot /robot3" in lines[0] and "'robot3/base_link'" in lines[0], result["stderr"]
     recording = read_recording(out)
     for ns, urdf_file, shift, base in (("robot1", urdfs[0], 0.0, (1.0, 0.0)), ("robot2", urdfs[1], 0.5, (0.0, -1.0))):
         names = joint_names(urdf_file.read_text(), 0)

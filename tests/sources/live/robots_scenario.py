@@ -2,7 +2,8 @@
 
 Two real ROS 2 nodes (``nodes/publish_robot.py --namespace``) publish ``/robot1/…`` and ``/robot2/…`` descriptions
 and joint states; cyclonedds peers (``nodes/tf_peer.py``) publish robot1's base on ``/tf`` with prefixed frames
-(convention A) and robot2's on its own ``/robot2/tf`` with bare frames (convention B). ``r2d2-viz --ros --save``
+(convention A) and robot2's on its own ``/robot2/tf`` with bare frames (convention B); a third robot, if given, has
+no TF at all. ``r2d2-viz --ros --save``
 runs as a late joiner. Prints one JSON: the run's exit code and stderr, the nodes' reports.
 """
 
@@ -21,13 +22,13 @@ TF = {
     "/tf": [["map", "robot1/base_link", [1.0, 0.0, 0.0], ID]],
     "/robot2/tf": [["map", "odom", [0.0, 0.0, 0.0], ID], ["odom", "base_link", [0.0, -1.0, 0.0], ID]],
 }
-SHIFT = {"/robot1": 0.0, "/robot2": 0.5}
+SHIFT = {"/robot1": 0.0, "/robot2": 0.5, "/robot3": 0.0}
 
 
 def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--ros-python", required=True)
-    parser.add_argument("--urdf", nargs=2, required=True, help="robot1's and robot2's")
+    parser.add_argument("--urdf", nargs="+", required=True, help="robot1's and robot2's (and robot3's: no TF)")
     parser.add_argument("--cli", required=True, help="the r2d2-viz command")
     parser.add_argument("--run", required=True, help="JSON list of the run's arguments")
     parser.add_argument("--count", type=int, default=150)
@@ -55,7 +56,7 @@ def main() -> int:
             stderr=subprocess.PIPE,
             text=True,
         )
-        for ns, urdf in zip(("/robot1", "/robot2"), args.urdf, strict=True)
+        for ns, urdf in zip(("/robot1", "/robot2", "/robot3"), args.urdf, strict=False)
     ]
     peers = [
         subprocess.Popen([sys.executable, str(NODES / "tf_peer.py"), "40", topic, json.dumps(transforms)])
