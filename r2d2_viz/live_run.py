@@ -17,14 +17,14 @@ import os
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Protocol, TextIO
+from typing import Protocol
 
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
-from r2d2_viz.pacing import PACING_LOG_ENV
+from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import load_robot
@@ -57,31 +57,6 @@ SETTLE_SECONDS = 1.5
 TF_TOPICS = ("/tf", "/tf_static")
 FLUSH_SECONDS = 5.0
 """Wait for the sinks this often (backpressure: a slow sink makes the run lag instead of piling up memory)."""
-
-
-class LatenessLog:
-    """The benchmark hook (``benchmarks/live_app.py``): when ``R2D2_VIZ_PACING_LOG`` names a file, one line per
-    message handed to Rerun, ``topic lateness_seconds`` — the wall time (``time.time()``) when its send returned
-    minus its DDS source timestamp (for ``/joint_states`` the chunk's times: header stamps with ``--time header``).
-    """
-
-    def __init__(self, file: TextIO | None) -> None:
-        self.file = file
-
-    @classmethod
-    def from_env(cls) -> LatenessLog:
-        path = os.environ.get(PACING_LOG_ENV)
-        return cls(open(path, "w", buffering=1 << 16) if path else None)
-
-    def sent(self, topic: str, stamps_ns: Iterable[int]) -> None:
-        """``stamps_ns``' messages were just handed to Rerun."""
-        if self.file is not None:
-            now = time.time()
-            self.file.write("".join(f"{topic} {now - int(t) * 1e-9:.6f}\n" for t in stamps_ns))
-
-    def close(self) -> None:
-        if self.file is not None:
-            self.file.close()
 
 
 class LiveConfig(Protocol):
@@ -130,17 +105,35 @@ class _LiveRobots:
     and moved by its ``/<namespace>/joint_states`` by its own :class:`RobotStream`, its frames prefixed as
     :func:`r2d2_viz.sources.robots.choose_prefix` says (the root namespace's robot is :class:`_LiveRun`'s own)."""
 
-    def __init__(self, run: _LiveRun, several: bool) -> None:
-        self.run, self.several = run, several
+    def __init__(self, run: _LiveRun, batches: Sequence[LiveBatch] = ()) -> None:
+        """``batches``: what the settle received (which robots there are, which frames the graph has)."""
+        self.run = run
+        names = {ns for b in batches for ns, _ in b.robot_descriptions}
+        names |= {""} if any(b.descriptions for b in batches) else set()
+        self.several = len(names) > 1
+        self.names = tuple(sorted(names)) if self.several else ()
+        """Several robots: their namespaces (a plot each; shapes under ``/robots/<namespace>``)."""
+        self.frames = {f for b in batches for r in b.tf for f in (*r.parents, *r.children)}
+        self.parents: dict[str, str] = {}
+        """Child frame → parent of the transforms received (:meth:`check`)."""
         self.texts: dict[str, str] = {}
         self.streams: dict[str, RobotStream] = {}
         self.plans: dict[str, RobotPlan] = {}
         self.edges: set[tuple[str, str]] = set()
 
-    def describe(self, namespace: str, text: str) -> None:
+    def laid_out(self, view: ViewPlan) -> ViewPlan:
+        """``view`` with a plot per robot, when there are several."""
+        if not self.names:
+            return view
+        return dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=self.names))
+
+    def describe(self, batch: LiveBatch) -> None:
+        for namespace, text in batch.robot_descriptions:
+            if self.texts.get(namespace) != text:
+                self._load(namespace, text)
+
+    def _load(self, namespace: str, text: str) -> None:
         """A (new) description of the robot in ``namespace``: (re)loaded, or one line when it does not parse."""
-        if self.texts.get(namespace) == text:
-            return
         first = namespace not in self.texts
         self.texts[namespace] = text
         run, topic = self.run, f"{namespace}/robot_description"
@@ -151,7 +144,7 @@ class _LiveRobots:
             return
         subscribed = run.source.subscribed
         own_tf = any(f"{namespace}/{name}" in subscribed for name in ("tf", "tf_static"))
-        prefix = choose_prefix(namespace, robot.root, own_tf=own_tf, frames=run.frames, several=True)
+        prefix = choose_prefix(namespace, robot.root, own_tf=own_tf, frames=self.frames, several=True)
         tree = compile_tree(prefixed_robot(robot, prefix))
         if (old := self.streams.pop(namespace, None)) is not None:
             old.finish()
@@ -178,6 +171,8 @@ class _LiveRobots:
 
     def send(self, batch: LiveBatch) -> int:
         """The batch's namespaced joint states; how many were sent."""
+        for records in batch.tf:
+            self.parents.update(zip(records.children, records.parents, strict=True))
         sent = 0
         for namespace, chunk in batch.robot_joints.items():
             if (stream := self.streams.get(namespace)) is not None:
@@ -192,11 +187,12 @@ class _LiveRobots:
             return
         run = self.run
         for namespace, robot in self.plans.items():
-            line = unreached(robot, run.fixed_frame, run.parents)
+            line = unreached(robot, run.fixed_frame, self.parents)
             if line is not None:
                 run.notices.report(line, key=f"unreached {namespace}")
 
     def finish(self) -> None:
+        self.check()
         for stream in self.streams.values():
             stream.finish()
 
@@ -213,11 +209,6 @@ class _LiveRun:
         self.description: str | None = None
         self.children: set[str] = set()
         self.streamer: RobotStream | None = None
-        self.frames: set[str] = set()
-        self.parents: dict[str, str] = {}
-        """Child frame → parent of the transforms received."""
-        """Frames the settle saw (which convention a namespaced robot follows)."""
-        self.robots = _LiveRobots(self, several=False)
         self.samples = 0
         self.lateness = LatenessLog(None)
 
@@ -247,10 +238,7 @@ class _LiveRun:
 
     def _plan(self, batches: list[LiveBatch]) -> tuple[RunPlan, ViewPlan]:
         records = [r for b in batches for r in b.tf]
-        self.frames = {f for r in records for f in (*r.parents, *r.children)}
-        namespaces = {ns for b in batches for ns, _ in b.robot_descriptions}
-        several = len(namespaces) + any(b.descriptions for b in batches) > 1
-        self.robots = _LiveRobots(self, several=several)
+        self.robots = _LiveRobots(self, batches)
         static = next((r for r in records if r.static), None)
         moving = next((r for r in records if not r.static), None)
         tree = compile_tree(self.robot) if self.robot is not None else None
@@ -259,9 +247,7 @@ class _LiveRun:
         frame = self.config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
         plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
         view = plan_view(plan, rviz=self.config.rviz, fixed_frame=self.config.fixed_frame)
-        if several:  # a plot per robot, each robot's shapes under /robots/<namespace>
-            names = sorted({*namespaces, *([""] if any(b.descriptions for b in batches) else [])})
-            view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=tuple(names)))
+        view = self.robots.laid_out(view)
         return plan, view
 
     def run(self, on_ready: Callable[[str], None] | None) -> tuple[int, bool, Path | None]:
@@ -384,8 +370,7 @@ class _LiveRun:
             text = batch.descriptions[-1]
             if text != self.description:
                 self._describe(text)
-        for namespace, text in batch.robot_descriptions:
-            self.robots.describe(namespace, text)
+        self.robots.describe(batch)
         for records in batch.tf:
             self._tf(records)
         for topic in TF_TOPICS if batch.tf else ():
@@ -401,7 +386,6 @@ class _LiveRun:
 
     def _tf(self, records: TfRecords) -> None:
         self.children.update(records.children)
-        self.parents.update(zip(records.children, records.parents, strict=True))
         self.recorded.log(records)
 
     def _finish(self) -> None:
@@ -410,7 +394,6 @@ class _LiveRun:
         self.feed.finish()
         if self.streamer is not None:
             self.streamer.finish()
-        self.robots.check()
         self.robots.finish()
         received = ", ".join(f"{t} {n}" for t, n in sorted(self.source.received.items())) or "nothing"
         print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)

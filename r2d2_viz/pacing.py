@@ -34,6 +34,31 @@ MAX_SLEEP = 0.1
 """Sleep at most this long at a time, so a signal (which sets the stop event) is seen soon."""
 
 
+class LatenessLog:
+    """The benchmark hook (``benchmarks/live_app.py``): when ``R2D2_VIZ_PACING_LOG`` names a file, one line per
+    message handed to Rerun, ``topic lateness_seconds`` — the wall time (``time.time()``) when its send returned
+    minus its DDS source timestamp (for ``/joint_states`` the chunk's times: header stamps with ``--time header``).
+    """
+
+    def __init__(self, file: TextIO | None) -> None:
+        self.file = file
+
+    @classmethod
+    def from_env(cls) -> LatenessLog:
+        path = os.environ.get(PACING_LOG_ENV)
+        return cls(open(path, "w", buffering=1 << 16) if path else None)
+
+    def sent(self, topic: str, stamps_ns: Iterable[int]) -> None:
+        """``stamps_ns``' messages were just handed to Rerun."""
+        if self.file is not None:
+            now = time.time()
+            self.file.write("".join(f"{topic} {now - int(t) * 1e-9:.6f}\n" for t in stamps_ns))
+
+    def close(self) -> None:
+        if self.file is not None:
+            self.file.close()
+
+
 @dataclass
 class Feeds:
     """Recorded transforms and display messages, handed on in time order as far as a replay has got."""

@@ -137,18 +137,8 @@ class Reader:
         views = manager.get("Views") or {}
         current = views.get("Current") if isinstance(views, dict) else None
         camera = read_camera(self, current, fixed) if isinstance(current, dict) else None
-        return ViewSpec(
-            self.source,
-            fixed,
-            background,
-            grid,
-            tf,
-            robot,
-            camera,
-            tuple(topics),
-            tuple(self.notes),
-            more_robots=tuple(more_robots),
-        )
+        shown, notes = tuple(topics), tuple(self.notes)
+        return ViewSpec(self.source, fixed, background, grid, tf, robot, camera, shown, notes, tuple(more_robots))
 
     def tools_and_panels(self, tools: Any, panels: Any) -> None:
         """One note naming every tool and panel (none has a counterpart: Rerun's viewer has its own camera,

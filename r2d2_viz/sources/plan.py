@@ -21,7 +21,7 @@ from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.sources.bag_displays import TopicMessage, display_topics, frames_of
-from r2d2_viz.sources.bag_joints import JOINT_STATE, TimeSource, read_robot_description
+from r2d2_viz.sources.bag_joints import TimeSource, read_robot_description
 from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.base import JointState, SampleChunk, Source, TfRecords, tf_root
@@ -31,8 +31,9 @@ from r2d2_viz.sources.robots import (
     SHARED_FRAMES,
     RobotPlan,
     description_namespaces,
+    joint_topics_of,
+    namespaced_robots,
     parents_of,
-    plan_robots,
     renamed,
     robots_read,
     tf_frames,
@@ -185,26 +186,14 @@ def plan_bag(
     tf_read: tuple[tuple[str, str], ...] = ((TF, ""),)
     shared = tuple(shared_frames)
     if robot is None and any(namespaces):  # several robots, or one in a namespace
-        robots = _namespaced_robots(bag, namespaces, tf_frames((static, moving)), packages)
+        robots = namespaced_robots(bag, namespaces, tf_frames((static, moving)), packages)
         robot, text = (robots[0].tree.robot, robots[0].description) if robots else (None, None)
-        static_read = tf_topics(robots, selected, "tf_static")
         tf_read = tuple(tf_topics(robots, selected, "tf").items())
-        static = concatenate([r for r in [static, *_static_tf_of(bag, static_read, shared)] if r is not None])
-        moving = concatenate(
-            [r for r in [moving, *_tf_preview_of(bag, tf_read[1:], shared, time, start, stop)] if r is not None]
-        )
+        static, moving = _robots_tf(bag, robots, selected, (static, moving), time, start, stop, shared)
     tree = robots[0].tree if robots else compile_tree(robot) if robot is not None else None
     records = [r for r in (static, moving) if r is not None]
-    actuated = tree.actuated if tree is not None and JOINTS in selected else None
-    if robots:
-        actuated = None  # the robots' own joint-states topics
-    joint_topics: list[tuple[str, tuple[str, ...] | None]] = [
-        (
-            r.joints_topic,
-            r.tree.actuated if r.joints_topic in selected and bag.require_type(r.joints_topic, JOINT_STATE) else None,
-        )
-        for r in robots
-    ]
+    actuated = tree.actuated if tree is not None and JOINTS in selected and not robots else None
+    joint_topics = joint_topics_of(bag, robots, selected)
     robot_topics = (*(t for t, a in joint_topics if a), *(t for t, _ in tf_read[1:]))
     read = (*bag_topics_read(bag, None if robots else actuated, shown), *robot_topics)
     lookahead = [Segment(read, start, min(stop, start + LOOKAHEAD_NS))]
@@ -264,38 +253,26 @@ def plan_bag(
     )
 
 
-def _namespaced_robots(
-    bag: Bag, namespaces: Sequence[str], frames: set[str], packages: PackageIndex | None
-) -> tuple[RobotPlan, ...]:
-    """Every namespace's robot (see :mod:`r2d2_viz.sources.robots`)."""
-    found = []
-    for namespace in namespaces:
-        topic = f"{namespace}/robot_description"
-        text = read_robot_description(bag, topic)
-        if text is not None:
-            robot = parse_urdf(text, source=f"{bag.path.name}:{topic}", base_dir=bag.path.parent, packages=packages)
-            found.append((namespace, robot, text))
-    return plan_robots(found, bag.topics, frames, compile_tree)
-
-
-def _static_tf_of(bag: Bag, topics: dict[str, str], shared: Sequence[str]) -> list[TfRecords]:
-    """The robots' own ``/<ns>/tf_static``, their frames prefixed."""
-    out = []
-    for topic, prefix in topics.items():
+def _robots_tf(
+    bag: Bag,
+    robots: Sequence[RobotPlan],
+    selected: set[str],
+    tf: tuple[TfRecords | None, TfRecords | None],
+    time: TimeSource,
+    start: int,
+    stop: int,
+    shared: Sequence[str],
+) -> tuple[TfRecords | None, TfRecords | None]:
+    """``tf`` (static, moving: what the plan read of ``/tf_static`` and ``/tf``) with the robots' own
+    ``/<ns>/tf_static`` and ``/<ns>/tf`` (as far as the plan reads it) merged in, their frames prefixed."""
+    static, moving = [tf[0]], [tf[1]]
+    for topic, prefix in tf_topics(robots, selected, "tf_static").items():
         if prefix and (records := _static_tf(bag, topic)) is not None:
-            out.append(renamed(records, prefix, shared))
-    return out
-
-
-def _tf_preview_of(
-    bag: Bag, topics: Sequence[tuple[str, str]], shared: Sequence[str], time: TimeSource, start: int, stop: int
-) -> list[TfRecords]:
-    """The robots' own ``/<ns>/tf`` as far as the plan reads it, their frames prefixed."""
-    out = []
-    for topic, prefix in topics:
-        if (records := _tf_preview(bag, time, start, stop, topic)) is not None:
-            out.append(renamed(records, prefix, shared))
-    return out
+            static.append(renamed(records, prefix, shared))
+    for topic, prefix in tf_topics(robots, selected, "tf").items():
+        if prefix and (records := _tf_preview(bag, time, start, stop, topic)) is not None:
+            moving.append(renamed(records, prefix, shared))
+    return concatenate([r for r in static if r is not None]), concatenate([r for r in moving if r is not None])
 
 
 def _stretch(bag: Bag, span: tuple[int, int], choice: BagChoice) -> tuple[int, int]:

@@ -18,8 +18,11 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
-from r2d2_viz.kinematics.tree import KinematicTree
-from r2d2_viz.robot.model import Robot
+from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
+from r2d2_viz.robot.model import Robot, parse_urdf
+from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.sources.bag_joints import JOINT_STATE, read_robot_description
+from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.base import TfRecords
 
 DESCRIPTION = "robot_description"
@@ -174,3 +177,30 @@ def tf_topics(robots: Sequence[RobotPlan], topics: Iterable[str], name: str) -> 
         if r.namespace and topic(r.namespace, name) in present:
             out[topic(r.namespace, name)] = r.prefix
     return out
+
+
+def namespaced_robots(
+    bag: Bag, namespaces: Sequence[str], frames: set[str], packages: PackageIndex | None
+) -> tuple[RobotPlan, ...]:
+    """Every namespace's robot in ``bag`` (``frames``: those of its ``/tf`` and ``/tf_static``)."""
+    found = []
+    for namespace in namespaces:
+        name = topic(namespace, DESCRIPTION)
+        text = read_robot_description(bag, name)
+        if text is not None:
+            robot = parse_urdf(text, source=f"{bag.path.name}:{name}", base_dir=bag.path.parent, packages=packages)
+            found.append((namespace, robot, text))
+    return plan_robots(found, bag.topics, frames, compile_tree)
+
+
+def joint_topics_of(
+    bag: Bag, robots: Sequence[RobotPlan], selected: set[str]
+) -> list[tuple[str, tuple[str, ...] | None]]:
+    """Each robot's joint-states topic and its joints (None: the topic is not replayed)."""
+    return [
+        (
+            r.joints_topic,
+            r.tree.actuated if r.joints_topic in selected and bag.require_type(r.joints_topic, JOINT_STATE) else None,
+        )
+        for r in robots
+    ]

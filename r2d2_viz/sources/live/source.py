@@ -196,7 +196,8 @@ class LiveSource:
                 batch.displays.append(TopicMessage(s.source_timestamp_ns, s.topic, s.ros_type, s.data))
         batch.joints = self._decode_joints(joints)
         for namespace, messages in robot_joints.items():
-            if (chunk := self._decode_robot_joints(namespace, messages)) is not None:
+            pending = self._robot_pending.setdefault(namespace, deque(maxlen=PENDING_JOINT_STATES))
+            if (chunk := _held_or_decoded(self._robot_joints.get(namespace), pending, messages)) is not None:
                 batch.robot_joints[namespace] = chunk
         for topic, messages in sorted(tf.items(), key=lambda item: not item[0].endswith("/tf_static")):
             records = self._decode_tf(topic, messages)
@@ -253,25 +254,7 @@ class LiveSource:
             if getattr(decoder, kind) and kind not in said:
                 said.add(kind)
                 self._note(f"/joint_states {kind}", f"/joint_states: {what} (counted, said at the end)")
-        if chunk is None or not len(chunk):
-            return None
-        order = np.argsort(chunk.times_ns, kind="stable")  # several publishers' stamps may interleave
-        return SampleChunk(chunk.times_ns[order], chunk.joints, chunk.positions[order])
-
-    def _decode_robot_joints(self, namespace: str, messages: list[tuple[int, bytes]]) -> SampleChunk | None:
-        """A namespaced robot's joint states (kept until its description arrives; its problems counted)."""
-        pending = self._robot_pending.setdefault(namespace, deque(maxlen=PENDING_JOINT_STATES))
-        decoder = self._robot_joints.get(namespace)
-        if decoder is None:
-            pending.extend(messages)
-            return None
-        messages = [*pending, *messages]
-        pending.clear()
-        chunk = decoder.decode(messages)
-        if chunk is None or not len(chunk):
-            return None
-        order = np.argsort(chunk.times_ns, kind="stable")
-        return SampleChunk(chunk.times_ns[order], chunk.joints, chunk.positions[order])
+        return _time_sorted(chunk)
 
     def _decode_tf(self, topic: str, messages: list[tuple[int, bytes]]) -> TfRecords | None:
         if not messages:
@@ -301,3 +284,24 @@ class LiveSource:
                     f"{topic}: messages dropped, the viewer fell behind (oldest first; counted, said at the end)",
                 )
             self._dropped[topic] = n
+
+
+def _time_sorted(chunk: SampleChunk | None) -> SampleChunk | None:
+    """``chunk`` in time order (several publishers' stamps may interleave); None when empty."""
+    if chunk is None or not len(chunk):
+        return None
+    order = np.argsort(chunk.times_ns, kind="stable")
+    return SampleChunk(chunk.times_ns[order], chunk.joints, chunk.positions[order])
+
+
+def _held_or_decoded(
+    decoder: JointStateDecoder | None, pending: deque[tuple[int, bytes]], messages: list[tuple[int, bytes]]
+) -> SampleChunk | None:
+    """A namespaced robot's joint states: kept in ``pending`` until its description gives a ``decoder``, then
+    decoded with them (its problems counted by the decoder, said at the end)."""
+    if decoder is None:
+        pending.extend(messages)
+        return None
+    messages = [*pending, *messages]
+    pending.clear()
+    return _time_sorted(decoder.decode(messages)) if messages else None
