@@ -10,7 +10,7 @@ serializer, the 1 kHz bag's from one message it serialized, with stamps and posi
 storages. Each reader runs in its own subprocess (``os.wait4`` gives wall time and peak RSS); the decode time
 is what the child measures around the decoding alone, after its imports. Side by side on the same files:
 
-* ours: ``BagSource(bag, joints).chunks(10_000)`` to arrays (times (n,), positions (n, 8));
+* ours: the one pass (``BagPass``, joint states only) to arrays (times (n,), positions (n, 8));
 * rosbags: its reader and ``deserialize_cdr`` per message, to the same arrays;
 * Rerun's ``rerun.chunk.McapReader`` (``ros2msg`` decoder, Rust) to the same arrays (.mcap only);
 * ``rerun mcap convert`` (the CLI of rerun-sdk) from .mcap to .rrd: plots only, no robot.
@@ -21,7 +21,7 @@ of boxes, written here) beside the import floor (a Python that imports what the 
 Rerun's converter's whole wall time (goals: ≤ 1.5× for .mcap, ≤ 3× for .db3). And the peak RSS of
 ``r2d2-viz --bag`` on the 1 kHz, 30-joint bag (goal: under 400 MB).
 
-Memory: peak RSS of a child reading the 1 kHz, 30-joint bag chunk by chunk through ``BagSource`` (goal:
+Memory: peak RSS of a child reading the 1 kHz, 30-joint bag window by window through ``BagPass`` (goal:
 under 400 MB), beside the RSS of the same child's imports alone.
 """
 
@@ -89,10 +89,12 @@ OURS = """
     import sys, time
     import numpy as np
     from r2d2_viz.sources.bags.bag import open_bag
-    from r2d2_viz.sources.bag_joints import BagSource
+    from r2d2_viz.sources.playback import BagPass, Segment
     t = time.perf_counter()
     with open_bag(sys.argv[1]) as bag:
-        chunks = list(BagSource(bag, [f"joint_{i}" for i in range(int(sys.argv[2]))]).chunks(10_000))
+        joints = [f"joint_{i}" for i in range(int(sys.argv[2]))]
+        one_pass = BagPass(bag, [Segment(("/joint_states",))], actuated=joints, displays={})
+        chunks = [w.joints for w in one_pass.windows(10_000) if w.joints is not None]
     times = np.concatenate([c.times_ns for c in chunks]); pos = np.vstack([c.positions for c in chunks])
     print(time.perf_counter() - t, len(times), float(np.nansum(pos)), HWM())
 """
@@ -134,13 +136,14 @@ RERUN_READER = """
 MEMORY = """
     import sys, time
     from r2d2_viz.sources.bags.bag import open_bag
-    from r2d2_viz.sources.bag_joints import BagSource
+    from r2d2_viz.sources.playback import BagPass, Segment
     if sys.argv[2] == "0":
         print(0, 0, 0.0, HWM()); raise SystemExit
     t, n = time.perf_counter(), 0
     with open_bag(sys.argv[1]) as bag:
-        for chunk in BagSource(bag, [f"joint_{i}" for i in range(30)]).chunks(10_000):
-            n += len(chunk)
+        one_pass = BagPass(bag, [Segment(("/joint_states",))], actuated=[f"joint_{i}" for i in range(30)], displays={})
+        for window in one_pass.windows(10_000):
+            n += len(window.joints) if window.joints is not None else 0
     print(time.perf_counter() - t, n, 0.0, HWM())
 """
 
@@ -274,7 +277,7 @@ def main() -> None:
         print(f"\n{'reader':<46} {'storage':<8} {'decode s':>9} {'µs/msg':>7} {'wall s':>7} {'peak MB':>8}")
         rows: dict[tuple[str, str], float] = {}
         for storage, path in bags.items():
-            entries = [("ours: BagSource to arrays", _child(OURS, str(path), "8"))]
+            entries = [("ours: BagPass to arrays", _child(OURS, str(path), "8"))]
             entries.append(("rosbags: deserialize_cdr per message", _child(ROSBAGS, str(path))))
             if storage == "mcap":
                 entries.append(
@@ -291,7 +294,7 @@ def main() -> None:
                 rows[("rerun mcap convert", storage)] = wall
                 name = "rerun mcap convert (.mcap to .rrd, plots only)"
                 print(f"{name:<46} {storage:<8} {'':>9} {'':>7} {wall:>7.2f} {rss:>8.0f}")
-        ours_mcap, ours_db3 = rows[("ours: BagSource to arrays", "mcap")], rows[("ours: BagSource to arrays", "db3")]
+        ours_mcap, ours_db3 = rows[("ours: BagPass to arrays", "mcap")], rows[("ours: BagPass to arrays", "db3")]
         slow = "rosbags: deserialize_cdr per message"
         print(
             f"\nours vs rosbags per message: {rows[(slow, 'mcap')] / ours_mcap:.1f}x faster (mcap), "
@@ -331,7 +334,7 @@ def main() -> None:
         wall, rss, out = _child(MEMORY, str(big), "1")
         decode = float(out.split()[0])
         print(
-            f"BagSource, chunks of 10,000: peak RSS {rss:.0f} MB (imports alone {floor:.0f} MB; goal < 400 MB), "
+            f"BagPass, windows of 10,000: peak RSS {rss:.0f} MB (imports alone {floor:.0f} MB; goal < 400 MB), "
             f"decode {decode:.1f} s, wall {wall:.1f} s"
         )
         urdf30 = chain_urdf(folder / "arm30.urdf", 30)

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
-from r2d2_viz.errors import UsageError
+from r2d2_viz.errors import UsageError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.robot.model import Robot
 from r2d2_viz.robot.xacro_load import load_robot
@@ -100,12 +100,12 @@ class RobotLogger:
         names = tuple(self.joints if joints is None else joints)
         q = np.asarray(positions, dtype=np.float64).reshape(len(times_ns), -1)
         if q.shape[1] != len(names):
-            raise UsageError(f"positions have {q.shape[1]} columns for {len(names)} joints ({', '.join(names)})")
+            raise UsageError(f"positions have {q.shape[1]} columns for {len(names)} joints ({listed(names)})")
         unknown = [name for name in names if name not in self.joints]
         if unknown:
             raise UsageError(
-                f"not actuated joints of {self.robot.name!r}: {', '.join(unknown)}; "
-                f"expected some of {', '.join(self.joints)}"
+                f"not actuated joints of {self.robot.name!r}: {listed(unknown)}; "
+                f"expected some of its {len(self.joints)}: {listed(self.joints)}"
             )
         tracks: list[FrameTrack] = []
         for parent, child in self._frames:

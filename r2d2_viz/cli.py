@@ -13,11 +13,12 @@ import sys
 import traceback
 from pathlib import Path
 
-from r2d2_viz.errors import R2d2VizError
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError
 from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 CONNECT_DEFAULT = "rerun+http://127.0.0.1:9876/proxy"
+SAVE_SUFFIXES = (".rrd", ".mcap")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -111,7 +112,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="show the live graph: /robot_description (or --urdf), /joint_states, /tf, /tf_static and display "
         "topics; --duration is then seconds of wall time",
     )
-    ros.add_argument("--list", action="store_true", help="with --ros: print the topics, types and publishers; exit")
+    ros.add_argument(
+        "--list",
+        action="store_true",
+        help="with --ros: print the graph's topics, types and publishers; with --bag: every topic, type and "
+        "message count (like ros2 bag info); exit",
+    )
     parser.add_argument(
         "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
     )
@@ -149,18 +155,43 @@ def main(argv: list[str] | None = None) -> int:
         print("r2d2-viz: interrupted; nothing saved", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:
-        if os.environ.get("R2D2_VIZ_DEBUG"):
+        if os.environ.get(DEBUG_ENV):
             traceback.print_exc()
         print(f"error: unexpected {type(exc).__name__}: {exc} (set R2D2_VIZ_DEBUG=1 for details)", file=sys.stderr)
         return EXIT_UNEXPECTED
 
 
+def _quiet_rerun() -> None:
+    """Rerun's own log lines (Rust ``tracing``: ``WARN re_sdk::recording_stream: Recording disabled…``, with
+    colour codes even into a file) off, unless ``R2D2_VIZ_DEBUG`` is set: its filter is read from ``RUST_LOG``
+    once, when rerun is first imported (rerun 0.41), so it is set around that import only — the viewer and
+    server processes started later get the environment as it was. Our own lines say what went wrong."""
+    if os.environ.get(DEBUG_ENV) or "rerun" in sys.modules:
+        return
+    saved = os.environ.get("RUST_LOG")
+    os.environ["RUST_LOG"] = "off"
+    try:
+        import r2d2_viz.viewer.sinks  # noqa: F401  (imports rerun)
+    finally:
+        if saved is None:
+            del os.environ["RUST_LOG"]
+        else:
+            os.environ["RUST_LOG"] = saved
+
+
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     # Heavy imports (rerun, yourdfpy, trimesh) only after the arguments parsed: --help stays instant.
-    from r2d2_viz.errors import UsageError
+    from r2d2_viz.errors import SinkError, UsageError
+
+    if args.save is not None and args.save.suffix not in SAVE_SUFFIXES and not args.save.is_dir():
+        raise UsageError(
+            f"--save {args.save}: unknown extension {args.save.suffix or '(none)'!r}; "
+            "write a recording (.rrd) or a ROS 2 bag (.mcap)"
+        )
+    _quiet_rerun()
     from r2d2_viz.progress import wanted
     from r2d2_viz.runner import RunConfig, print_summary, run
-    from r2d2_viz.viewer.sinks import SinkConfig
+    from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
     if args.connect is not None and ":=" in args.connect:  # "--connect ur_type:=ur5e": a xacro argument, not a URL
         args.xacro_args = [args.connect, *args.xacro_args]
@@ -173,7 +204,9 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if args.bag is not None and args.motion is not None:
         raise UsageError("--motion and --bag both say what moves the robot; choose one")
     if args.list and not args.ros:
-        raise UsageError("--list lists a live ROS 2 graph's topics: use it with --ros")
+        if args.bag is None:
+            raise UsageError("--list lists the topics of a live ROS 2 graph or a bag: use it with --ros or --bag PATH")
+        return _list_bag(args.bag)
     if args.ros:
         if args.bag is not None or args.motion is not None:
             raise UsageError("--ros shows the live graph; it cannot be combined with --bag or --motion")
@@ -190,11 +223,12 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError("--start-offset and --topics choose what of a bag to replay: use them with --bag")
     if not (math.isfinite(args.start_offset) and args.start_offset >= 0):
         raise UsageError(f"--start-offset must be a number of seconds >= 0, got {args.start_offset:g}")
-    spawn = args.spawn or not (live or args.save or args.headless)
+    implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
+    fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
     sink = SinkConfig(
-        spawn=spawn,
+        spawn=args.spawn or (implied and not fallback),
         connect=args.connect,
-        serve=args.serve,
+        serve=args.serve or fallback,
         save=args.save,
         headless=args.headless,
         bind=args.bind,
@@ -227,7 +261,18 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         topics=tuple(args.topics) if args.topics is not None else None,
         progress=wanted(),
     )
-    result = run(config, on_ready=lambda message: print(message, file=sys.stderr, flush=True))
+
+    def on_ready(message: str) -> None:
+        if fallback:
+            message = _no_display(message, args.port, args.web_port)
+        print(message, file=sys.stderr, flush=True)
+
+    try:
+        result = run(config, on_ready=on_ready)
+    except SinkError as exc:
+        if fallback:  # the user typed no --serve: say why it was tried
+            raise SinkError(f"no display for a viewer window, and the web viewer instead failed: {exc}") from None
+        raise
     print_summary(result, config)
     return EXIT_OK
 
@@ -244,10 +289,35 @@ def _frames(text: str | None) -> tuple[str, ...] | None:
     return frames
 
 
-def _list_topics() -> int:
-    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts."""
-    from r2d2_viz.sources.live.dds import list_topics
+def _no_display(serving: str, port: int, web_port: int) -> str:
+    """The one line of the fallback to the web viewer: why, the URL, and how to reach it from another machine."""
+    forward = f"ssh -L {web_port}:localhost:{web_port} -L {port}:localhost:{port} THIS-HOST"
+    how = serving.removeprefix("serving: ")
+    why = "no display for a viewer window: serving the web viewer instead"
+    return f"{why}; {how} (on your own machine first: {forward})"
 
-    for topic, msgtype, publishers in list_topics():
+
+def _list_bag(path: Path) -> int:
+    """``r2d2-viz --bag PATH --list``: every topic, however many (warnings show the first few), like ``ros2 bag
+    info``."""
+    from r2d2_viz.sources.bags.bag import open_bag
+
+    with open_bag(path) as bag:
+        for info in sorted(bag.topics.values(), key=lambda t: t.name):
+            print(f"{info.name} [{info.msgtype}] {info.count} message{'' if info.count == 1 else 's'}", flush=True)
+    return EXIT_OK
+
+
+def _list_topics() -> int:
+    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts; an empty graph says where
+    it was searched and how to check (exit 0, like ``ros2 topic list``: an empty graph is an answer, not an error)."""
+    from r2d2_viz.sources.live.dds import LIST_SECONDS, list_topics
+    from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT
+
+    topics, discovery = list_topics()
+    for topic, msgtype, publishers in topics:
         print(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}", flush=True)
+    if not topics:
+        searched = f"no topics after {LIST_SECONDS:g} s of discovery on {discovery.searched()}"
+        print(f"r2d2-viz: {searched}; {EMPTY_GRAPH_HINT}", file=sys.stderr, flush=True)
     return EXIT_OK

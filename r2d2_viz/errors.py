@@ -6,6 +6,14 @@ else is unexpected and exits 1.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
+DEBUG_ENV = "R2D2_VIZ_DEBUG"
+"""Set (to anything): tracebacks of unexpected errors, and the log lines of Rerun itself and of the Rerun processes
+the app starts (off otherwise: our own lines say what went wrong)."""
+SHOWN = 5
+"""How many names a message line shows of a long list before counting the rest."""
+
 
 class R2d2VizError(Exception):
     """Base class: a problem with the user's input that deserves one clear line."""
@@ -38,6 +46,16 @@ class PackageError(UrdfError):
 class XacroError(UrdfError):
     """A xacro file cannot be expanded (bad XML, bad expression, refused expression, missing include or
     package); names the file and the include / macro chain."""
+
+
+def listed(names: Iterable[object], *, first: int = SHOWN) -> str:
+    """Names in a message line: all of a short list (``a, b, c``), the first few of a long one and a count of
+    the rest (``a, b, c, d, e and 73 more``) — a Gazebo bag's 78 undrawn topics are not a 6,000-character line.
+    Callers say the total where it matters (``78 topics …: a, b, …``)."""
+    items = [str(n) for n in names]
+    if len(items) <= first + 1:  # "and 1 more" says no less than the name would
+        return ", ".join(items)
+    return f"{', '.join(items[:first])} and {len(items) - first} more"
 
 
 def one_line(exc: BaseException) -> str:

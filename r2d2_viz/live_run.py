@@ -32,16 +32,17 @@ from r2d2_viz.ros_out.live_record import LiveBagRecorder
 from r2d2_viz.rviz.config import load_rviz
 from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.bag_joints import TimeSource
-from r2d2_viz.sources.base import TfRecords, tf_root
+from r2d2_viz.sources.base import tf_root
 from r2d2_viz.sources.live.dds import LiveGraph
+from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, RosDiscovery
 from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
-from r2d2_viz.sources.robots import RobotPlan, choose_prefix, prefixed_robot, unreached
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
+from r2d2_viz.viewer.live_robots import LiveRobots, robot_namespaces
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import RobotStream
@@ -90,7 +91,7 @@ def run_live(
     signal stopped it, the file saved)."""
     stop = threading.Event()
     with signals_set(stop), LiveGraph(env) as graph:
-        return _LiveRun(config, graph, stop).run(on_ready)
+        return run_on(config, graph, stop, on_ready)
 
 
 def wanted_topics(rviz: Path | None) -> set[str] | None:
@@ -100,135 +101,71 @@ def wanted_topics(rviz: Path | None) -> set[str] | None:
     return {t.topic for t in load_rviz(rviz).topics if t.enabled and t.topic}
 
 
-class _LiveRobots:
-    """The namespaced robots of a live graph (``/<namespace>/robot_description``), each drawn from its description
-    and moved by its ``/<namespace>/joint_states`` by its own :class:`RobotStream`, its frames prefixed as
-    :func:`r2d2_viz.sources.robots.choose_prefix` says (the root namespace's robot is :class:`_LiveRun`'s own)."""
-
-    def __init__(self, run: _LiveRun, batches: Sequence[LiveBatch] = ()) -> None:
-        """``batches``: what the settle received (which robots there are, which frames the graph has)."""
-        self.run = run
-        names = {ns for b in batches for ns, _ in b.robot_descriptions}
-        names |= {""} if any(b.descriptions for b in batches) else set()
-        self.several = len(names) > 1
-        self.names = tuple(sorted(names)) if self.several else ()
-        """Several robots: their namespaces (a plot each; shapes under ``/robots/<namespace>``)."""
-        self.frames = {f for b in batches for r in b.tf for f in (*r.parents, *r.children)}
-        self.parents: dict[str, str] = {}
-        """Child frame → parent of the transforms received (:meth:`check`)."""
-        self.texts: dict[str, str] = {}
-        self.streams: dict[str, RobotStream] = {}
-        self.plans: dict[str, RobotPlan] = {}
-        self.edges: set[tuple[str, str]] = set()
-
-    def laid_out(self, view: ViewPlan) -> ViewPlan:
-        """``view`` with a plot per robot, when there are several."""
-        if not self.names:
-            return view
-        return dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=self.names))
-
-    def describe(self, batch: LiveBatch) -> None:
-        for namespace, text in batch.robot_descriptions:
-            if self.texts.get(namespace) != text:
-                self._load(namespace, text)
-
-    def _load(self, namespace: str, text: str) -> None:
-        """A (new) description of the robot in ``namespace``: (re)loaded, or one line when it does not parse."""
-        first = namespace not in self.texts
-        self.texts[namespace] = text
-        run, topic = self.run, f"{namespace}/robot_description"
-        try:
-            robot = parse_urdf(text, source=topic, packages=run.packages)
-        except R2d2VizError as exc:
-            run.notices.report(f"{exc} (robot {namespace} not shown)", key=f"description {hash(text)}")
-            return
-        subscribed = run.source.subscribed
-        own_tf = any(f"{namespace}/{name}" in subscribed for name in ("tf", "tf_static"))
-        prefix = choose_prefix(namespace, robot.root, own_tf=own_tf, frames=self.frames, several=True)
-        tree = compile_tree(prefixed_robot(robot, prefix))
-        if (old := self.streams.pop(namespace, None)) is not None:
-            old.finish()
-        if not first:
-            run.notices.report(f"{topic} changed: robot {robot.name!r} reloaded", key=f"loaded {hash(text)}")
-        stream = RobotStream(
-            run.rec,
-            tree,
-            clock="timestamp",
-            fixed_frame=run.fixed_frame,
-            root_placed=tree.robot.root == run.fixed_frame or tree.robot.root in run.children,
-            axis_length=run.view.axis_length,
-            show_names=run.view.show_names,
-            robot_name=namespace if self.several else "",
-            frame_prefix=prefix,
-        )
-        stream.notices = run.notices
-        stream.log_static()
-        self.streams[namespace] = stream
-        self.plans[namespace] = RobotPlan(namespace, tree, f"{namespace}/joint_states", prefix, text)
-        self.edges |= set(urdf_edges(tree))
-        run.recorded.skip |= self.edges
-        run.source.set_joints(tree.actuated, namespace)
-
-    def send(self, batch: LiveBatch) -> int:
-        """The batch's namespaced joint states; how many were sent."""
-        for records in batch.tf:
-            self.parents.update(zip(records.children, records.parents, strict=True))
-        sent = 0
-        for namespace, chunk in batch.robot_joints.items():
-            if (stream := self.streams.get(namespace)) is not None:
-                stream.send(stream.prepare(chunk))
-                sent += len(chunk)
-                self.run.lateness.sent(f"{namespace}/joint_states", chunk.times_ns)
-        return sent
-
-    def check(self) -> None:
-        """One line for each robot (when there are several) whose tree does not reach the fixed frame (said once)."""
-        if not self.several:
-            return
-        run = self.run
-        for namespace, robot in self.plans.items():
-            line = unreached(robot, run.fixed_frame, self.parents)
-            if line is not None:
-                run.notices.report(line, key=f"unreached {namespace}")
-
-    def finish(self) -> None:
-        self.check()
-        for stream in self.streams.values():
-            stream.finish()
+def run_on(
+    config: LiveConfig, graph: LiveGraph, stop: threading.Event, on_ready: Callable[[str], None] | None = None
+) -> tuple[int, bool, Path | None]:
+    """One live run on ``graph``: settle (discovery, latched topics), plan the view, then hand each batch the graph
+    gives to the scene until the deadline or a signal; the files are finalised or, on any failure, removed."""
+    deadline = _Deadline(stop, time.monotonic() + config.duration if config.duration is not None else None)
+    started = time.monotonic()
+    source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time)
+    model = _Model(config)
+    batches = _settle(source, model, deadline)
+    plan, view = _plan(config, model.robot, batches)
+    output = _Output(config.sink, endless=deadline.end is None or config.sink.live)
+    lateness = LatenessLog.from_env()
+    try:
+        recording = output.open(view, on_ready)
+        scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
+        latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
+        for k, batch in enumerate(batches):
+            if k < latest:  # a description the settle's latest one replaced: not worth a word
+                batch.descriptions.clear()
+            scene.handle(batch, output.bag)
+        scene.robots.check()
+        flushed = time.monotonic()
+        while not deadline.done():
+            scene.handle(source.poll(), output.bag)
+            if time.monotonic() - flushed > FLUSH_SECONDS:
+                recording.rec.flush()
+                flushed = time.monotonic()
+            if source.graph.wait(POLL_SECONDS):
+                time.sleep(GATHER_SECONDS)
+        scene.finish()
+        _say_received(source, time.monotonic() - started)
+        output.close()
+    except BaseException:
+        output.abort()
+        raise
+    finally:
+        lateness.close()
+    return scene.samples, stop.is_set(), config.sink.save
 
 
-class _LiveRun:
-    def __init__(self, config: LiveConfig, graph: LiveGraph, stop: threading.Event) -> None:
-        self.config, self.stop = config, stop
-        self.end = time.monotonic() + config.duration if config.duration is not None else None
-        self.source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time)
+@dataclasses.dataclass(frozen=True)
+class _Deadline:
+    stop: threading.Event
+    end: float | None
+    """``time.monotonic()`` when ``--duration`` runs out (None: until a signal)."""
+
+    def done(self) -> bool:
+        return self.stop.is_set() or (self.end is not None and time.monotonic() >= self.end)
+
+
+class _Model:
+    """The robot model of a live run: ``--urdf``, else the latest ``/robot_description`` that parses."""
+
+    def __init__(self, config: LiveConfig) -> None:
+        self.fixed_by_urdf = config.urdf is not None
         self.packages = PackageIndex.from_args(config.package_paths, description=config.urdf, environ=os.environ)
         self.robot: Robot | None = None
         if config.urdf is not None:
             self.robot = load_robot(config.urdf, mappings=config.mappings, packages=self.packages)
         self.description: str | None = None
-        self.children: set[str] = set()
-        self.streamer: RobotStream | None = None
-        self.samples = 0
-        self.lateness = LatenessLog(None)
+        """The /robot_description text the robot was built from."""
 
-    def _done(self) -> bool:
-        return self.stop.is_set() or (self.end is not None and time.monotonic() >= self.end)
-
-    def _settle(self) -> list[LiveBatch]:
-        """Discovery, the latched description and static transforms: what the view is planned from."""
-        batches: list[LiveBatch] = []
-        deadline = time.monotonic() + SETTLE_SECONDS
-        while not self._done() and time.monotonic() < deadline:
-            batches.append(self.source.poll())
-            if self.robot is None and any(b.descriptions for b in batches):
-                text = next(d for b in reversed(batches) for d in reversed(b.descriptions))
-                self.robot = self._parse(text, quiet=True)
-                self.description = text if self.robot is not None else None
-            time.sleep(POLL_SECONDS)
-        return batches
-
-    def _parse(self, text: str, *, quiet: bool = False) -> Robot | None:
+    def parse(self, text: str, *, quiet: bool = False) -> Robot | None:
+        """``text`` as a robot; a bad one raises (None when ``quiet``)."""
         try:
             return parse_urdf(text, source="/robot_description", packages=self.packages)
         except R2d2VizError:
@@ -236,89 +173,119 @@ class _LiveRun:
                 raise
             return None
 
-    def _plan(self, batches: list[LiveBatch]) -> tuple[RunPlan, ViewPlan]:
-        records = [r for b in batches for r in b.tf]
-        self.robots = _LiveRobots(self, batches)
-        static = next((r for r in records if r.static), None)
-        moving = next((r for r in records if not r.static), None)
-        tree = compile_tree(self.robot) if self.robot is not None else None
-        rviz_frame = load_rviz(self.config.rviz).fixed_frame if self.config.rviz is not None else None
-        root = tree.robot.root if tree is not None else None
-        frame = self.config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
-        plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
-        view = plan_view(plan, rviz=self.config.rviz, fixed_frame=self.config.fixed_frame)
-        view = self.robots.laid_out(view)
-        return plan, view
 
-    def run(self, on_ready: Callable[[str], None] | None) -> tuple[int, bool, Path | None]:
-        save = self.config.sink.save
-        bag_path = save if save is not None and save.suffix == ".mcap" else None
-        rrd = save if bag_path is None else None
-        sink = self.config.sink
-        if bag_path is not None:
-            sink = dataclasses.replace(sink, save=None, headless=not sink.live)
-        tmp = rrd.with_name(f".{rrd.name}.{os.getpid()}.partial") if rrd is not None else None
-        batches = self._settle()
-        plan, self.view = self._plan(batches)
-        self.fixed_frame = plan.fixed_frame
-        blueprint = generate_blueprint(self.view.spec, layout=self.view.layout)
-        recording: Recording | None = None
-        bag = LiveBagRecorder(bag_path) if bag_path is not None else None
-        self.lateness = LatenessLog.from_env()
+def _settle(source: LiveSource, model: _Model, deadline: _Deadline) -> list[LiveBatch]:
+    """Discovery, the latched description and static transforms: what the view is planned from."""
+    batches: list[LiveBatch] = []
+    end = time.monotonic() + SETTLE_SECONDS
+    while not deadline.done() and time.monotonic() < end:
+        batches.append(source.poll())
+        if model.robot is None and any(b.descriptions for b in batches):
+            text = next(d for b in reversed(batches) for d in reversed(b.descriptions))
+            model.robot = model.parse(text, quiet=True)
+            model.description = text if model.robot is not None else None
+        time.sleep(POLL_SECONDS)
+    return batches
+
+
+def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> tuple[RunPlan, ViewPlan]:
+    records = [r for b in batches for r in b.tf]
+    static = next((r for r in records if r.static), None)
+    moving = next((r for r in records if not r.static), None)
+    tree = compile_tree(robot) if robot is not None else None
+    rviz_frame = load_rviz(config.rviz).fixed_frame if config.rviz is not None else None
+    root = tree.robot.root if tree is not None else None
+    frame = config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
+    plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
+    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    if names := robot_namespaces(batches):  # several robots: a plot each, shapes under /robots/<namespace>
+        view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=names))
+    return plan, view
+
+
+class _Output:
+    """Where a live run is written: the sinks, ``--save out.rrd`` (beside the target, renamed when done; without a
+    footer when ``endless``: its manifest would grow in memory) or ``--save out.mcap`` (what was received)."""
+
+    def __init__(self, sink: SinkConfig, *, endless: bool) -> None:
+        save = sink.save
+        self.bag_path = save if save is not None and save.suffix == ".mcap" else None
+        self.rrd = save if self.bag_path is None else None
+        self.sink = dataclasses.replace(sink, save=None, headless=not sink.live) if self.bag_path else sink
+        self.tmp = self.rrd.with_name(f".{self.rrd.name}.{os.getpid()}.partial") if self.rrd is not None else None
+        self.endless = endless
+        self.recording: Recording | None = None
+        self.bag: LiveBagRecorder | None = None
+
+    def open(self, view: ViewPlan, on_ready: Callable[[str], None] | None) -> Recording:
+        self.bag = LiveBagRecorder(self.bag_path) if self.bag_path is not None else None
+        blueprint = generate_blueprint(view.spec, layout=view.layout)
+        self.recording = open_recording(
+            self.sink, save_to=self.tmp, live=self.endless, on_ready=on_ready, blueprint=blueprint
+        )
+        return self.recording
+
+    def close(self) -> None:
+        if self.recording is not None:
+            close_recording(self.recording)
+            self.recording = None
+        if self.bag is not None:
+            self.bag.close()
+            self.bag = None
+        if self.tmp is not None and self.rrd is not None:
+            os.replace(self.tmp, self.rrd)
+
+    def abort(self) -> None:
+        """Nothing half-written: the partial recording and bag removed."""
         try:
-            endless = self.end is None or sink.live  # a file without footer: its manifest would grow in memory
-            recording = open_recording(sink, save_to=tmp, live=endless, on_ready=on_ready, blueprint=blueprint)
-            self._start(recording)
-            latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
-            for k, batch in enumerate(batches):
-                if k < latest:  # a description the settle's latest one replaced: not worth a word
-                    batch.descriptions.clear()
-                self._handle(batch, bag)
-            self.robots.check()
-            flushed = time.monotonic()
-            while not self._done():
-                self._handle(self.source.poll(), bag)
-                if time.monotonic() - flushed > FLUSH_SECONDS:
-                    recording.rec.flush()
-                    flushed = time.monotonic()
-                if self.source.graph.wait(POLL_SECONDS):
-                    time.sleep(GATHER_SECONDS)
-            self._finish()
-            close_recording(recording)
-            recording = None
-            if bag is not None:
-                bag.close()
-            if tmp is not None and rrd is not None:
-                os.replace(tmp, rrd)
-        except BaseException:
-            if recording is not None:
-                close_recording(recording)
-            if bag is not None:
-                bag.abort()
-            if tmp is not None:
-                tmp.unlink(missing_ok=True)
-            raise
+            if self.recording is not None:
+                close_recording(self.recording)
+        except R2d2VizError:
+            pass  # the error being handled says more
         finally:
-            self.lateness.close()
-        return self.samples, self.stop.is_set(), save
+            if self.bag is not None:
+                self.bag.abort()
+            if self.tmp is not None:
+                self.tmp.unlink(missing_ok=True)
 
-    def _start(self, recording: Recording) -> None:
+
+class _Scene:
+    """What a live run shows, batch by batch: the robot (reloaded when ``/robot_description`` changes; transforms
+    only while it does not parse), recorded transforms, display topics, the notes of the source."""
+
+    def __init__(
+        self,
+        config: LiveConfig,
+        model: _Model,
+        source: LiveSource,
+        view: ViewPlan,
+        fixed_frame: str,
+        recording: Recording,
+        lateness: LatenessLog,
+        batches: Sequence[LiveBatch] = (),
+    ) -> None:
         rec = recording.rec
+        self.model, self.source, self.view, self.fixed_frame, self.rec = model, source, view, fixed_frame, rec
+        self.lateness = lateness
+        self.children: set[str] = set()
+        self.streamer: RobotStream | None = None
+        self.samples = 0
         self.notices = Notices(rec)
-        for note in self.view.notes:
+        for note in view.notes:
             self.notices.report(note)
-        self.recorded = RecordedTf(rec, clock="timestamp", axis_length=self.view.axis_length)
+        self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
         self.feed = DisplayFeed(
             self.notices,
             clock="timestamp",
-            fixed_frame=self.fixed_frame,
-            header_time=self.config.time == "header",
-            styles=self.view.display_styles,
-            load_mesh=uri_loader(self.packages, Path(".")),
+            fixed_frame=fixed_frame,
+            header_time=config.time == "header",
+            styles=view.display_styles,
+            load_mesh=uri_loader(model.packages, Path(".")),
         )
-        self.rec = rec
-        if self.robot is not None:
-            self._load(self.robot)
+        self.robots = LiveRobots(self, batches, model.packages, lateness.sent)
+        """The namespaced robots (several robots: :mod:`r2d2_viz.viewer.live_robots`)."""
+        if model.robot is not None:
+            self._load(model.robot)
         else:
             self.notices.report("no --urdf and no /robot_description yet: transforms only until one is published")
 
@@ -343,10 +310,10 @@ class _LiveRun:
 
     def _describe(self, text: str) -> None:
         """A (new) ``/robot_description``: the robot reloaded, or TF only when it does not parse."""
-        first = self.description is None
-        self.description = text
+        first = self.model.description is None
+        self.model.description = text
         try:
-            robot = self._parse(text)
+            robot = self.model.parse(text)
         except R2d2VizError as exc:
             self.notices.report(f"{exc} (showing transforms only)", key=f"description {hash(text)}")
             if self.streamer is not None:
@@ -358,21 +325,22 @@ class _LiveRun:
         if not first:
             line = f"/robot_description changed: robot {robot.name!r} reloaded"
             self.notices.report(line, key=f"loaded {hash(text)}")
-        self.robot = robot
+        self.model.robot = robot
         self._load(robot)
 
-    def _handle(self, batch: LiveBatch, bag: LiveBagRecorder | None) -> None:
+    def handle(self, batch: LiveBatch, bag: LiveBagRecorder | None) -> None:
         if bag is not None:
             bag.write(batch.samples)
         for key, line in batch.notes:
             self.notices.report(line, key=key)
-        if batch.descriptions and self.config.urdf is None:
+        if batch.descriptions and not self.model.fixed_by_urdf:
             text = batch.descriptions[-1]
-            if text != self.description:
+            if text != self.model.description:
                 self._describe(text)
         self.robots.describe(batch)
         for records in batch.tf:
-            self._tf(records)
+            self.children.update(records.children)
+            self.recorded.log(records)
         for topic in TF_TOPICS if batch.tf else ():
             self.lateness.sent(topic, (s.source_timestamp_ns for s in batch.samples if s.topic == topic))
         if batch.joints is not None and self.streamer is not None:
@@ -384,16 +352,20 @@ class _LiveRun:
             self.feed.log(message)
             self.lateness.sent(message.topic, (message.time_ns,))
 
-    def _tf(self, records: TfRecords) -> None:
-        self.children.update(records.children)
-        self.recorded.log(records)
-
-    def _finish(self) -> None:
+    def finish(self) -> None:
         for topic, line in self.source.problems():
             self.notices.report(f"{topic}: {line}")
         self.feed.finish()
         if self.streamer is not None:
             self.streamer.finish()
         self.robots.finish()
-        received = ", ".join(f"{t} {n}" for t, n in sorted(self.source.received.items())) or "nothing"
-        print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)
+
+
+def _say_received(source: LiveSource, seconds: float) -> None:
+    """The run's last line: each topic's count — or, when nothing came, what was searched and how to check."""
+    received = ", ".join(f"{t} {n}" for t, n in sorted(source.received.items()))
+    if not received:
+        discovery: RosDiscovery | None = getattr(source.graph, "discovery", None)
+        where = f" on {discovery.searched()}" if discovery is not None else ""
+        received = f"nothing in {seconds:.1f} s{where}; {EMPTY_GRAPH_HINT}"
+    print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)

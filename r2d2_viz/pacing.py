@@ -71,8 +71,10 @@ class Feeds:
     def push(self, window: Window) -> None:
         """A stretch's transforms and display messages, logged by :meth:`until` when due."""
         self.tf.push(window.tf)
-        if self.displays is not None and window.displays:
-            self.displays.push(window.displays)
+        if self.displays is not None:
+            self.displays.add_tf(window.tf)
+            if window.displays:
+                self.displays.push(window.displays)
         for robot, chunk in zip(self.robots, window.more_joints, strict=False):
             robot.push(chunk)
 

@@ -14,7 +14,7 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import UsageError
+from r2d2_viz.errors import SHOWN, UsageError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.pacing import Feeds, paced
@@ -108,6 +108,9 @@ class RunResult:
     samples: int
     interrupted: bool
     saved: Path | None
+    what: str = "samples"
+    """What ``samples`` counts, for the summary: a motion's samples, a bag's joint states, or — in a bag without
+    joint states — its transforms and display messages."""
 
 
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -129,7 +132,19 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
             with sigterm_raises():
                 samples = write_bag(save, plan, plan.description or _description_text(config))
             return RunResult(samples=samples, interrupted=False, saved=save)
-        return _record(config, plan, on_ready)
+        result = _record(config, plan, on_ready)
+        result.what = _counted(config, plan, result.samples)
+        return result
+
+
+def _counted(config: RunConfig, plan: RunPlan, samples: int) -> str:
+    """What a run without ``--ros`` counted (batch and paced runs count the robot's samples when something moves
+    it and gave any, else the transforms and display messages handed on)."""
+    if config.bag is None:
+        return "samples"
+    if plan.moves_robot and samples:
+        return "joint states"
+    return "transforms and display messages"
 
 
 def _packages(config: RunConfig) -> PackageIndex:
@@ -198,6 +213,10 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     styles=view.display_styles,
                     source_name=str(config.bag),
                     topics=plan.displays,
+                    start_ns=int(plan.moving_tf.times_ns.min())
+                    if plan.moving_tf is not None and len(plan.moving_tf)
+                    else None,
+                    tf=[r for r in (plan.static_tf, plan.moving_tf) if r is not None],
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.push(plan.seek_messages)
@@ -312,8 +331,10 @@ def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:
         for topic in result.logged:
             skipped.pop(topic, None)
     if skipped:
-        listed = ", ".join(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
-        notices.report(f"{config.bag}: topics with no display, not shown: {listed}")
+        names = listed(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
+        n = len(skipped)
+        every = " (--list shows every topic)" if n > SHOWN + 1 else ""
+        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}")
 
 
 def _live_block(config: RunConfig) -> int:
@@ -350,6 +371,7 @@ def batch_chunk_samples(n_moving: int) -> int:
 def print_summary(result: RunResult, config: RunConfig) -> None:
     where = f" to {result.saved}" if result.saved else ""
     how = " (stopped by signal)" if result.interrupted else ""
-    what = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
-    what = "of joint states from the ROS 2 graph" if config.ros else what
-    print(f"r2d2-viz: {result.samples} samples {what}{where}{how}", file=sys.stderr)
+    origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
+    origin = "from the ROS 2 graph" if config.ros else origin
+    what = "joint states" if config.ros else result.what
+    print(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}", file=sys.stderr)

@@ -83,7 +83,7 @@ def test_bad_arguments_are_one_clear_line(tmp_path: Path) -> None:
     logger = r2d2_viz.RobotLogger(ARM, recording=rec, warn=lambda _: None)
     with pytest.raises(UsageError, match="2 columns for 1 joints"):
         logger.log_joint_positions([0.0], [[1.0, 2.0]], joints=["elbow"])
-    with pytest.raises(UsageError, match="not actuated joints of 'arm6': nose; expected some of base_yaw"):
+    with pytest.raises(UsageError, match="not actuated joints of 'arm6': nose; expected some of its 6: base_yaw"):
         logger.log_joint_positions([0.0], [[1.0]], joints=["nose"])
     with pytest.raises(UsageError, match="finite"):
         logger.log_joint_positions([np.nan], [[1.0]], joints=["elbow"])

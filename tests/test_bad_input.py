@@ -104,3 +104,22 @@ def test_odd_names_keep_their_frames_exactly(tmp_path: Path) -> None:
 def test_good_corpus_runs_headless(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     for urdf in sorted(GOOD.glob("*.urdf")):
         assert main(["--urdf", str(urdf), "--headless", "--duration", "0.5"]) == 0, capsys.readouterr().err
+
+
+def test_lying_display_messages_warn_grouped_and_leak_nothing(tmp_path: Path) -> None:
+    """NaN, infinite and 1e300 marker poses, scales and points, zero quaternions, a 1e300 transform, clouds and
+    images whose sizes do not match their data: grouped warnings, exit 0, and nothing from inside numpy or
+    rerun (``RuntimeWarning: overflow encountered in cast`` and its source line) — every warning shown
+    (``PYTHONWARNINGS=always``), none may be there."""
+    from liarbag import write_liar_bag
+
+    bag = write_liar_bag(tmp_path / "liar")
+    out = tmp_path / "liar.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), env={"PYTHONWARNINGS": "always"}, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "Warning" not in result.stderr, result.stderr
+    lines = result.stderr.splitlines()
+    assert all(line.startswith(("warning: ", "r2d2-viz: ")) for line in lines), result.stderr
+    for topic in ("/markers", "/cloud", "/image"):
+        assert sum(f"{topic}: " in line and "could not be shown" in line for line in lines) == 1, result.stderr
+    assert out.stat().st_size < 100_000_000

@@ -28,3 +28,12 @@ def test_one_line_collapses_a_library_message_for_a_warning() -> None:
     assert errors.one_line(ValueError("line 3:\n  bad   value\n")) == "line 3: bad value"  # by hand
     assert errors.one_line(KeyError()) == "KeyError"  # an empty message still says something
     assert len(errors.one_line(ValueError("x" * 500))) == 200
+
+
+def test_listed_shows_a_few_names_and_counts_the_rest() -> None:
+    names = [f"/t{k}" for k in range(78)]
+    assert errors.listed(names) == "/t0, /t1, /t2, /t3, /t4 and 73 more"  # by hand
+    assert errors.listed(names[:6]) == "/t0, /t1, /t2, /t3, /t4, /t5"  # "and 1 more" would be no shorter
+    assert errors.listed(names[:7]) == "/t0, /t1, /t2, /t3, /t4 and 2 more"
+    assert errors.listed([]) == "" and errors.listed(["a"]) == "a"
+    assert errors.listed(iter(names), first=2) == "/t0, /t1 and 76 more"

@@ -160,7 +160,7 @@ def test_list_needs_ros_and_ros_refuses_a_bag(capsys: pytest.CaptureFixture[str]
     assert main(["--list"]) == 2
     assert main(["--ros", "--bag", "x.mcap"]) == 2
     err = capsys.readouterr().err
-    assert "use it with --ros" in err and "cannot be combined with --bag" in err
+    assert "use it with --ros or --bag PATH" in err and "cannot be combined with --bag" in err
 
 
 def test_missing_cyclonedds_is_one_line_exit_2(without_cyclonedds: None, capsys: Any) -> None:
@@ -212,10 +212,33 @@ def test_a_description_that_does_not_parse_then_one_that_does(
     graph = Stepwise([broken, *[[]] * 10, good, [], [], joints])  # the broken one within the settle, then a pause
     graph.pubs = [Publication("/robot_description", string, True, True), Publication("/joint_states", JS, False, False)]
     config = Config(None, SinkConfig(save=tmp_path / "out.rrd"), duration=1.0)
-    samples, _, _ = live_run._LiveRun(config, graph, threading.Event()).run(None)  # type: ignore[arg-type]
+    samples, _, _ = live_run.run_on(config, graph, threading.Event())  # type: ignore[arg-type]
     err = capsys.readouterr().err
     assert err.count("(showing transforms only)") == 1
     assert "/robot_description changed: robot 'one' reloaded" in err
     assert samples == 3, err
     recording = read_recording(tmp_path / "out.rrd")
     assert len(recording["/joints/limited"].times) == 3  # the reloaded robot's joint moved
+
+
+def test_an_empty_graph_says_what_was_searched_and_how_to_check(tmp_path: Path) -> None:
+    """In a network namespace with only loopback nothing publishes: ``--ros --list`` and ``--ros --save`` used to
+    print nothing or only 'received nothing'; now they name the domain, how long, the discovery range and how to
+    check (ROS_DOMAIN_ID 42 and LOCALHOST set here, so the line must carry what the environment says)."""
+    missing = ros_node.netns_missing()
+    if missing:
+        pytest.skip(missing)
+    exe = str(Path(sys.executable).parent / "r2d2-viz")
+    env = {"ROS_DOMAIN_ID": "42", "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    listed = ros_node.in_netns([exe, "--ros", "--list"], timeout=120, env=env)
+    assert listed.returncode == 0 and listed.stdout == "", listed.stderr
+    [line] = listed.stderr.strip().splitlines()
+    assert line.startswith("r2d2-viz: no topics after 2 s of discovery on ROS_DOMAIN_ID 42, discovery range LOCALHOST")
+    assert "ros2 topic list" in line and "ROS_STATIC_PEERS" in line
+    out = tmp_path / "x.rrd"
+    saved = ros_node.in_netns([exe, "--ros", "--save", str(out), "--duration", "2"], timeout=120, env=env)
+    assert saved.returncode == 0, saved.stderr
+    [line] = [x for x in saved.stderr.splitlines() if x.startswith("r2d2-viz: received ")]
+    assert line.startswith("r2d2-viz: received nothing in "), saved.stderr
+    assert " s on ROS_DOMAIN_ID 42, discovery range LOCALHOST (this machine only); check that" in line, line
+    assert out.exists()

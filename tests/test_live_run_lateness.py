@@ -56,7 +56,7 @@ def _run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> int:
     graph.queue = [Sample("/joint_states", JS, sent_ns + k, _js(["j"], [0.1 * k])) for k in range(3)]
     graph.queue.append(Sample("/cam/image", IMAGE, sent_ns, _image()))
     config = Config(urdf, SinkConfig(save=tmp_path / "out.rrd"))
-    samples, _, _ = live_run._LiveRun(config, graph, threading.Event()).run(None)  # type: ignore[arg-type]
+    samples, _, _ = live_run.run_on(config, graph, threading.Event())  # type: ignore[arg-type]
     return samples
 
 

@@ -8,7 +8,9 @@ import time
 import numpy as np
 
 from r2d2_viz.pacing import paced
-from r2d2_viz.sources.base import ArraySource
+from r2d2_viz.sources.bag_displays import TopicMessage
+from r2d2_viz.sources.base import ArraySource, SampleChunk
+from r2d2_viz.sources.playback import Window, source_windows
 
 
 class _Recorder:
@@ -33,15 +35,23 @@ class _NoFeeds:
     next_time_ns = None
     sent = 0
 
+    def push(self, window: Window) -> None:
+        assert not window.displays and window.tf is None
+
     def until(self, time_ns) -> None:
         pass
 
 
 class _Items:
-    """A stand-in for Feeds: items at given times; notes the wall clock when each is handed on."""
+    """A stand-in for Feeds: the display messages of each window pushed; notes the wall clock when each is handed
+    on."""
 
-    def __init__(self, times_ns: list[int]) -> None:
-        self.times, self.at = sorted(times_ns), []
+    def __init__(self) -> None:
+        self.times: list[int] = []
+        self.at: list[tuple[float, int]] = []
+
+    def push(self, window: Window) -> None:
+        self.times += [m.time_ns for m in window.displays]
 
     @property
     def next_time_ns(self):
@@ -56,14 +66,27 @@ class _Items:
             self.at.append((time.monotonic(), self.next_time_ns))
 
 
+MS = 1_000_000
+
+
+def _samples(*ms: int) -> SampleChunk:
+    return SampleChunk(np.array(ms, dtype=np.int64) * MS, ("j",), np.zeros((len(ms), 1)))
+
+
+def _messages(*ms: int) -> tuple[TopicMessage, ...]:
+    return tuple(TopicMessage(t * MS, "/chatter", "std_msgs/msg/String", b"") for t in ms)
+
+
 def test_paced_samples_go_out_in_order_and_not_before_they_are_due() -> None:
     n, period = 12, 0.02
     times = (np.arange(n) * period * 1e9).astype(np.int64)
     source = ArraySource(times, ["j"], np.zeros((n, 1)))
     streamer = _Recorder()
     start = time.monotonic()
-    sent, stopped = paced(streamer, source, _NoFeeds(), block=5, speed=2.0)  # twice as fast: 10 ms apart
-    assert sent == n and not stopped
+    seen: list[Window] = []
+    windows = list(source_windows(source, 5))
+    sent, stopped = paced(streamer, windows, _NoFeeds(), speed=2.0, progress=seen.append)  # twice as fast: 10 ms apart
+    assert sent == n and not stopped and seen == windows and len(windows) == 3
     assert sum(k for _, _, k in streamer.sent) == n
     assert [t for _, t, _ in streamer.sent] == sorted(t for _, t, _ in streamer.sent)
     first = streamer.sent[0][0]
@@ -73,11 +96,15 @@ def test_paced_samples_go_out_in_order_and_not_before_they_are_due() -> None:
 
 
 def test_feed_items_between_samples_go_out_at_their_own_time_and_after_the_last_sample() -> None:
-    # samples at 0, 100, 200 ms; items at 30, 60, 130 ms and 350 ms (after the robot's last sample)
-    times = np.array([0, 100, 200], dtype=np.int64) * 1_000_000
-    source = ArraySource(times, ["j"], np.zeros((3, 1)))
-    streamer, items = _Recorder(), _Items([30_000_000, 60_000_000, 130_000_000, 350_000_000])
-    sent, stopped = paced(streamer, source, items, block=10)
+    # samples at 0, 100, 200 ms; items at 30, 60, 130 ms and 350 ms (after the robot's last sample), read in three
+    # windows as a bag's pass hands them on
+    windows = [
+        Window(100 * MS, joints=_samples(0, 100), displays=_messages(30, 60)),
+        Window(200 * MS, joints=_samples(200), displays=_messages(130)),
+        Window(350 * MS, displays=_messages(350)),
+    ]
+    streamer, items = _Recorder(), _Items()
+    sent, stopped = paced(streamer, windows, items)
     assert sent == 3 and not stopped and items.sent == 4
     first = streamer.sent[0][0]
     for wall, t_ns in items.at:
@@ -86,8 +113,9 @@ def test_feed_items_between_samples_go_out_at_their_own_time_and_after_the_last_
 
 
 def test_without_a_robot_the_items_keep_their_schedule() -> None:
-    items = _Items([0, 40_000_000, 80_000_000])
-    sent, stopped = paced(None, None, items, block=10, speed=2.0)  # twice as fast: 0, 20, 40 ms
+    items = _Items()
+    windows = [Window(40 * MS, displays=_messages(0, 40)), Window(80 * MS, displays=_messages(80))]
+    sent, stopped = paced(None, windows, items, speed=2.0)  # twice as fast: 0, 20, 40 ms
     assert sent == 3 and not stopped
     first = items.at[0][0]
     assert [round((wall - first) * 1000 / 10) for wall, _ in items.at] == [0, 2, 4]  # in 10 ms steps

@@ -37,9 +37,11 @@ def quat_multiply(a: npt.ArrayLike, b: npt.ArrayLike) -> F64:
 
 
 def quat_to_matrix(q: npt.ArrayLike) -> F64:
-    """3×3 rotation matrices from (not necessarily unit) ``xyzw`` quaternions."""
+    """3×3 rotation matrices from (not necessarily unit) ``xyzw`` quaternions; an all-zero or non-finite one (a
+    lying message) gives a NaN matrix, silently: callers drop non-finite poses, numpy prints nothing."""
     unit = np.asarray(q, dtype=np.float64)
-    unit = unit / np.linalg.norm(unit, axis=-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        unit = unit / np.linalg.norm(unit, axis=-1, keepdims=True)
     x, y, z, w = np.moveaxis(unit, -1, 0)
     out = np.empty((*unit.shape[:-1], 3, 3))
     out[..., 0, 0] = 1 - 2 * (y * y + z * z)

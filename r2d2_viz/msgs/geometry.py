@@ -12,6 +12,8 @@ from r2d2_viz.msgs.shapes import F32, U8, Ellipsoids, Pose, Rgba8
 from r2d2_viz.msgs.typestore import MsgError
 
 F64 = npt.NDArray[np.float64]
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+"""Beyond this a double turns infinite where the viewer draws it (float32): such a vector is refused like NaN."""
 
 
 def frame_of(frame_id: str) -> str:
@@ -26,10 +28,10 @@ def header_of(msg: Any) -> tuple[str, int]:
 
 
 def xyz(v: Any) -> tuple[float, float, float]:
-    """A Point / Vector3 as a tuple; non-finite values are refused."""
+    """A Point / Vector3 as a tuple; values that are not finite as float32 (NaN, ±inf, |v| > 3.4e38) are refused."""
     out = (float(v.x), float(v.y), float(v.z))
-    if not all(np.isfinite(out)):
-        raise MsgError(f"non-finite vector {out}")
+    if not all(abs(c) <= FLOAT32_MAX for c in out):
+        raise MsgError(f"non-finite vector {out}" + ("" if not all(np.isfinite(out)) else " (in float32)"))
     return out
 
 

@@ -106,5 +106,10 @@ def decode(typename: str, data: bytes | memoryview, options: DecodeOptions | Non
         raise MsgError(f"{typename}: {one_line(exc)}") from None
 
 
-if __name__ == "__main__":  # python -m r2d2_viz.msgs.registry: the README's table
+if __name__ == "__main__":  # python -m r2d2_viz.msgs.registry: the README's table of display types
+    import argparse
+
+    argparse.ArgumentParser(
+        prog="python -m r2d2_viz.msgs.registry", description="Print the README's table of display types (Markdown)."
+    ).parse_args()
     print(displays_markdown())

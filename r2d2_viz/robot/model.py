@@ -25,6 +25,7 @@ import numpy as np
 import numpy.typing as npt
 from lxml import etree
 
+from r2d2_viz.errors import listed
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.urdf_check import JOINT_TYPES, check_robot, parse_urdf_xml, read_urdf_xml
 
@@ -165,7 +166,7 @@ class Robot:
         try:
             return self._joints_by_name[name]
         except KeyError:
-            raise KeyError(f"no joint {name!r}; joints are {', '.join(j.name for j in self.joints)}") from None
+            raise KeyError(f"no joint {name!r}; joints are {listed(j.name for j in self.joints)}") from None
 
     @cached_property
     def _joints_by_name(self) -> dict[str, Joint]:

@@ -26,7 +26,7 @@ from urllib.parse import unquote, urlsplit
 
 from lxml import etree
 
-from r2d2_viz.errors import PackageError, UsageError
+from r2d2_viz.errors import SHOWN, PackageError, UsageError, listed
 
 SCAN_DEPTH = 3
 """How deep a folder of packages is searched for ``package.xml`` files."""
@@ -219,13 +219,16 @@ class PackageIndex:
 
     def where(self, *, near: Path | None = None) -> str:
         """Where :meth:`find` looks, for messages (one line)."""
-        places = [f"the folders above {', '.join(repr(str(s)) for s in self._starts(near)) or 'nothing'}"]
-        places.append("--package-path " + (", ".join(repr(str(p)) for p in self.paths) if self.paths else "(none)"))
+        places = [f"the folders above {listed(repr(str(s)) for s in self._starts(near)) or 'nothing'}"]
+        places.append("--package-path " + (listed(repr(str(p)) for p in self.paths) if self.paths else "(none)"))
         for var, entries in (
             ("ROS_PACKAGE_PATH", self.ros_package_path),
             ("AMENT_PREFIX_PATH", self.ament_prefix_path),
         ):
-            places.append(f"{var} " + (":".join(str(p) for p in entries) if entries else "(unset)"))
+            if len(entries) > SHOWN + 1:  # a big workspace's AMENT_PREFIX_PATH: hundreds of prefixes
+                places.append(f"{var} ({len(entries)} entries: {listed(entries)})")
+            else:
+                places.append(f"{var} " + (":".join(str(p) for p in entries) if entries else "(unset)"))
         return "; ".join(places)
 
     def _starts(self, near: Path | None) -> list[Path]:

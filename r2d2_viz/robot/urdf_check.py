@@ -19,6 +19,7 @@ from urllib.parse import unquote, urlsplit
 
 from lxml import etree
 
+from r2d2_viz.errors import listed
 from r2d2_viz.robot.packages import PackageIndex, uri_package
 from r2d2_viz.robot.urdf_xml import MAX_FILE_BYTES, _fail, _one_line, _q, parse_urdf_xml, read_urdf_xml
 
@@ -316,7 +317,7 @@ def check_robot(
 
     roots = [name for name in links if name not in parent_joint]
     if len(roots) > 1:
-        shown = ", ".join(_q(r, 40) for r in roots[:5]) + (", …" if len(roots) > 5 else "")
+        shown = listed(_q(r, 40) for r in roots)
         checker.fail(
             robot,
             f"more than one root link ({len(roots)}: {shown}); every other link needs a parent joint "

@@ -39,7 +39,16 @@ RECURSION_LIMIT = 3000
 MAX_WARNINGS = 20
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m r2d2_viz.robot.xacro_sandbox",
+        usage="%(prog)s < JOB.json",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.parse_args(argv)  # the job comes on stdin: only --help is an argument
     job = json.loads(sys.stdin.read())
     _limit_resources(float(job["cpu_seconds"]))
     path = Path(job["path"])

@@ -64,7 +64,16 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "flat colour and point radius; FlatColor forces the flat colour, any other transformer keeps RViz's "
         "default choice (packed RGB8, else Intensity's rainbow, else flat)",
     ),
-    ("LaserScan, PointCloud2", "Decay Time", "not mapped: the latest message shows (noted here, not per config)"),
+    (
+        "LaserScan, PointCloud2, PointCloud (and Range, Odometry, Pose, PoseArray, … when a config has it)",
+        "Decay Time",
+        "each entity the display draws on (`/scan`; Odometry's `/odom/<k>`) gets a view override "
+        "`VisibleTimeRanges(timeline=time, start=cursor − N s, end=cursor)`: the messages of the last N seconds "
+        "stay drawn (0, RViz's default: only the latest), each where it was received: their points, lines and "
+        "arrows are logged in the fixed frame (Rerun places a range's rows at the cursor's transforms). RViz's own "
+        "displays have it on clouds and scans only; Marker displays have none (each marker's lifetime applies): "
+        "not mapped on markers",
+    ),
     ("Map", "Color Scheme", "map, costmap or raw colours (RViz's palettes)"),
     ("Odometry", "Keep, Covariance", "the last Keep poses stay drawn (`/odom/<k>`); the covariance ellipsoid"),
     ("Image, Camera", "Topic / Image Topic, Enabled", "a 2D view of that topic's entity beside the plots"),
@@ -116,5 +125,13 @@ def mapping_markdown() -> str:
     return "\n".join(lines)
 
 
-if __name__ == "__main__":  # python -m r2d2_viz.rviz.mapping: the README's table
+if (
+    __name__ == "__main__"
+):  # python -m r2d2_viz.rviz.mapping: the README's table of RViz displays and their Rerun counterparts
+    import argparse
+
+    argparse.ArgumentParser(
+        prog="python -m r2d2_viz.rviz.mapping",
+        description="Print the README's table of RViz displays and their Rerun counterparts (Markdown).",
+    ).parse_args()
     print(mapping_markdown())

@@ -28,6 +28,8 @@ class TopicMessage:
     data: bytes | memoryview
     decoded: Decoded | list[MarkerOp] | MsgError | None = None
     """What it draws, when decoded ahead (in the bag reader's thread); None: not yet decoded."""
+    prepared: object = None
+    """What the viewer built ahead from ``decoded`` to log it (opaque here; None: nothing built)."""
 
 
 def display_topics(bag: Bag) -> tuple[dict[str, str], dict[str, str]]:

@@ -20,6 +20,7 @@ import numpy as np
 import numpy.typing as npt
 
 from r2d2_viz.arrays import F64, I64
+from r2d2_viz.errors import listed
 
 Clock = Literal["duration", "timestamp"]
 """``duration``: time since the start (generated motions); ``timestamp``: nanoseconds since the Unix epoch."""
@@ -87,7 +88,7 @@ class JointState:
         try:
             return [self._column[name] for name in names]
         except KeyError as exc:
-            raise KeyError(f"no actuated joint {exc.args[0]!r}; actuated joints are {', '.join(self.joints)}") from None
+            raise KeyError(f"no actuated joint {exc.args[0]!r}; actuated joints are {listed(self.joints)}") from None
 
     def update(self, chunk: SampleChunk) -> F64:
         n = len(chunk)

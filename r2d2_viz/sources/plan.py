@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from r2d2_viz.errors import BagError
+from r2d2_viz.errors import BagError, listed
 from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
@@ -94,7 +94,8 @@ class RunPlan:
     preview_joints: SampleChunk | None = None
     """The first joint states (the view is fitted to the robot in them)."""
     preview_messages: tuple[TopicMessage, ...] = ()
-    """The first display messages (the view frames what they draw)."""
+    """The first display messages, and the first two of each topic in the look-ahead (the view frames what they
+    draw; their frames are checked against the TF tree)."""
     seek_messages: tuple[TopicMessage, ...] = ()
     """Shown first: the latest maps before a seek."""
     robots: tuple[RobotPlan, ...] = ()
@@ -292,8 +293,10 @@ def _selected(bag: Bag, topics: Sequence[str] | None) -> set[str]:
     if topics is None:
         return set(bag.topics)
     if missing := [t for t in topics if t not in bag.topics]:
-        listed = ", ".join(sorted(bag.topics))
-        raise BagError(f"{bag.path}: no topic {', '.join(missing)} in this bag; its topics: {listed}")
+        raise BagError(
+            f"{bag.path}: no topic {listed(missing)} in this bag; its {len(bag.topics)} topics: "
+            f"{listed(sorted(bag.topics))} (--bag {bag.path} --list shows them all)"
+        )
     return {*topics, "/robot_description"}
 
 
@@ -326,9 +329,11 @@ def _tf_preview(bag: Bag, time: TimeSource, start: int, stop: int, topic: str = 
 def _preview(
     preview: BagPass,
 ) -> tuple[SampleChunk | None, tuple[TopicMessage, ...], tuple[SampleChunk | None, ...]]:
-    """The look-ahead's joint states, its first display messages, and the other robots' joint states."""
+    """The look-ahead's joint states, its first display messages with the first two of every topic (the view frames
+    what they draw; their frames are checked against the TF tree), and the other robots' joint states."""
     chunks: list[SampleChunk] = []
     messages: list[TopicMessage] = []
+    per_topic: dict[str, int] = {}
     more: list[list[SampleChunk]] = [[] for _ in preview.others]
     for window in preview.windows(10_000):
         if window.joints is not None:
@@ -336,7 +341,10 @@ def _preview(
         for i, chunk in enumerate(window.more_joints):
             if chunk is not None:
                 more[i].append(chunk)
-        messages += window.displays[: PREVIEW_MESSAGES - len(messages)]
+        for message in window.displays:
+            per_topic[message.topic] = per_topic.get(message.topic, 0) + 1
+            if len(messages) < PREVIEW_MESSAGES or per_topic[message.topic] <= 2:
+                messages.append(message)
     others = tuple(_held(c, d.joints if d is not None else ()) for c, (_, d) in zip(more, preview.others, strict=True))
     return _held(chunks, preview.joints.joints if preview.joints is not None else ()), tuple(messages), others
 

@@ -81,3 +81,14 @@ def _pose(edges: dict[str, _Edge], fixed: str, frame: str, times: I64) -> tuple[
         q = quat_multiply(q_pc, q)
         at = edge.parent
     return None
+
+
+class TfLookup:
+    """:func:`frame_pose` for many lookups in the same records (their index built once)."""
+
+    def __init__(self, records: Sequence[TfRecords]) -> None:
+        self._edges = _edges(records)
+
+    def pose(self, fixed: str, frame: str, times_ns: I64) -> tuple[F64, F64] | None:
+        """``(translation (N, 3), quaternion xyzw (N, 4))`` of ``frame`` in ``fixed`` at ``times_ns``, or None."""
+        return _pose(self._edges, fixed, frame, np.asarray(times_ns, dtype=np.int64))

@@ -19,6 +19,7 @@ import pyarrow as pa
 import rerun as rr
 from rerun.chunk import Chunk, McapReader
 
+from r2d2_viz.errors import listed
 from r2d2_viz.viewer.entities import TIMELINE
 
 OURS = ("/joint_states", "/tf", "/tf_static", "/robot_description")
@@ -38,7 +39,9 @@ class OtherTopics:
     def summary(self) -> str:
         if not self.skipped:
             return ""
-        return "topics Rerun cannot show, skipped: " + ", ".join(f"{t} ({m})" for t, m in self.skipped)
+        shown = listed(f"{t} ({m})" for t, m in self.skipped)
+        n = len(self.skipped)
+        return f"{n} topic{'s' * (n != 1)} Rerun cannot show, skipped: {shown}"
 
 
 def _semantic(chunk: Chunk, source: str, timeline: str) -> Chunk | None:

@@ -7,6 +7,7 @@ by slicing those Arrow arrays (zero-copy) and handing them to the public ``rr.se
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import pyarrow as pa
 import rerun as rr
 
@@ -14,6 +15,14 @@ from r2d2_viz.arrays import I64
 from r2d2_viz.sources.base import Clock
 
 Encoded = list[tuple[rr.ComponentDescriptor, pa.Array]]
+
+
+def f32(values: npt.ArrayLike) -> npt.NDArray[np.float32]:
+    """``values`` in the float32 Rerun stores positions in, cast here: a double beyond float32's range (a lying
+    message, a 1e300 translation) becomes ±inf, which Rerun does not draw, silently — Rerun's own cast would
+    print numpy's ``RuntimeWarning: overflow encountered in cast`` and its source line."""
+    with np.errstate(over="ignore"):
+        return np.asarray(values, dtype=np.float32)
 
 
 def encoded(columns: rr.ComponentColumnList | list[rr.ComponentColumn]) -> Encoded:

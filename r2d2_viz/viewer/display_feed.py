@@ -10,17 +10,18 @@ from __future__ import annotations
 
 import dataclasses
 from collections import deque
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import rerun as rr
 
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp, MeshResource
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import TopicMessage
-from r2d2_viz.sources.base import Clock
-from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, set_time
+from r2d2_viz.sources.base import Clock, TfRecords
+from r2d2_viz.viewer.decay import FixedFramePlacer
+from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
 
@@ -38,6 +39,8 @@ class DisplayStyle:
     options: DecodeOptions = field(default_factory=DecodeOptions)
     keep: int | None = None
     """History length (Odometry's Keep); None: the type's default."""
+    decay: bool = False
+    """RViz's Decay Time is set: the drawings are logged in the fixed frame (:mod:`r2d2_viz.viewer.decay`)."""
 
 
 @dataclass
@@ -63,10 +66,11 @@ class DisplayFeed:
         source_name: str = "",
         timeline: str = TIMELINE,
         topics: Mapping[str, str] | None = None,
+        start_ns: int | None = None,
+        tf: Sequence[TfRecords] = (),
     ) -> None:
         self.notices, self.rec = notices, notices.rec
         self._pending: deque[TopicMessage] = deque()
-        self._anchored = False
         self.clock, self.fixed_frame, self.header_time = clock, fixed_frame, header_time
         self.styles = dict(styles or {})
         self.load_mesh, self.source_name, self.timeline = load_mesh, source_name, timeline
@@ -75,12 +79,17 @@ class DisplayFeed:
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
         self._topic_types = dict(topics or {})
+        self._start_ns = start_ns
+        self._anchored: tuple[int, str] | None = None
+        decayed = any(style.decay for style in self.styles.values())
+        self._placer = FixedFramePlacer(tf, fixed_frame) if decayed else None
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
         frame until its own first message: the viewer then finds a transform path for each from the start
         (otherwise it reports "no transform path" for every entity not drawn yet)."""
         set_time(self.rec, self.timeline, time_ns, self.clock)
+        self._anchored = (time_ns, self.fixed_frame)  # markers' entities too, from their first message
         for topic, msgtype in topics.items():
             style = self.styles.get(topic) or DisplayStyle()
             keep = style.keep if style.keep is not None else KEEP.get(msgtype, 1)
@@ -90,11 +99,15 @@ class DisplayFeed:
     def push(self, messages: Iterable[TopicMessage]) -> None:
         """Messages just read, in receive-time order; the first ones anchor every display entity."""
         for message in messages:
-            if not self._anchored:
-                self._anchored = True
-                if self._topic_types:
-                    self._anchor(self._topic_types, message.time_ns)
+            if self._anchored is None and self._topic_types:  # from the run's start when that is earlier
+                start = message.time_ns if self._start_ns is None else min(message.time_ns, self._start_ns)
+                self._anchor(self._topic_types, start)
             self._pending.append(message)
+
+    def add_tf(self, records: TfRecords | None) -> None:
+        """Transforms just read: decayed displays are placed in the fixed frame with them."""
+        if self._placer is not None and records is not None and len(records):
+            self._placer.add(records)
 
     @property
     def next_time_ns(self) -> int | None:
@@ -117,6 +130,7 @@ class DisplayFeed:
     def log(self, message: TopicMessage) -> None:
         """Decode and log one message (a live source calls this as messages arrive)."""
         state = self.topics.setdefault(message.topic, _TopicState())
+        state.markers.anchor = self._anchored
         state.messages += 1
         self._unflushed += len(message.data)
         if self._unflushed > FLUSH_BYTES:  # backpressure: big messages must not pile up ahead of the sinks
@@ -136,7 +150,11 @@ class DisplayFeed:
                 key=f"display problem {message.topic}",
             )
             return
-        decoded = self._placed(message.topic, decoded)
+        placed = self._placed(message.topic, decoded)
+        if style.decay and self._placer is not None and isinstance(placed, Decoded):
+            placed = self._placer.place(placed, message.time_ns)
+        prepared = message.prepared if placed is decoded else None  # built for the frames it had
+        decoded = placed
         time_ns = message.time_ns
         if self.header_time:
             stamp = decoded.stamp_ns if isinstance(decoded, Decoded) else _first_stamp(decoded)
@@ -145,17 +163,24 @@ class DisplayFeed:
         keep = style.keep if style.keep is not None else KEEP.get(message.msgtype, 1)
         if keep > 1 and isinstance(decoded, Decoded):
             entity = f"{message.topic}/{(state.messages - 1) % keep}"
-        for target in (entity, *self.cameras.get(message.topic, ())):
-            log_decoded(
-                self.rec,
-                target,
-                decoded,
-                timeline=self.timeline,
-                time_ns=time_ns,
-                clock=self.clock,
-                markers=state.markers,
-                load_mesh=self.load_mesh,
-            )
+        images = self.cameras.get(message.topic, ())
+        times = [time_ns]
+        if images and state.messages == 1 and self._anchored is not None and self._anchored[0] < time_ns:
+            # a camera's first intrinsics from the run's start: its images are never without a pinhole in 3D
+            times.insert(0, self._anchored[0])
+        for t in times:
+            for target in (entity, *images):
+                log_decoded(
+                    self.rec,
+                    target,
+                    decoded,
+                    timeline=self.timeline,
+                    time_ns=t,
+                    clock=self.clock,
+                    markers=state.markers,
+                    load_mesh=self.load_mesh,
+                    prepared=prepared,  # type: ignore[arg-type]  # what self.decode built: displays.Prepared
+                )
 
     def decode(self, message: TopicMessage) -> TopicMessage:
         """``message`` with what it draws (or why it cannot), in its topic's style; pure, so a bag's reader
@@ -167,7 +192,10 @@ class DisplayFeed:
             decoded: Decoded | list[MarkerOp] | MsgError = decode(message.msgtype, message.data, style.options)
         except MsgError as exc:
             decoded = exc
-        return dataclasses.replace(message, decoded=decoded)
+        prepared = None
+        if isinstance(decoded, Decoded) and decoded.frame_id and not _meshes(decoded):
+            prepared = prepare(decoded)  # the archetypes too, off the logging thread
+        return dataclasses.replace(message, decoded=decoded, prepared=prepared)
 
     def _where(self, topic: str) -> str:
         return f"{self.source_name}: {topic}" if self.source_name else topic
@@ -213,6 +241,11 @@ def camera_images(topics: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
         if images:
             out[info] = images
     return out
+
+
+def _meshes(decoded: Decoded) -> bool:
+    """Whether it draws mesh files (loaded through the package resolver when logged, not ahead)."""
+    return any(isinstance(item, MeshResource) for item in decoded.items)
 
 
 def _first_stamp(ops: list[MarkerOp]) -> int:

@@ -2,7 +2,12 @@
 
 A message's drawings go on its topic's entity (one item) or on ``<entity>/<i>`` (several); the item pose
 ``T_frame_item`` is an ``InstancePoses3D``. Markers go on ``<entity>/<ns>/<id>`` (``_`` for an empty ns); DELETE,
-DELETEALL and an expired lifetime are recursive ``Clear``s, the expiry logged at its own time.
+DELETEALL and an expired lifetime ``Clear`` the markers shown (recursively), the expiry at its own time.
+
+Every entity stays in a TF frame at every time of the run, drawn or not (an entity without one is in Rerun's
+implicit ``tf#/<path>`` frame, which no transform reaches: the view reports it): a marker entity sits in the
+fixed frame (the book's anchor) from the anchor's time until it is drawn, and again after each ``Clear``. A
+camera's pinhole names its frames (parent: the optical frame; child: ``<entity>#image``, its image plane).
 """
 
 from __future__ import annotations
@@ -29,6 +34,12 @@ class MarkerBook:
     """The markers drawn per topic entity: marker entity → expiry time in ns (None: no lifetime)."""
 
     live: dict[str, int | None] = field(default_factory=dict)
+    frames: dict[str, str] = field(default_factory=dict)
+    """Every marker entity drawn so far → the frame it was last drawn in."""
+    drawn: set[str] = field(default_factory=set)
+    """The marker entities drawn and not cleared since."""
+    anchor: tuple[int, str] | None = None
+    """(time, frame) where the topic's entities were placed before their first message (the display feed's)."""
 
 
 def set_time(rec: rr.RecordingStream, timeline: str, time_ns: int, clock: Clock) -> None:
@@ -136,13 +147,55 @@ def archetypes(item: shapes.Shape, load: MeshLoader | None = None) -> list[rr.As
     return _grid(item)
 
 
-def _log_items(rec: rr.RecordingStream, entity_path: str, decoded: Decoded, load: MeshLoader | None) -> None:
+Prepared = list[tuple[str, list[rr.AsComponents]]]
+"""A decoded message's archetypes, built ahead: per item, its entity's suffix and what is logged there."""
+
+
+def image_plane(entity_path: str) -> str:
+    """The frame of the image plane of the camera logged on ``entity_path`` (its pinhole's child frame)."""
+    return f"{entity_path}#image"
+
+
+def _components(item: shapes.Shape, decoded: Decoded, entity: str, load: MeshLoader | None) -> list[rr.AsComponents]:
+    if isinstance(item, shapes.Pinhole) and decoded.frame_id:  # optical frame → image plane, named
+        plane = image_plane(entity)
+        pinhole = rr.Pinhole(
+            image_from_camera=item.K,
+            resolution=[item.width, item.height],
+            camera_xyz=rr.ViewCoordinates.RDF,
+            parent_frame=decoded.frame_id,
+            child_frame=plane,
+        )
+        return [rr.CoordinateFrame(plane), pinhole]
+    in_3d = not isinstance(item, (shapes.Image, shapes.CompressedImage))
+    frame: list[rr.AsComponents] = [rr.CoordinateFrame(decoded.frame_id)] if in_3d and decoded.frame_id else []
+    return [*frame, *archetypes(item, load)]
+
+
+def prepare(decoded: Decoded, load: MeshLoader | None = None) -> Prepared | None:
+    """The archetypes of every item of ``decoded`` (pure: a bag's reader thread builds them beside the logging);
+    None when they depend on the entity they go to (a camera's pinhole names its image plane by it)."""
+    if any(isinstance(item, shapes.Pinhole) for item in decoded.items):
+        return None
+    many = len(decoded.items) > 1
+    return [(f"/{i}" if many else "", _components(item, decoded, "", load)) for i, item in enumerate(decoded.items)]
+
+
+def _log_items(
+    rec: rr.RecordingStream,
+    entity_path: str,
+    decoded: Decoded,
+    load: MeshLoader | None,
+    prepared: Prepared | None = None,
+) -> None:
+    if prepared is not None:
+        for suffix, components in prepared:
+            rec.log(entity_path + suffix, *components)
+        return
     many = len(decoded.items) > 1
     for i, item in enumerate(decoded.items):
         entity = f"{entity_path}/{i}" if many else entity_path
-        in_3d = not isinstance(item, (shapes.Image, shapes.CompressedImage))
-        frame = [rr.CoordinateFrame(decoded.frame_id)] if in_3d and decoded.frame_id else []
-        rec.log(entity, *frame, *archetypes(item, load))
+        rec.log(entity, *_components(item, decoded, entity, load))
 
 
 def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, time_ns: int, clock: Clock) -> None:
@@ -150,25 +203,56 @@ def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, tim
     expired = sorted((t, e) for e, t in book.live.items() if t is not None and t <= time_ns)
     for expiry, entity in expired:
         set_time(rec, timeline, expiry, clock)
-        rec.log(entity, rr.Clear(recursive=True))
+        _clear(rec, entity, book)
         del book.live[entity]
 
 
+def _clear(rec: rr.RecordingStream, prefix: str, book: MarkerBook) -> None:
+    """Clear the drawn marker entities at and below ``prefix``, one by one (those cleared already stay so: a
+    tracker's DELETEALL costs as many rows as it has markers shown, however many ids it has used), each put back
+    in the anchor's frame (the fixed frame; without an anchor, its own): it draws nothing, and the view can place
+    it (an entity with no frame is in Rerun's implicit ``tf#/<path>``, which the view reports)."""
+    for entity in sorted(e for e in book.drawn if e == prefix or e.startswith(prefix + "/")):
+        rec.log(entity, rr.Clear(recursive=True))
+        frame = book.anchor[1] if book.anchor is not None else book.frames.get(entity)
+        if frame:
+            rec.log(entity, rr.CoordinateFrame(frame))
+        book.drawn.discard(entity)
+
+
+def _place(rec: rr.RecordingStream, entity: str, frame: str, book: MarkerBook, when: tuple[str, int, Clock]) -> None:
+    """A marker entity's first drawing at ``when`` (timeline, time, clock): before it, from the anchor's time on,
+    the entity sits in the anchor's frame (the fixed frame), like the topic's own entity."""
+    timeline, time_ns, clock = when
+    if entity not in book.frames and book.anchor is not None and book.anchor[0] < time_ns:
+        set_time(rec, timeline, book.anchor[0], clock)
+        rec.log(entity, rr.CoordinateFrame(book.anchor[1]))
+        set_time(rec, timeline, time_ns, clock)
+    book.frames[entity] = frame
+    book.drawn.add(entity)
+
+
 def _log_markers(
-    rec: rr.RecordingStream, entity_path: str, ops: list[MarkerOp], book: MarkerBook, load: MeshLoader | None
+    rec: rr.RecordingStream,
+    entity_path: str,
+    ops: list[MarkerOp],
+    book: MarkerBook,
+    load: MeshLoader | None,
+    when: tuple[str, int, Clock],
 ) -> None:
     for op in ops:
         if op.action == "deleteall":
             prefix = marker_entity(entity_path, op.ns) if op.ns else entity_path
-            rec.log(prefix, rr.Clear(recursive=True))
+            _clear(rec, prefix, book)
             for entity in [e for e in book.live if e == prefix or e.startswith(prefix + "/")]:
                 del book.live[entity]
             continue
         entity = marker_entity(entity_path, op.ns, op.id)
         if op.action == "delete" or op.decoded is None:
-            rec.log(entity, rr.Clear(recursive=True))
+            _clear(rec, entity, book)
             book.live.pop(entity, None)
             continue
+        _place(rec, entity, op.decoded.frame_id, book, when)
         _log_items(rec, entity, op.decoded, load)
         book.live[entity] = None
 
@@ -183,17 +267,19 @@ def log_decoded(
     clock: Clock = "timestamp",
     markers: MarkerBook | None = None,
     load_mesh: MeshLoader | None = None,
+    prepared: Prepared | None = None,
 ) -> None:
-    """Log one decoded message on ``entity_path`` at ``time_ns``. Marker messages need the topic's ``markers``
-    book (for DELETEALL and lifetimes); markers that expired before ``time_ns`` are cleared first."""
+    """Log one decoded message on ``entity_path`` at ``time_ns`` (its archetypes ``prepared`` ahead, if they
+    were). Marker messages need the topic's ``markers`` book (for DELETEALL and lifetimes); markers that expired
+    before ``time_ns`` are cleared first."""
     if isinstance(decoded, Decoded):
         set_time(rec, timeline, time_ns, clock)
-        _log_items(rec, entity_path, decoded, load_mesh)
+        _log_items(rec, entity_path, decoded, load_mesh, prepared)
         return
     book = markers if markers is not None else MarkerBook()
     expire_markers(rec, book, timeline, time_ns, clock)
     set_time(rec, timeline, time_ns, clock)
-    _log_markers(rec, entity_path, decoded, book, load_mesh)
+    _log_markers(rec, entity_path, decoded, book, load_mesh, (timeline, time_ns, clock))
     for op in decoded:
         if op.action == "add" and op.lifetime_ns > 0:
             book.live[marker_entity(entity_path, op.ns, op.id)] = time_ns + op.lifetime_ns

@@ -15,17 +15,22 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from urllib.parse import quote
+from urllib.parse import quote, urlsplit
 
 import rerun as rr
 import rerun.blueprint as rrb
 
-from r2d2_viz.errors import SinkError, UsageError
+from r2d2_viz.errors import DEBUG_ENV, SinkError, UsageError, one_line
 from r2d2_viz.viewer.entities import APP_ID
 
 DEFAULT_GRPC_PORT = 9876
 DEFAULT_WEB_PORT = 9090
 SERVER_START_TIMEOUT_S = 30.0
+CONNECT_TIMEOUT_S = 3.0
+"""How long ``--connect`` tries the viewer's address before saying no viewer is there (Rerun's own gRPC client
+retries for ever, and a run waiting on it ignores Ctrl-C)."""
+CLOSE_TIMEOUT_S = 30.0
+"""How long closing waits for a live viewer to take the rest of the data."""
 
 
 @dataclass(frozen=True)
@@ -45,6 +50,11 @@ class SinkConfig:
         return self.spawn or self.connect is not None or self.serve
 
 
+def has_display() -> bool:
+    """Whether a native window can open here (on Linux: ``DISPLAY`` or ``WAYLAND_DISPLAY`` is set)."""
+    return not sys.platform.startswith("linux") or bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 def current_recording(recording: rr.RecordingStream | None = None) -> rr.RecordingStream:
     """``recording``, else the caller's current Rerun recording (``rr.init``'s)."""
     rec = recording if recording is not None else rr.get_data_recording()
@@ -59,6 +69,11 @@ def viewer_executable() -> str | None:
     if beside.is_file() and os.access(beside, os.X_OK):
         return str(beside)
     return shutil.which("rerun")
+
+
+def _child_output() -> int | None:
+    """Where the Rerun processes we start write their log lines: nowhere, unless ``R2D2_VIZ_DEBUG`` is set."""
+    return None if os.environ.get(DEBUG_ENV) else subprocess.DEVNULL
 
 
 def _check_port_free(bind: str, port: int, what: str) -> None:
@@ -89,10 +104,11 @@ def open_recording(
     sinks: list[rr.FileSink | rr.GrpcSink] = []
     server: subprocess.Popen[bytes] | None = None
     if config.spawn:
-        if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        if not has_display():
             raise SinkError("--spawn: no display to open the viewer on; use --save FILE.rrd or --serve instead")
         sinks.append(rr.GrpcSink(_spawn_viewer(config.port)))
     if config.connect is not None:
+        _probe(config.connect)
         sinks.append(rr.GrpcSink(config.connect))
     if config.serve:
         server, uri = _serve(config)
@@ -107,7 +123,7 @@ def open_recording(
             f"serving: open http://{host}:{config.web_port}/?url={quote(public, safe='')} in a browser, "
             f"or run: rerun {public}"
         )
-    return Recording(rec, server)
+    return Recording(rec, server, live=config.live)
 
 
 def _spawn_viewer(port: int) -> str:
@@ -126,8 +142,8 @@ def _spawn_viewer(port: int) -> str:
         viewer = subprocess.Popen(
             command,
             stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
+            stdout=_child_output(),
+            stderr=_child_output(),
             start_new_session=True,  # detached: Ctrl-C in the terminal ends the app, not the window
             env={**os.environ, "RERUN_APP_ONLY": "true"},
         )
@@ -140,6 +156,26 @@ def _spawn_viewer(port: int) -> str:
         time.sleep(0.05)
     _stop(viewer)
     raise SinkError(f"--spawn: the viewer did not start on 127.0.0.1:{port}; use --save FILE.rrd or --serve instead")
+
+
+def _probe(url: str) -> None:
+    """``--connect URL``: a viewer must be listening at its host and port (tried for a few seconds) — Rerun's
+    gRPC sink connects lazily and would retry for ever."""
+    try:
+        parts = urlsplit(url)
+        host, port = parts.hostname, parts.port or DEFAULT_GRPC_PORT
+    except ValueError as exc:
+        raise SinkError(f"--connect {url}: not a viewer URL ({exc}); expected rerun+http://HOST:PORT/proxy") from None
+    if not parts.scheme.startswith("rerun") or not host:
+        raise SinkError(f"--connect {url}: not a viewer URL; expected rerun+http://HOST:PORT/proxy")
+    try:
+        socket.create_connection((host, port), timeout=CONNECT_TIMEOUT_S).close()
+    except OSError as exc:
+        why = "timed out" if isinstance(exc, TimeoutError) else (exc.strerror or type(exc).__name__).lower()
+        raise SinkError(
+            f"--connect {url}: no viewer at {host}:{port} ({why}); start one there with "
+            f"'rerun --port {port}', or use --spawn or --serve"
+        ) from None
 
 
 def _listening(host: str, port: int) -> bool:
@@ -167,7 +203,8 @@ def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
         "--web-viewer-port",
         str(config.web_port),
     ]
-    server = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    output = _child_output()
+    server = subprocess.Popen(command, stdout=output, stderr=output, start_new_session=True)
     local = "127.0.0.1" if config.bind in ("0.0.0.0", "::") else config.bind
     deadline = time.monotonic() + SERVER_START_TIMEOUT_S
     while time.monotonic() < deadline and server.poll() is None:
@@ -195,12 +232,20 @@ class Recording:
 
     rec: rr.RecordingStream
     server: subprocess.Popen[bytes] | None = None
+    live: bool = False
+    """A viewer takes the data (closing waits for it at most ``CLOSE_TIMEOUT_S``)."""
 
 
 def close_recording(recording: Recording) -> None:
     """Flush everything to the sinks and close them (finalises an .rrd file); stop the server."""
     try:
-        recording.rec.flush()
+        if recording.live:  # a viewer that went away must not hold the app for ever
+            try:
+                recording.rec.flush(timeout_sec=CLOSE_TIMEOUT_S)
+            except (RuntimeError, TimeoutError) as exc:
+                raise SinkError(f"the viewer did not take the last data: {one_line(exc)}") from None
+        else:
+            recording.rec.flush()
         recording.rec.disconnect()
     finally:
         if recording.server is not None:

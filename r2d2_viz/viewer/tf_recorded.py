@@ -16,7 +16,7 @@ import rerun as rr
 
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer import entities
-from r2d2_viz.viewer.columns import encoded, send, tiled, time_array
+from r2d2_viz.viewer.columns import encoded, f32, send, tiled, time_array
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH
 from r2d2_viz.viewer.scene import ARROW_COLOR
 
@@ -47,7 +47,7 @@ class RecordedTf:
         index = np.flatnonzero(keep)
         parents = [records.parents[i] for i in index]
         children = [records.children[i] for i in index]
-        translation, quat = records.translation[index], records.quat_xyzw[index]
+        translation, quat = f32(records.translation[index]), records.quat_xyzw[index]
         self._log_axes({*parents, *children})
         if records.static:
             self._log_static(parents, children, translation, quat)

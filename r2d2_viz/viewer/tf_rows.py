@@ -14,7 +14,7 @@ import rerun as rr
 from r2d2_viz.arrays import F64
 from r2d2_viz.kinematics.tree import PRISMATIC, KinematicTree, link_positions, transforms_from_values
 from r2d2_viz.sources.base import FrameTrack
-from r2d2_viz.viewer.columns import Encoded, encoded, first_of_every, tiled
+from r2d2_viz.viewer.columns import Encoded, encoded, f32, first_of_every, tiled
 from r2d2_viz.viewer.scene import ARROW_COLOR
 
 
@@ -60,7 +60,7 @@ class TfRows:
             translation = np.concatenate([translation, *(t.translation[:, None] for t in tracks)], axis=1)
             quat = np.concatenate([quat, *(t.quat_xyzw[:, None] for t in tracks)], axis=1)
         columns = rr.Transform3D.columns(
-            translation=translation.reshape(-1, 3),
+            translation=f32(translation.reshape(-1, 3)),
             quaternion=quat.reshape(-1, 4),  # xyzw
             parent_frame=tiled(self.parents, n),
             child_frame=tiled(self.children, n),
@@ -78,5 +78,5 @@ class TfRows:
         child = np.stack([at[c] for c, _ in self._arrow_ends], axis=1)  # (n, k, 3)
         parent = np.stack([at[p] if p >= 0 else origin for _, p in self._arrow_ends], axis=1)
         k = len(self._arrow_ends)
-        arrows = rr.Arrows3D.columns(origins=child.reshape(-1, 3), vectors=(parent - child).reshape(-1, 3))
+        arrows = rr.Arrows3D.columns(origins=f32(child.reshape(-1, 3)), vectors=f32((parent - child).reshape(-1, 3)))
         return encoded(arrows.partition(np.full(n, k)))

@@ -23,6 +23,7 @@ from . import viewers
 
 if TYPE_CHECKING:
     from playwright.sync_api import Browser
+    from rerun.experimental import ViewerClient
 
 
 def unavailable(reason: str) -> NoReturn:
@@ -75,3 +76,18 @@ def artifacts_dir(request: pytest.FixtureRequest, tmp_path: Path) -> Path:
     path = Path(root) / re.sub(r"[^A-Za-z0-9_.-]+", "_", request.node.name)
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+@pytest.fixture(scope="session")
+def headless_client(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ViewerClient]:
+    """One windowless native viewer for the session (no display: lavapipe renders), for its views' reports
+    (:func:`viewers.view_reports`)."""
+    missing = [r for r in viewers.missing_native_prerequisites() if "Xvfb" not in r and "libX11" not in r]
+    if missing:
+        unavailable("; ".join(missing))
+    log = tmp_path_factory.mktemp("headless") / "rerun.log"
+    try:
+        with viewers.headless_viewer(log) as client:
+            yield client
+    except (OSError, RuntimeError) as exc:
+        unavailable(f"the headless viewer failed to start: {exc}")

@@ -685,6 +685,84 @@ def native_viewer(display: str, window: tuple[int, int], log: Path, timeout: flo
         _stop_process_group(proc)
 
 
+@contextlib.contextmanager
+def headless_viewer(log: Path, timeout: float = 60.0) -> Iterator[ViewerClient]:
+    """The real native viewer with no window (``rerun --headless``: no display needed; lavapipe renders), driven
+    through its control API on a free loopback port; its process group stopped on exit."""
+    from rerun.experimental import ViewerClient
+
+    port = free_port()
+    command = [rerun_cli(), "--headless", "--port", str(port), "--bind", "127.0.0.1", "--hide-welcome-screen"]
+    env = native_render_env("")
+    env.pop("DISPLAY", None)
+    with log.open("wb") as sink:
+        proc = subprocess.Popen(
+            command, env=env, stdin=subprocess.DEVNULL, stdout=sink, stderr=subprocess.STDOUT, start_new_session=True
+        )
+    try:
+        deadline = time.monotonic() + timeout
+        while True:
+            if proc.poll() is not None:
+                raise RuntimeError(f"rerun exited with {proc.returncode}:\n{_tail(log)}")
+            with socket.socket() as s:
+                if s.connect_ex(("127.0.0.1", port)) == 0:
+                    break
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"rerun did not listen on port {port} within {timeout:.0f} s:\n{_tail(log)}")
+            time.sleep(0.2)
+        yield ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
+    finally:
+        _stop_process_group(proc)
+
+
+@dataclass(frozen=True)
+class Report:
+    """One problem a view reports at one time of the recording."""
+
+    time_ns: int
+    view: str
+    severity: str
+    summary: str
+
+
+def view_reports(
+    client: ViewerClient, rrd: Path, *, samples: int = 9, timeline: str = "time", since_ns: int | None = None
+) -> list[Report]:
+    """What the views of ``rrd`` report (Rerun's error badges), at ``samples`` times spread evenly over
+    ``timeline`` from its first time (or ``since_ns``, when later) to its last, in the recording's own blueprint
+    (reset to it: the viewer keeps the blueprint of the app id's last recording otherwise). The recording is
+    closed afterwards.
+
+    Each time is waited for with a (tiny) screenshot: the viewer answers it only once it has painted that time,
+    so the reports are those of that time."""
+    if client.get_state().recordings:
+        client.close("all")
+    client.open(str(Path(rrd).resolve()))
+    try:
+        client.run_command("recording.reset_blueprint_to_default")
+        state = client.get_state()
+        recording = next(r for r in state.recordings if r.store_id == state.active_recording)
+        line = next(t for t in recording.timelines if t.name == timeline)
+        assert line.start is not None and line.end is not None, line
+        out: list[Report] = []
+        first = line.start if since_ns is None else min(max(line.start, since_ns), line.end)
+        for i in range(samples):
+            t = first + (line.end - first) * i // max(samples - 1, 1)
+            if line.time_type == "timestamp":
+                client.set_time(timeline, timestamp=np.datetime64(t, "ns"), play_state="paused")
+            else:
+                client.set_time(timeline, duration=np.timedelta64(t, "ns"), play_state="paused")
+            client.take_screenshot(max_size=64)
+            out += [
+                Report(t, view.name, report.severity, report.summary)
+                for view in client.get_state().views
+                for report in view.reports
+            ]
+        return out
+    finally:
+        client.close("all")
+
+
 @dataclass
 class NativeShot:
     """Result of ``screenshot_native``."""

@@ -29,3 +29,13 @@ def test_matrix_to_quat_near_half_turns_and_w_is_not_negative() -> None:
     near = Rotation.from_rotvec(np.array([[np.pi - 1e-9, 0, 0], [0, np.pi, 0], [0, 0, -np.pi + 1e-7], [1e-12, 0, 0]]))
     q = matrix_to_quat(near.as_matrix())
     assert _same_rotation(q, near.as_quat()) and np.all(q[:, 3] >= 0)
+
+
+def test_a_zero_quaternion_gives_nan_silently() -> None:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = quat_to_matrix(np.array([[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 2.0]]))
+    assert np.isnan(out[0]).all()
+    assert np.array_equal(out[1], np.eye(3))

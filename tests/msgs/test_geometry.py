@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 import pytest
-from msgs_build import color, quat
+from msgs_build import color, quat, vec
 
-from r2d2_viz.msgs.geometry import frame_of, matrix_quat, quat_matrix, rgba8, xyzw
+from r2d2_viz.msgs.geometry import frame_of, matrix_quat, quat_matrix, rgba8, xyz, xyzw
 from r2d2_viz.msgs.typestore import MsgError
 
 
@@ -35,3 +35,11 @@ def test_quaternions() -> None:
 def test_colours() -> None:
     assert rgba8(color(1.0, 0.5, 0.0, 2.0)) == (255, 128, 0, 255)  # clipped to [0, 1]
     assert rgba8(color(math.nan, 0.2, 0.0, 1.0)) == (0, 51, 0, 255)
+
+
+def test_vectors_the_viewer_cannot_hold_are_refused() -> None:
+    """3.4028235e38 is float32's largest finite value (IEEE 754 binary32: (2 − 2⁻²³) · 2¹²⁷)."""
+    assert xyz(vec(3.4e38, -3.4e38, 0)) == (3.4e38, -3.4e38, 0.0)
+    for lie in (1e300, -1e39, math.inf, math.nan):
+        with pytest.raises(MsgError, match="non-finite vector"):
+            xyz(vec(0, lie, 0))

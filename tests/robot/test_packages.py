@@ -174,3 +174,14 @@ def test_uri_package() -> None:
     assert uri_package("file:///a/b.stl") is None
     assert uri_package("meshes/b.stl") is None
     assert uri_package("package://") is None
+
+
+def test_a_big_workspace_is_counted_not_spelled_out(tmp_path: Path) -> None:
+    """A workspace with 300 packages has 300 AMENT_PREFIX_PATH entries: the message names 5 and counts the rest."""
+    prefixes = ":".join(f"/ws/install/pkg_{k:03d}" for k in range(300))
+    index = PackageIndex.from_args([], description=tmp_path / "robot.xacro", environ={"AMENT_PREFIX_PATH": prefixes})
+    with pytest.raises(PackageError) as info:
+        index.find("ghost_description")
+    message = str(info.value)
+    assert "AMENT_PREFIX_PATH (300 entries: /ws/install/pkg_000, " in message and "pkg_004 and 295 more)" in message
+    assert len(message) < 600, message

@@ -3,6 +3,7 @@ by ours; atomic; transient-local where robot_state_publisher offers it."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -13,14 +14,24 @@ from rosbags.rosbag2 import Reader
 
 from r2d2_viz.errors import BagError
 from r2d2_viz.ros_out.bag_write import BagWriter, StaticTransform
-from r2d2_viz.sources.bags.bag import open_bag
-from r2d2_viz.sources.bag_joints import BagSource, read_robot_description
-from r2d2_viz.sources.bag_tf import read_tf
-from r2d2_viz.sources.base import FrameTrack
+from r2d2_viz.sources.bag_joints import read_robot_description
+from r2d2_viz.sources.bag_tf import concatenate
+from r2d2_viz.sources.bags.bag import Bag, open_bag
+from r2d2_viz.sources.base import FrameTrack, SampleChunk, TfRecords
+from r2d2_viz.sources.plan import plan_bag
+from r2d2_viz.sources.playback import BagPass, Segment, bag_topics_read
 
 JOINTS = ["swivel", "tilt", "periscope"]
 URDF = "<robot name='r2d2'><link name='base_link'/></robot>"
 STATIC = [StaticTransform("base_link", "camera", (0.1, 0.0, 0.3), (0.0, 0.0, 0.0, 1.0))]
+
+
+def _read(bag: Bag, joints: Sequence[str]) -> tuple[list[SampleChunk], TfRecords | None, TfRecords | None]:
+    """By our reader: the joint states and /tf of the bag's one pass, /tf_static as the run's plan reads it."""
+    topics = bag_topics_read(bag, joints, {})
+    windows = list(BagPass(bag, [Segment(topics)], actuated=joints, displays={}).windows(100))
+    chunks = [w.joints for w in windows if w.joints is not None]
+    return chunks, plan_bag(bag).static_tf, concatenate([w.tf for w in windows if w.tf is not None])
 
 
 def _run(n: int = 250, seed: int = 1):
@@ -85,8 +96,8 @@ def test_our_reader_reads_it_back(tmp_path: Path) -> None:
     times, positions, track = _write(tmp_path / "run.mcap")  # a rosbag2 directory named like a file
     with open_bag(tmp_path / "run.mcap") as bag:
         assert read_robot_description(bag) == URDF
-        chunks = list(BagSource(bag, JOINTS).chunks(100))
-        static, moving = read_tf(bag)
+        chunks, static, moving = _read(bag, JOINTS)
+    assert static is not None and moving is not None
     np.testing.assert_array_equal(np.concatenate([c.times_ns for c in chunks]), times)
     np.testing.assert_array_equal(np.vstack([c.positions for c in chunks]), positions)  # NaN where not given
     np.testing.assert_array_equal(moving.translation, track.translation)
@@ -139,7 +150,8 @@ def test_a_run_without_samples_still_has_the_robot(tmp_path: Path) -> None:
         pass
     with open_bag(w.path) as bag:
         assert read_robot_description(bag) == URDF
-        assert [r.children for r in read_tf(bag)] == [("camera",)]
+        chunks, static, moving = _read(bag, JOINTS)
+    assert chunks == [] and moving is None and static is not None and static.children == ("camera",)
 
 
 def test_the_tutorial_lap_round_trips_exactly(tmp_path: Path) -> None:
@@ -159,8 +171,8 @@ def test_the_tutorial_lap_round_trips_exactly(tmp_path: Path) -> None:
         for c in chunks:
             w.write_samples(c.times_ns, c.joints, c.positions, c.frames)
     with open_bag(tmp_path / "lap.mcap") as bag:
-        back = list(BagSource(bag, motion.joints).chunks(1000))
-        (tf,) = read_tf(bag)
+        back, static, tf = _read(bag, motion.joints)
+        assert static is None and tf is not None
         assert read_robot_description(bag) == urdf_path.read_text()
     times = np.concatenate([c.times_ns for c in chunks])
     np.testing.assert_array_equal(np.concatenate([c.times_ns for c in back]), times + start)

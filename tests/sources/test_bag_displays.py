@@ -1,4 +1,5 @@
-"""A bag's display topics as one stream of raw messages (sources/bag_displays), on bags rosbags wrote."""
+"""A bag's display topics as one stream of raw messages in receive-time order (sources/bag_displays, read by the
+bag's one pass, sources/playback.BagPass), on bags rosbags wrote."""
 
 from __future__ import annotations
 
@@ -8,8 +9,10 @@ import pytest
 from displaybags import MAP_TIME, SCAN_TIMES, T0, write_display_bag
 from rosbags.rosbag2 import Reader
 
+from r2d2_viz.sources.bag_displays import display_topics, frames_of
 from r2d2_viz.sources.bags.bag import open_bag
-from r2d2_viz.sources.bag_displays import bag_messages, display_frames, display_topics
+from r2d2_viz.sources.plan import plan_bag
+from r2d2_viz.sources.playback import BagPass, Segment
 
 
 @pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
@@ -30,10 +33,17 @@ def test_the_display_topics_merged_by_receive_time_as_rosbags_reads_them(tmp_pat
             "/scan": "sensor_msgs/msg/LaserScan",
         }
         assert other == {"/chatter": "std_msgs/msg/String"}  # /tf and /tf_static are the robot pipeline's
-        got = [(m.time_ns, m.topic, bytes(m.data)) for m in bag_messages(bag, shown)]
+        windows = BagPass(bag, [Segment(tuple(shown))], actuated=None, displays=shown).windows(1000)
+        messages = [m for w in windows for m in w.displays]
+        assert all(m.msgtype == shown[m.topic] for m in messages)
+        got = [(m.time_ns, m.topic, bytes(m.data)) for m in messages]
         assert [t for t, _, _ in got] == sorted(t for t, _, _ in got)  # in receive-time order
         assert sorted(got) == sorted(expected)  # (messages received at the same time: any order)
         assert got[0][0] == T0 and (MAP_TIME, "/map") in [(t, topic) for t, topic, _ in got]
         assert sum(topic == "/scan" for _, topic, _ in got) == len(SCAN_TIMES) + 2  # + empty frame, garbage
-        # the first messages' frames: a leading '/' is stripped as tf2 does, an empty id left out
-        assert display_frames(bag, shown) == {"base_laser", "odom"}
+        # the frames they are drawn in: a leading '/' is stripped as tf2 does, an empty id and garbage left out
+        assert frames_of(messages) == {"base_laser", "odom"}
+        # the plan's preview (what the view is fitted to): the first messages, as the pass reads them
+        preview = plan_bag(bag).preview_messages
+        assert [(m.time_ns, m.topic, bytes(m.data)) for m in preview] == got[: len(preview)] and len(preview) > 4
+        assert frames_of(preview) == {"base_laser", "odom"}

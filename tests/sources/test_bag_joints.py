@@ -1,5 +1,6 @@
-"""BagSource and the /robot_description reader, on bags written by rosbags: values must equal what
-rosbags' own deserializer reads from the same bytes (bit for bit), times the bag's receive times or stamps."""
+"""A bag's /joint_states through its one pass (sources/playback.BagPass, decoded by bag_joints) and the
+/robot_description reader, on bags written by rosbags: values must equal what rosbags' own deserializer reads from
+the same bytes (bit for bit), times the bag's receive times or stamps."""
 
 from __future__ import annotations
 
@@ -12,8 +13,9 @@ from conftest import REPO
 from rosbags.rosbag2 import Reader
 
 from r2d2_viz.errors import BagError
-from r2d2_viz.sources.bags.bag import open_bag
-from r2d2_viz.sources.bag_joints import BagSource, read_robot_description
+from r2d2_viz.sources.bag_joints import TimeSource, read_robot_description
+from r2d2_viz.sources.bags.bag import Bag, open_bag
+from r2d2_viz.sources.playback import BagPass, Segment, bag_topics_read
 
 ARM = ["shoulder", "elbow", "wrist", "gripper"]
 
@@ -43,8 +45,13 @@ def _rosbags_reference(path: Path) -> tuple[list[int], list[int], list[dict[str,
     return receive, header, values
 
 
-def _all(source: BagSource, max_samples: int = 64):
-    chunks = list(source.chunks(max_samples))
+def _pass(bag: Bag, actuated: list[str], time: TimeSource = "receive") -> BagPass:
+    """The bag's joint states alone, read once (what a replay's pass does beside /tf and the displays)."""
+    return BagPass(bag, [Segment(bag_topics_read(bag, actuated, {}))], actuated=actuated, displays={}, time=time)
+
+
+def _all(source: BagPass, max_samples: int = 64):
+    chunks = [w.joints for w in source.windows(max_samples) if w.joints is not None]
     assert all(0 < len(c) <= max_samples for c in chunks)
     times = np.concatenate([c.times_ns for c in chunks])
     rows = []
@@ -59,18 +66,19 @@ def test_reads_exactly_what_rosbags_reads(tmp_path: Path, storage: str, version:
     path = _arm_bag(tmp_path, storage, version)
     receive, header, values = _rosbags_reference(storage_file(path))
     with open_bag(path) as bag:
-        times, rows = _all(BagSource(bag, ARM))
+        times, rows = _all(_pass(bag, ARM))
         assert times.tolist() == receive
         assert rows == values  # a message's joints only: the others are NaN (keep their last value)
-        header_times, _ = _all(BagSource(bag, ARM, time="header"))
+        header_times, _ = _all(_pass(bag, ARM, time="header"))
         assert header_times.tolist() == header
 
 
 def test_chunk_columns_are_robot_joints_in_robot_order(tmp_path: Path) -> None:
     with open_bag(_arm_bag(tmp_path, n=10)) as bag:
-        source = BagSource(bag, ["gripper", "wrist", "elbow", "shoulder", "unused"])
-        assert source.joints == ("gripper", "wrist", "elbow", "shoulder", "unused") and source.clock == "timestamp"
-        chunk = next(source.chunks(100))
+        source = _pass(bag, ["gripper", "wrist", "elbow", "shoulder", "unused"])
+        assert source.joints is not None
+        assert source.joints.joints == ("gripper", "wrist", "elbow", "shoulder", "unused")
+        chunk = next(w.joints for w in source.windows(100) if w.joints is not None)
     assert chunk.joints == ("gripper", "wrist", "elbow", "shoulder")
     assert chunk.positions.shape == (len(chunk.times_ns), 4) and chunk.positions.dtype == np.float64
     assert np.all(np.diff(chunk.times_ns) >= 0)
@@ -82,7 +90,7 @@ def test_unknown_names_ignored_with_one_warning(tmp_path: Path) -> None:
         spec.add("/joint_states", T0 + k, joint_state(T0 + k, ["elbow", "caster_wheel"], [k, 2 * k]))
     warnings: list[str] = []
     with open_bag(write_bag(tmp_path / "b", spec), warn=warnings.append) as bag:
-        _times, rows = _all(BagSource(bag, ARM), 7)
+        _times, rows = _all(_pass(bag, ARM), 7)
     assert rows == [{"elbow": float(k)} for k in range(50)]
     assert len(warnings) == 1 and "caster_wheel" in warnings[0] and "not actuated joints" in warnings[0]
 
@@ -94,7 +102,7 @@ def test_mismatched_lengths_skipped_and_counted_once(tmp_path: Path) -> None:
         spec.add("/joint_states", T0 + k, joint_state(T0 + k, names, pos))
     warnings: list[str] = []
     with open_bag(write_bag(tmp_path / "b", spec), warn=warnings.append) as bag:
-        times, _rows = _all(BagSource(bag, ARM), 8)
+        times, _rows = _all(_pass(bag, ARM), 8)
     assert times.tolist() == [T0 + k for k in range(30) if k % 10]
     assert warnings == [f"{tmp_path / 'b'}: /joint_states: skipped 3 messages whose name and position lengths differ"]
 
@@ -104,8 +112,8 @@ def test_big_endian_messages_decoded_by_rosbags(tmp_path: Path) -> None:
     big = bytes(TS.serialize_cdr(msg, "sensor_msgs/msg/JointState", little_endian=False))
     spec = BagSpec().add("/joint_states", T0 + 5, big).add("/joint_states", T0 + 6, joint_state(T0, ["elbow"], [1]))
     with open_bag(write_bag(tmp_path / "b", spec)) as bag:
-        times, rows = _all(BagSource(bag, ARM))
-        header, _ = _all(BagSource(bag, ARM, time="header"))
+        times, rows = _all(_pass(bag, ARM))
+        header, _ = _all(_pass(bag, ARM, time="header"))
     assert rows == [{"elbow": 0.25, "wrist": -1.5}, {"elbow": 1.0}]
     assert times.tolist() == [T0 + 5, T0 + 6] and header.tolist() == [T0, T0]
 
@@ -117,7 +125,7 @@ def test_header_stamps_that_go_back_are_held_with_one_warning(tmp_path: Path) ->
         spec.add("/joint_states", T0 + k, joint_state(T0 + s, ["elbow"], [k]))
     warnings: list[str] = []
     with open_bag(write_bag(tmp_path / "b", spec), warn=warnings.append) as bag:
-        times, _ = _all(BagSource(bag, ARM, time="header"), 2)
+        times, _ = _all(_pass(bag, ARM, time="header"), 2)
     assert (times - T0).tolist() == [5, 6, 6, 7, 7, 8]
     assert len(warnings) == 1 and "2 header stamps went back" in warnings[0]
 
@@ -125,7 +133,7 @@ def test_header_stamps_that_go_back_are_held_with_one_warning(tmp_path: Path) ->
 def test_wrong_type_on_joint_states_is_one_line(tmp_path: Path) -> None:
     spec = BagSpec(types={"/joint_states": "std_msgs/msg/String"}).add("/joint_states", T0, string("x"))
     with open_bag(write_bag(tmp_path / "b", spec)) as bag, pytest.raises(BagError) as info:
-        BagSource(bag, ARM)
+        bag_topics_read(bag, ARM, {})
     assert (
         str(info.value)
         == f"{tmp_path / 'b'}: /joint_states is std_msgs/msg/String, expected sensor_msgs/msg/JointState"
@@ -135,7 +143,9 @@ def test_wrong_type_on_joint_states_is_one_line(tmp_path: Path) -> None:
 def test_no_joint_states_no_chunks(tmp_path: Path) -> None:
     spec = BagSpec().add("/robot_description", T0, string("<robot/>"))
     with open_bag(write_bag(tmp_path / "b", spec)) as bag:
-        assert list(BagSource(bag, ARM).chunks(10)) == []
+        assert bag_topics_read(bag, ARM, {}) == ()  # the pass does not read it
+        windows = list(BagPass(bag, [Segment(("/joint_states",))], actuated=ARM, displays={}).windows(10))
+        assert windows == []
 
 
 def test_robot_description_is_the_latest(tmp_path: Path) -> None:

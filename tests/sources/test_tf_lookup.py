@@ -49,3 +49,24 @@ def test_latest_value_at_each_time_composed_up_the_chain() -> None:
 def test_a_cycle_in_hostile_data_is_no_pose() -> None:
     loop = TfRecords(np.array([0, 0]), ("a", "b"), ("b", "a"), np.zeros((2, 3)), np.tile([0, 0, 0, 1.0], (2, 1)))
     assert frame_pose([loop], "odom", "a", np.array([0])) is None
+
+
+def test_a_lookup_built_once_answers_as_frame_pose() -> None:
+    from r2d2_viz.sources.base import TfRecords
+    from r2d2_viz.sources.tf_lookup import TfLookup, frame_pose
+
+    records = [
+        TfRecords(
+            np.array([0, 10], dtype=np.int64),
+            ("odom", "odom"),
+            ("base", "base"),
+            np.array([[1.0, 0, 0], [2.0, 0, 0]]),
+            np.array([[0, 0, 0, 1.0], [0, 0, 0, 1.0]]),
+        )
+    ]
+    times = np.array([0, 5, 10, 20], dtype=np.int64)
+    got, want = TfLookup(records).pose("odom", "base", times), frame_pose(records, "odom", "base", times)
+    assert got is not None and want is not None
+    np.testing.assert_array_equal(got[0], want[0])
+    np.testing.assert_array_equal(got[0][:, 0], [1, 1, 2, 2])  # the latest at or before each time, by hand
+    assert TfLookup(records).pose("odom", "nowhere", times) is None

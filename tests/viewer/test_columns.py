@@ -9,7 +9,7 @@ import pyarrow as pa
 import rerun as rr
 from rrd import read_recording
 
-from r2d2_viz.viewer.columns import encoded, first_of_every, send, tiled, time_array
+from r2d2_viz.viewer.columns import encoded, f32, first_of_every, send, tiled, time_array
 
 
 def test_tiled_is_texts_times_n() -> None:
@@ -43,3 +43,13 @@ def test_sending_a_slice_sends_exactly_those_rows(tmp_path: Path) -> None:
     assert recording["/part"].times == [3000, 4000, 5000, 6000]
     assert [v[0] for v in recording["/part"].temporal["Scalars:scalars"]] == [4.5, 6.0, 7.5, 9.0]
     assert times.type == pa.duration("ns") and stamps.type == pa.timestamp("ns")
+
+
+def test_f32_turns_doubles_beyond_float32_into_inf_silently() -> None:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = f32(np.array([1e300, -1e300, 0.5, np.nan]))
+    assert out.dtype == np.float32
+    assert out[0] == np.inf and out[1] == -np.inf and out[2] == 0.5 and np.isnan(out[3])

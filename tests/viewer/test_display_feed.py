@@ -66,7 +66,10 @@ def test_a_bags_displays_land_in_their_frames_at_their_times(tmp_path: Path, sto
     assert grid.temporal["InstancePoses3D:translations"][at] == [[-1, -0.5, 0]]
     # markers: the cube kept its 1 s lifetime, the sphere was deleted
     cube, ball = recording["/markers/boxes/1"], recording["/markers/balls/7"]
-    assert cube.times[0] == MARKER_TIME and cube.temporal["InstancePoses3D:translations"][0] == [[1, 1, 0]]
+    drawn_at = cube.times.index(MARKER_TIME)
+    assert cube.temporal["InstancePoses3D:translations"][drawn_at] == [[1, 1, 0]]
+    # each marker entity sits in its frame from the first display message on, like the topics' entities below
+    assert cube.times[0] == T0 and cube.temporal["CoordinateFrame:frame"][0] == ["odom"]
     assert _clears(cube) == [MARKER_TIME + CUBE_LIFETIME_S * S]
     assert _clears(ball) == [SPHERE_DELETED]
     # odometry keeps RViz's history (Keep 100): three poses on three entities, each still drawn
@@ -79,7 +82,7 @@ def test_a_bags_displays_land_in_their_frames_at_their_times(tmp_path: Path, sto
     lines = [line for line in stderr.splitlines() if line.startswith("warning:")]
     assert sum("/scan: messages with an empty frame_id are drawn in the fixed frame [odom]" in x for x in lines) == 1
     assert sum("/scan: a sensor_msgs/msg/LaserScan message cannot be shown" in x for x in lines) == 1
-    skipped = sum("topics with no display, not shown: /chatter (std_msgs/msg/String)" in x for x in lines)
+    skipped = sum("1 topic with no display, not shown: /chatter (std_msgs/msg/String)" in x for x in lines)
     if storage == "mcap":  # Rerun's own MCAP decoders show what ours do not: a String becomes a text log
         assert skipped == 0 and "/chatter" in recording
     else:
@@ -112,15 +115,19 @@ def test_the_feed_pulls_messages_up_to_a_time_and_odometry_goes_round_its_keep()
     try:
         from displaybags import odometry
 
-        messages = iter([TopicMessage(t, "/odom", "nav_msgs/msg/Odometry", odometry(1, float(t))) for t in (1, 2, 3)])
-        feed = DisplayFeed(_Notices(), messages, clock="timestamp", fixed_frame="odom")  # type: ignore[arg-type]
+        messages = [TopicMessage(t, "/odom", "nav_msgs/msg/Odometry", odometry(1, float(t))) for t in (1, 2, 3, 4)]
+        feed = DisplayFeed(_Notices(), clock="timestamp", fixed_frame="odom")  # type: ignore[arg-type]
         feed.styles["/odom"] = feed_module.DisplayStyle(keep=2)
+        assert feed.next_time_ns is None and feed.until(None) == 0  # nothing read yet
+        feed.push(messages[:3])  # one stretch of the replay
         assert feed.next_time_ns == 1
         assert feed.until(2) == 2 and feed.next_time_ns == 3
         assert feed.until(None) == 1 and feed.next_time_ns is None
+        feed.push(messages[3:])  # the next stretch
+        assert feed.next_time_ns == 4 and feed.until(3) == 0 and feed.until(4) == 1
     finally:
         feed_module.log_decoded = original
-    assert sent == [("/odom/0", 1), ("/odom/1", 2), ("/odom/0", 3)]
+    assert sent == [("/odom/0", 1), ("/odom/1", 2), ("/odom/0", 3), ("/odom/1", 4)]
 
 
 STYLED_CONFIG = """Visualization Manager:

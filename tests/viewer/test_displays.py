@@ -113,11 +113,23 @@ def test_marker_add_delete_deleteall_and_lifetime(tmp_path: Path) -> None:
         for path, rows in recording.items()
         if "Clear:is_recursive" in rows.temporal
     }
-    assert clears["/markers/a/2"] == [2 * S]
-    assert clears["/markers/b/1"] == [3 * S]  # lifetime 2 s from t = 1
-    assert clears["/markers/a"] == [4 * S]  # DELETEALL with ns 'a'
-    assert clears["/markers"] == [5 * S]  # DELETEALL without ns
-    assert recording["/markers/_/9"].times == [5 * S]
+    # each marker shown is cleared once, when it goes: a DELETEALL clears only what is still shown
+    assert clears == {
+        "/markers/a/2": [2 * S],  # DELETE a/2
+        "/markers/b/1": [3 * S],  # lifetime 2 s from t = 1
+        "/markers/a/1": [4 * S],  # DELETEALL with ns 'a' (a/2 is gone already)
+        "/markers/_/9": [5 * S],  # DELETEALL without ns (the rest is gone already)
+    }
+    assert recording["/markers/_/9"].times == [5 * S, 5 * S, 5 * S]  # drawn, cleared, placed again
+    # a cleared marker stays in a frame (else Rerun's implicit tf#/markers/a/2, which no transform reaches,
+    # would be reported by the view): its frame is logged again with each clear
+    framed = {
+        path: [t for t, v in zip(rows.times, rows.temporal["CoordinateFrame:frame"], strict=True) if v == ["odom"]]
+        for path, rows in recording.items()
+        if "CoordinateFrame:frame" in rows.temporal
+    }
+    assert framed["/markers/a/2"] == [S, 2 * S] and framed["/markers/b/1"] == [S, 3 * S]
+    assert framed["/markers/a/1"] == [S, 4 * S] and framed["/markers/_/9"] == [5 * S, 5 * S]
     assert b1.temporal["Boxes3D:half_sizes"][0] == [[1, 1, 1]]
     assert book.live == {}
 

@@ -32,8 +32,10 @@ def test_static_and_moving_transforms_axes_and_arrows(tmp_path: Path) -> None:
     rec.save(out)
     recorded = RecordedTf(rec, clock="timestamp", skip={("base", "arm")})
     recorded.log(_records([T0, T0 + 5], ["base", "base"], ["laser", "laser"], [[1, 0, 0], [2, 0, 0]], static=True))
-    feed = TfFeed(
-        recorded,
+    feed = TfFeed(recorded)
+    assert feed.next_time_ns is None
+    feed.push(None)  # a window without /tf
+    feed.push(
         _records(
             [T0 + 30, T0 + 10, T0 + 20, T0 + 20],  # out of order: the feed sorts by time
             ["map", "map", "map", "base"],
@@ -41,9 +43,15 @@ def test_static_and_moving_transforms_axes_and_arrows(tmp_path: Path) -> None:
             [[3, 0, 0], [1, 0, 0], [2, 0, 0], [9, 9, 9]],
         ),
     )
+    assert feed.next_time_ns == T0 + 10
     feed.until(T0 + 20)
     assert recorded.rows == 2 + 2  # two static rows, then base at 10 and 20 (arm skipped)
+    assert feed.next_time_ns == T0 + 30 and feed.logged == 3  # base at 10, 20 and the (skipped) arm at 20
+    feed.push(_records([T0 + 40], ["map"], ["base"], [[4, 0, 0]]))  # the next window's
+    feed.until(T0 + 35)
+    assert feed.next_time_ns == T0 + 40
     feed.until(None)
+    assert feed.next_time_ns is None and feed.logged == 5
     rec.flush()
     rec.disconnect()
     recording = read_recording(out)
@@ -51,11 +59,11 @@ def test_static_and_moving_transforms_axes_and_arrows(tmp_path: Path) -> None:
     assert laser["Transform3D:parent_frame"][-1] == ["base"]
     assert np.allclose(laser["Transform3D:translation"][-1][0], [2, 0, 0])  # the last one wins, as in tf2
     base = tf_by_child(recording)["base"]
-    assert base.times == [T0 + 10, T0 + 20, T0 + 30]
-    assert [t[0][0] for t in base.temporal["Transform3D:translation"]] == [1, 2, 3]
+    assert base.times == [T0 + 10, T0 + 20, T0 + 30, T0 + 40]
+    assert [t[0][0] for t in base.temporal["Transform3D:translation"]] == [1, 2, 3, 4]
     assert "arm" not in tf_by_child(recording)
     assert {"/tf_axes/map", "/tf_axes/base", "/tf_axes/laser"} <= set(recording)
     arrow = recording["/tf_arrows/base"]
     assert arrow.static["CoordinateFrame:frame"][-1] == ["map"]
-    assert [o[0][0] for o in arrow.temporal["Arrows3D:origins"]] == [1, 2, 3]
-    assert [v[0][0] for v in arrow.temporal["Arrows3D:vectors"]] == [-1, -2, -3]
+    assert [o[0][0] for o in arrow.temporal["Arrows3D:origins"]] == [1, 2, 3, 4]
+    assert [v[0][0] for v in arrow.temporal["Arrows3D:vectors"]] == [-1, -2, -3, -4]

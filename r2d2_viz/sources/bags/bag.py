@@ -20,7 +20,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from r2d2_viz.errors import BagError
+from r2d2_viz.errors import BagError, listed
 from r2d2_viz.msgs.typestore import deserialize
 from r2d2_viz.sources.bags.mcap_scan import McapScan
 from r2d2_viz.sources.bags.storage import Block, Storage, TopicInfo
@@ -55,6 +55,7 @@ class Bag:
     def __init__(self, path: Path, *, warn: Warn = to_stderr) -> None:
         self.path, self.warn = path, warn
         self._files: list[Storage] = []
+        self._damage_said = False
         try:
             self._open()
         except BagError:
@@ -84,7 +85,8 @@ class Bag:
                 raise BagError(f"{file}: cannot read this bag: {_problem(exc)}") from None
             self._files.append(storage)
             if storage.note:
-                self.warn(f"{file}: {storage.note}")
+                listed = sum(expected.values()) if len(files) == 1 else 0
+                self.warn(f"{file}: {storage.note}" + (f" (the metadata lists {listed})" if listed else ""))
         topics: dict[str, TopicInfo] = {}
         for f in self._files:
             for topic, info in f.topics.items():
@@ -132,6 +134,7 @@ class Bag:
         if not wanted:
             return
         got = 0
+        said: list[str] = []  # damage met in this pass: said once, in one warning, at its end
         for f in self._files:
             try:
                 for block in f.blocks(wanted, start_ns=start_ns, stop_ns=stop_ns):
@@ -139,19 +142,23 @@ class Bag:
                     yield block
             except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
                 if got == 0 and len(self._files) == 1:
-                    raise BagError(f"{f.path}: cannot read {', '.join(wanted)}: {_problem(exc)}") from None
-                self.warn(f"{f.path}: the rest of the file cannot be read ({_problem(exc)}); recovered {got} messages")
-            self._say_problems(f)
-        if start_ns is None and stop_ns is None and not any(f.note for f in self._files):
-            expected = sum(self.topics[t].count for t in wanted)
-            if got < expected:
-                self.warn(f"{self.path}: {', '.join(sorted(wanted))}: recovered {got} of {expected} messages")
+                    raise BagError(f"{f.path}: cannot read {listed(wanted)}: {_problem(exc)}") from None
+                said.append(f"{f.path}: the rest of the file cannot be read ({_problem(exc)})")
+            said += self._problems(f)
+        expected = sum(self.topics[t].count for t in wanted)
+        whole = start_ns is None and stop_ns is None and not any(f.note for f in self._files)
+        if whole and got < expected and not self._damage_said:
+            said.append(f"{self.path}: {listed(sorted(wanted))}: recovered {got} of {expected} messages")
+        if said:
+            self._damage_said = True
+            self.warn("; ".join(said))
 
-    def _say_problems(self, f: Storage) -> None:
+    def _problems(self, f: Storage) -> list[str]:
+        """The damaged chunks a storage met (each chunk is counted once, on the pass that met it)."""
         problems: dict[str, int] = getattr(f, "problems", {})
-        for kind, n in sorted(problems.items()):
-            self.warn(f"{f.path}: {kind}: {n} chunk{'s' if n > 1 else ''} skipped")
+        out = [f"{f.path}: {kind}: {n} chunk{'s' if n > 1 else ''} skipped" for kind, n in sorted(problems.items())]
         problems.clear()
+        return out
 
     def raw(self, topic: str) -> Iterator[tuple[int, memoryview]]:
         """``(receive time ns, CDR bytes)`` of every message on ``topic``, in time order."""
@@ -226,7 +233,7 @@ def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:
     except Exception as exc:  # YAML errors, missing keys, wrong types
         raise BagError(f"{meta}: not rosbag2 metadata: {_problem(exc)}") from None
     if missing := [f.name for f in files if not f.is_file()]:
-        raise BagError(f"{path}: storage files named in metadata.yaml are missing: {', '.join(missing)}")
+        raise BagError(f"{path}: storage files named in metadata.yaml are missing: {listed(missing)}")
     return files, counts
 
 

@@ -250,7 +250,14 @@ class LiveGraph:
             time.sleep(0.001)
 
 
-def list_topics(timeout: float = 2.0, env: Mapping[str, str] | None = None) -> list[tuple[str, str, int]]:
-    """``(topic, type, publisher count)`` of the ROS 2 graph, like ``ros2 topic list -t`` (``--ros --list``)."""
+LIST_SECONDS = 2.0
+"""How long ``--ros --list`` lets discovery run."""
+
+
+def list_topics(
+    timeout: float = LIST_SECONDS, env: Mapping[str, str] | None = None
+) -> tuple[list[tuple[str, str, int]], RosDiscovery]:
+    """``(topic, type, publisher count)`` of the ROS 2 graph, like ``ros2 topic list -t`` (``--ros --list``), and
+    where discovery looked."""
     with LiveGraph(env) as graph:
-        return graph.topics(timeout)
+        return graph.topics(timeout), graph.discovery

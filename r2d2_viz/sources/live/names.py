@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from enum import Enum
 from xml.sax.saxutils import quoteattr
 
-from r2d2_viz.errors import R2d2VizError
+from r2d2_viz.errors import R2d2VizError, listed
 
 
 class LiveError(R2d2VizError):
@@ -60,6 +60,14 @@ def ros_type(dds_name: str) -> str | None:
 FAST_DDS_VENDOR = "1.15"
 """eProsima's RTPS vendor id (0x010f): ``IgnoreTypeInformation`` takes a list of the vendors whose type information
 Cyclone should ignore (falling back to name-based type matching, as ROS 2 does anyway)."""
+
+
+EMPTY_GRAPH_HINT = (
+    "check that the publishers run with the same ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE "
+    "(ros2 topic list beside them shows their topics); on another machine, multicast must pass between the two "
+    "or ROS_STATIC_PEERS name it; r2d2-viz --ros --list shows what this machine sees"
+)
+"""How to check, when a live graph showed nothing."""
 
 
 class DiscoveryRange(Enum):
@@ -105,6 +113,17 @@ class RosDiscovery:
             warnings.append(f"ROS_STATIC_PEERS ignored: discovery range is {discovery.value}")
             peers = ()
         return cls(domain_id, discovery, peers, tuple(warnings))
+
+    def searched(self) -> str:
+        """Where discovery looks, for a line saying that nothing was found there."""
+        where = {
+            DiscoveryRange.OFF: "this process only",
+            DiscoveryRange.LOCALHOST: "this machine only",
+            DiscoveryRange.SUBNET: "this machine's networks, by multicast",
+            DiscoveryRange.SYSTEM_DEFAULT: "as the DDS configuration says",
+        }[self.range]
+        peers = f", and the static peers {listed(self.static_peers)}" if self.static_peers else ""
+        return f"ROS_DOMAIN_ID {self.domain_id}, discovery range {self.range.value} ({where}{peers})"
 
     def cyclone_xml(self, pid: int | None = None) -> str:
         """The Cyclone DDS configuration fragment for this environment (``CYCLONEDDS_URI`` is added after it)."""

@@ -20,6 +20,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from r2d2_viz.errors import listed
 from r2d2_viz.msgs.registry import DECODERS
 from r2d2_viz.msgs.typestore import MsgError, deserialize
 from r2d2_viz.sources.bag_displays import OURS, TopicMessage
@@ -248,8 +249,8 @@ class LiveSource:
         said = self._said_joint_problems
         if decoder.unknown and "unknown" not in said:
             said.add("unknown")
-            names = ", ".join(sorted(decoder.unknown)[:10]) + (", ..." if len(decoder.unknown) > 10 else "")
-            self._note("/joint_states unknown", f"/joint_states: ignored joints the robot does not have: {names}")
+            names = f"{len(decoder.unknown)}: {listed(sorted(decoder.unknown))}"
+            self._note("/joint_states unknown", f"/joint_states: ignored joints the robot does not have ({names})")
         for kind, what in JOINT_PROBLEMS.items():
             if getattr(decoder, kind) and kind not in said:
                 said.add(kind)

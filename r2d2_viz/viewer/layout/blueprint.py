@@ -21,7 +21,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
-from r2d2_viz.rviz.spec import Camera, RobotModel, ViewSpec
+from r2d2_viz.rviz.spec import Camera, RobotModel, TopicDisplay, ViewSpec
 from r2d2_viz.viewer.entities import (
     APP_ID,
     JOINTS_CONTINUOUS,
@@ -56,6 +56,9 @@ class Layout:
     """False hides the TF arrows (robots with many frames)."""
     fixed_frame: str | None = None
     """The run's fixed frame, instead of the config's (a bag's TF root)."""
+    flat_images: tuple[str, ...] = ()
+    """Image topics without a camera (no CameraInfo, so no pinhole): kept out of the 3D view, which cannot place
+    them (RViz's 3D view draws none either; each has its 2D view)."""
     robots: tuple[str, ...] = ()
     """Several robots: their namespaces (shapes under ``/robots/<namespace>``, plots under ``/joints/<namespace>``)."""
 
@@ -75,15 +78,17 @@ def generate_blueprint(
     spec = spec or tutorial_spec()
     layout = layout or Layout()
     fixed = layout.fixed_frame or spec.fixed_frame
+    overrides: dict[str, rrb.EntityBehavior | rrb.VisibleTimeRanges] = {**_hidden(spec, layout, hidden_links)}
+    overrides.update(_decay(spec))
     scene = rrb.Spatial3DView(
         name=f"3D: {fixed} (Grid · TF · RobotModel)",
         origin="/",
-        contents=["+ /**", "- /joints/**", f"- {WARNINGS}"],
+        contents=["+ /**", "- /joints/**", f"- {WARNINGS}", *(f"- {topic}/**" for topic in layout.flat_images)],
         background=rrb.Background(color=spec.background),
         line_grid=_grid(spec),
         spatial_information=rrb.SpatialInformation(target_frame=fixed, show_axes=False, show_bounding_box=False),
         eye_controls=_eye(layout.camera or spec.camera),
-        overrides=_hidden(spec, layout, hidden_links),  # type: ignore[arg-type]  # EntityBehavior is accepted
+        overrides=overrides,  # type: ignore[arg-type]  # str keys are entity paths
     )
     parts: dict[str, rrb.View | rrb.Container] = {"scene": scene}
     side: list[rrb.View] = []
@@ -208,6 +213,47 @@ def _hidden(spec: ViewSpec, layout: Layout, hidden_links: Sequence[str]) -> dict
     return {entity: rrb.EntityBehavior(visible=False) for entity in dict.fromkeys(hidden)}
 
 
+ODOMETRY_KEEP = 100
+"""RViz's Odometry Keep by default (:data:`r2d2_viz.viewer.display_feed.KEEP`)."""
+TWO_ITEMS = ("PoseWithCovariance", "Wrench", "Twist")
+"""Displays whose message draws two things, logged on ``<topic>/0`` and ``<topic>/1``."""
+
+
+def decay_entities(display: TopicDisplay) -> tuple[str, ...]:
+    """The entities a topic display's messages are drawn on (:mod:`r2d2_viz.viewer.display_feed`): the topic's
+    own, ``<topic>/<i>`` for a message drawn as several things, ``<topic>/<k>`` for Odometry's Keep slots.
+    Markers go on ``<topic>/<ns>/<id>``, known only from the data: none here."""
+    topic, style = display.topic, display.style
+    if display.kind in ("Marker", "MarkerArray", "Image", "Camera"):
+        return ()
+    if display.kind == "Odometry":
+        keep = style.keep if style.keep and style.keep > 0 else ODOMETRY_KEEP
+        slots = [f"{topic}/{k}" for k in range(keep)] if keep > 1 else [topic]
+        return tuple(f"{s}/{i}" for s in slots for i in (0, 1)) if style.covariance else tuple(slots)
+    if display.kind in TWO_ITEMS:
+        return (f"{topic}/0", f"{topic}/1")
+    return (topic,)
+
+
+def _decay(spec: ViewSpec) -> dict[str, rrb.VisibleTimeRanges]:
+    """RViz's Decay Time (seconds; 0: only the latest message) as each drawn entity's visible time range: the
+    messages of the last N seconds before the time cursor, both ends included (``PointCloudCommon``: a cloud is
+    dropped once ``now - received > decay``). An override on a topic's entity does not reach the entities below
+    it, so each entity gets its own."""
+    out: dict[str, rrb.VisibleTimeRanges] = {}
+    for display in spec.topics:
+        seconds = display.style.decay_time
+        if not display.enabled or not display.topic.startswith("/") or seconds is None or seconds <= 0:
+            continue
+        ranges = rrb.VisibleTimeRanges(
+            timeline=TIMELINE,
+            start=rrb.TimeRangeBoundary.cursor_relative(seconds=-seconds),
+            end=rrb.TimeRangeBoundary.cursor_relative(),
+        )
+        out.update(dict.fromkeys(decay_entities(display), ranges))
+    return out
+
+
 def save_blueprint(path: Path = DEFAULT_BLUEPRINT_PATH, spec: ViewSpec | None = None) -> Path:
     """Write :func:`generate_blueprint` as an ``.rbl`` file for ``rerun FILE.rrd PATH.rbl``."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -216,24 +262,37 @@ def save_blueprint(path: Path = DEFAULT_BLUEPRINT_PATH, spec: ViewSpec | None = 
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m r2d2_viz.blueprint [PATH]`` or ``python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl``."""
-    args = list(sys.argv[1:] if argv is None else argv)
+    """``python -m r2d2_viz.blueprint [OUT.rbl]`` or ``python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl``."""
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m r2d2_viz.blueprint",
+        description="Write the viewer layout as a Rerun blueprint (.rbl), for: rerun FILE.rrd OUT.rbl",
+    )
+    parser.add_argument(
+        "out", nargs="?", type=Path, default=None, metavar="OUT.rbl", help=f"default: {DEFAULT_BLUEPRINT_PATH}"
+    )
+    parser.add_argument(
+        "--rviz", type=Path, default=None, metavar="CONFIG.rviz", help="convert this RViz config (then OUT is needed)"
+    )
+    args = parser.parse_args(argv)
+    if args.rviz is not None and args.out is None:
+        parser.error("--rviz CONFIG.rviz needs OUT.rbl")
+    out: Path = args.out if args.out is not None else DEFAULT_BLUEPRINT_PATH
+    if out.suffix != ".rbl":
+        parser.error(f"{out}: a blueprint is written as NAME.rbl")
     spec = None
-    if args[:1] == ["--rviz"]:
-        if len(args) != 3:
-            print("usage: python -m r2d2_viz.blueprint --rviz CONFIG.rviz OUT.rbl", file=sys.stderr)
-            return 2
+    if args.rviz is not None:
         from r2d2_viz.errors import R2d2VizError
 
         try:
-            spec = load_rviz(args[1])
+            spec = load_rviz(args.rviz)
         except R2d2VizError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
         for note in spec.notes:
             print(f"note: {note}", file=sys.stderr)
-        args = args[2:]
-    print(save_blueprint(Path(args[0]) if args else DEFAULT_BLUEPRINT_PATH, spec))
+    print(save_blueprint(out, spec))
     return 0
 
 

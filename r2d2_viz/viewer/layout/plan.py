@@ -22,7 +22,7 @@ from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
-from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle
+from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle, camera_images
 from r2d2_viz.viewer.layout.blueprint import Layout, robot_display
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
 
@@ -76,6 +76,8 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
     missing = missing_fixed_frame(spec, frames) if rviz is not None and fixed_frame is None else None
     if missing:
         notes.append(missing)
+    elif plan.preview_messages:  # (a fixed frame that does not exist is said already)
+        notes.extend(unconnected_frames(plan, frame))
     if rviz is not None:
         notes += _prefix_notes(spec, plan)
     layout = Layout(
@@ -85,6 +87,7 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
         show_arrows=arrows,
         fixed_frame=frame,
         robots=tuple(r.namespace for r in plan.robots) if len(plan.robots) > 1 else (),
+        flat_images=_flat_images(plan.displays),
     )
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
@@ -103,6 +106,50 @@ def _prefix_notes(spec: ViewSpec, plan: RunPlan) -> list[str]:
                 f"of robot {robot.name} carry the prefix {shown!r}; shown with that"
             )
     return notes
+
+
+def unconnected_frames(plan: RunPlan, fixed: str) -> list[str]:
+    """One line per display topic whose messages lie in a frame no recorded transform (nor the robot) joins to
+    the fixed frame, in RViz's words: its display says "No transform from [person] to [laser]", and so does the
+    viewer's 3D view (it cannot place them either)."""
+    neighbours: dict[str, set[str]] = {}
+    edges = [e for r in (plan.static_tf, plan.moving_tf) if r is not None for e in r.edges()]
+    for tree in [r.tree for r in plan.robots] or ([plan.tree] if plan.tree is not None else []):
+        edges += [(tree.robot.root, link) for link in tree.links]  # every robot's links, when there are several
+    for parent, child in edges:
+        neighbours.setdefault(parent, set()).add(child)
+        neighbours.setdefault(child, set()).add(parent)
+    reached, todo = {fixed}, [fixed]
+    while todo:
+        for other in neighbours.get(todo.pop(), ()):
+            if other not in reached:
+                reached.add(other)
+                todo.append(other)
+    lost: dict[str, set[str]] = {}
+    checked: dict[str, int] = {}
+    for message in plan.preview_messages:
+        seen = lost.setdefault(message.topic, set())
+        checked[message.topic] = checked.get(message.topic, 0) + 1
+        if message.msgtype in IMAGES or checked[message.topic] > 2:
+            continue  # images: drawn in their own 2D views
+        try:
+            decoded = decode(message.msgtype, message.data)
+        except MsgError:
+            continue
+        parts = [decoded] if isinstance(decoded, Decoded) else [op.decoded for op in decoded if op.decoded]
+        seen.update(d.frame_id for d in parts if d.frame_id not in reached)
+    return [
+        f"{topic}: No transform from [{'], ['.join(sorted(frames - {''}))}] to "
+        f"[{fixed}]: nothing joins them in the bag's transforms; not shown (RViz says the same)"
+        for topic, frames in sorted(lost.items())
+        if frames - {""}
+    ]
+
+
+def _flat_images(displays: dict[str, str]) -> tuple[str, ...]:
+    """Image topics no CameraInfo gives a pinhole (:func:`camera_images` pairs them like RViz's Camera display)."""
+    with_camera = {t for images in camera_images(displays).values() for t in images}
+    return tuple(t for t, m in sorted(displays.items()) if m in IMAGES and t not in with_camera)
 
 
 MAP_SCHEMES = ("map", "costmap", "raw")
@@ -127,7 +174,9 @@ def _styles(spec: ViewSpec) -> dict[str, DisplayStyle]:
         if s.covariance is not None:
             changes["odometry_covariance"] = s.covariance
         keep = s.keep if s.keep and s.keep > 0 else None
-        styles[display.topic] = DisplayStyle(dataclasses.replace(DecodeOptions(), **changes), keep=keep)
+        decay = s.decay_time is not None and s.decay_time > 0 and display.enabled
+        options = dataclasses.replace(DecodeOptions(), **changes)
+        styles[display.topic] = DisplayStyle(options, keep=keep, decay=decay)
     return styles
 
 

@@ -68,3 +68,14 @@ def test_bad_domain_and_warnings() -> None:
         with pytest.raises(LiveError, match="ROS_DOMAIN_ID"):
             RosDiscovery.from_env({"ROS_DOMAIN_ID": bad})
     assert RosDiscovery.from_env({"ROS_AUTOMATIC_DISCOVERY_RANGE": "nonsense"}).warnings
+
+
+def test_where_discovery_looked_is_said_as_the_environment_set_it() -> None:
+    env = {"ROS_DOMAIN_ID": "7", "ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET", "ROS_STATIC_PEERS": "10.0.0.2;robot.lan"}
+    assert RosDiscovery.from_env(env).searched() == (
+        "ROS_DOMAIN_ID 7, discovery range SUBNET (this machine's networks, by multicast, and the static peers "
+        "10.0.0.2, robot.lan)"
+    )
+    assert RosDiscovery.from_env({"ROS_LOCALHOST_ONLY": "1"}).searched() == (
+        "ROS_DOMAIN_ID 0, discovery range LOCALHOST (this machine only)"
+    )

@@ -89,6 +89,108 @@ def test_the_layout_follows_the_robot(tmp_path) -> None:
     assert f"{_view(small, 'TimeSeries', 'Joint states')}/PlotLegend" not in small
 
 
+# --------------------------------------------------------------------------------------------------
+# RViz's Decay Time → each drawn entity's visible time range
+
+DECAY_CONFIG = """
+Visualization Manager:
+  Global Options: {Fixed Frame: odom}
+  Displays:
+    - {Class: rviz_default_plugins/LaserScan, Name: five, Enabled: true, Topic: {Value: /scan}, Decay Time: 5}
+    - {Class: rviz_default_plugins/PointCloud2, Name: half, Enabled: true, Topic: {Value: /points}, Decay Time: 2.5}
+    - {Class: rviz_default_plugins/LaserScan, Name: latest, Enabled: true, Topic: {Value: /scan0}, Decay Time: 0}
+    - {Class: rviz_default_plugins/LaserScan, Name: unset, Enabled: true, Topic: {Value: /scan_unset}}
+    - {Class: rviz_default_plugins/LaserScan, Name: off, Enabled: false, Topic: {Value: /scan_off}, Decay Time: 5}
+    - {Class: rviz_default_plugins/Odometry, Name: odom, Enabled: true, Topic: {Value: /odom}, Keep: 3,
+       Decay Time: 1, Covariance: {Value: false}}
+    - {Class: rviz_default_plugins/Odometry, Name: cov, Enabled: true, Topic: {Value: /odom_cov}, Keep: 2,
+       Decay Time: 1, Covariance: {Value: true}}
+    - {Class: rviz_default_plugins/PoseWithCovariance, Name: amcl, Enabled: true, Topic: {Value: /amcl},
+       Decay Time: 3}
+    - {Class: rviz_default_plugins/Range, Name: sonar, Enabled: true, Topic: {Value: /sonar}, Decay Time: 4}
+    - {Class: rviz_default_plugins/MarkerArray, Name: markers, Enabled: true, Topic: {Value: /markers},
+       Decay Time: 5}
+"""
+
+
+def _decay_ranges(components: dict) -> dict[str, object]:
+    """Override entity → its VisibleTimeRanges, read back from the saved blueprint."""
+    (view,) = [p for p, c in components.items() if c.get("ViewBlueprint:class_identifier") == ["3D"]]
+    prefix = f"{view}/ViewContents/overrides"
+    return {
+        p[len(prefix) : -len("/visualizers")]: c["VisibleTimeRanges:ranges"]
+        for p, c in components.items()
+        if p.startswith(prefix) and "VisibleTimeRanges:ranges" in c
+    }
+
+
+def test_decay_time_becomes_each_drawn_entitys_visible_time_range(tmp_path) -> None:
+    from r2d2_viz.rviz.config import parse_rviz
+
+    path = tmp_path / "decay.rbl"
+    generate_blueprint(parse_rviz(DECAY_CONFIG, source="decay.rviz")).save("r2d2_viz", path)
+    got = _decay_ranges(blueprint_components(path))
+
+    def last(seconds: float) -> list[dict]:  # the last N seconds up to the cursor, on the bag's timeline
+        return [{"timeline": "time", "range": {"start": -round(seconds * 1e9), "end": 0}}]
+
+    # by hand from DECAY_CONFIG: 0, unset and disabled displays keep the latest message (no range); Odometry's
+    # Keep 3 slots /odom/0..2, with Covariance each slot's arrow and ellipsoid (/odom_cov/k/0, /1); a
+    # PoseWithCovariance draws an arrow and an ellipsoid (/amcl/0, /amcl/1); markers: none (known from the data)
+    expected = {
+        "/scan": last(5),
+        "/points": last(2.5),
+        **{f"/odom/{k}": last(1) for k in range(3)},
+        **{f"/odom_cov/{k}/{i}": last(1) for k in range(2) for i in range(2)},
+        "/amcl/0": last(3),
+        "/amcl/1": last(3),
+        "/sonar": last(4),
+    }
+    assert got == expected
+
+
+def test_decay_reaches_the_entities_a_recording_draws_on(tmp_path) -> None:
+    """The overrides name the very entities the app logs the topics' drawings on (an override on a parent does
+    not reach its children: checked in the viewer, tests/e2e/test_decay_e2e.py): read from a recording of a
+    rosbags-written bag, with the config's decay on its scan and its odometry."""
+    from conftest import cli
+    from displaybags import write_display_bag
+    from rrd import read_recording
+
+    bag = write_display_bag(tmp_path / "bag")
+    config = tmp_path / "decay.rviz"
+    config.write_text(
+        "Visualization Manager:\n  Global Options: {Fixed Frame: odom}\n  Displays:\n"
+        "    - {Class: rviz_default_plugins/LaserScan, Enabled: true, Topic: {Value: /scan}, Decay Time: 5}\n"
+        "    - {Class: rviz_default_plugins/Odometry, Enabled: true, Topic: {Value: /odom}, Keep: 4,"
+        " Decay Time: 2}\n"
+    )
+    out = tmp_path / "run.rrd"
+    run = cli("--bag", str(bag), "--rviz", str(config), "--save", str(out))
+    assert run.returncode == 0, run.stderr
+    ranges = _decay_ranges(blueprint_components(out))
+    drawn = {
+        entity
+        for entity, rows in read_recording(out).items()
+        if entity.split("/")[1] in ("scan", "odom")
+        and any(name.startswith(("Points3D:", "Arrows3D:")) for name in rows.temporal)
+    }
+    # the bag's 3 odometry messages fill slots 0..2 of the 4; the scans are all on /scan
+    assert drawn == {"/scan", "/odom/0", "/odom/1", "/odom/2"}
+    assert drawn <= set(ranges) and set(ranges) == {"/scan", *(f"/odom/{k}" for k in range(4))}
+
+
+def test_images_without_a_pinhole_are_left_out_of_the_3d_view(tmp_path) -> None:
+    from r2d2_viz.viewer.layout.blueprint import Layout
+
+    path = tmp_path / "flat.rbl"
+    generate_blueprint(layout=Layout(flat_images=("/bare/image",))).save("r2d2_viz", path)
+    components = blueprint_components(path)
+    view = _view(components, "3D")
+    # the 3D view cannot place an image without a pinhole ("2D visualizers require a pinhole ancestor"): out
+    assert components[f"{view}/ViewContents"]["ViewContents:query"][-1] == "- /bare/image/**"
+
+
 def test_each_robot_takes_the_robot_model_display_of_its_description_topic() -> None:
     from r2d2_viz.rviz.spec import RobotModel, ViewSpec
     from r2d2_viz.viewer.layout.blueprint import robot_display
