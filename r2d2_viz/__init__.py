@@ -2,7 +2,8 @@
 
 Stages, each importing only from the ones before it: ``robot`` (descriptions → model) → ``meshes`` →
 ``kinematics`` (pure numpy) → ``msgs`` (ROS messages as numpy) → ``sources`` (motions, bags) → ``rviz`` (configs)
-→ ``viewer`` (the only stage importing rerun) → ``ros_out`` (bags written) → ``runner``, ``api``, ``cli``.
+→ ``viewer`` (the only stage importing rerun) → ``ros_out`` (bags written) → ``runner``, ``api``, ``cli``, and
+``fleet`` (many bags in parallel, one dataset).
 The Python API (:class:`RobotLogger` and friends, listed in ``__all__``) is imported lazily, so
 ``import r2d2_viz`` stays light.
 """
@@ -33,6 +34,7 @@ _EXPORTS = {
     "UsageError": "errors",
     "APP_ID": "viewer.entities",
     "TIMELINE": "viewer.entities",
+    "fleet_summary": "fleet.dataset",
 }
 __all__ = [
     "APP_ID",
@@ -48,6 +50,7 @@ __all__ = [
     "UrdfError",
     "UsageError",
     "default_urdf_path",
+    "fleet_summary",
     "generate_blueprint",
     "load_robot",
     "load_urdf",
@@ -58,6 +61,7 @@ __all__ = [
 if TYPE_CHECKING:
     from r2d2_viz.api import RobotLogger
     from r2d2_viz.errors import R2d2VizError, UrdfError, UsageError
+    from r2d2_viz.fleet.dataset import fleet_summary
     from r2d2_viz.robot.model import Robot, default_urdf_path, load_urdf, parse_urdf
     from r2d2_viz.robot.xacro_load import load_robot
     from r2d2_viz.sources.base import ArraySource, FrameTrack, SampleChunk, Source

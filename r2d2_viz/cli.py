@@ -68,7 +68,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="samples per second (default 30)")
     bags = parser.add_argument_group("replaying a ROS 2 bag (a rosbag2 directory, a .mcap or a .db3 file)")
-    bags.add_argument("--bag", type=Path, default=None, metavar="PATH", help="replay this bag instead of a motion")
+    bags.add_argument(
+        "--bag",
+        type=Path,
+        nargs="+",
+        default=None,
+        metavar="PATH",
+        help="replay this bag instead of a motion; several with --save-dir",
+    )
     bags.add_argument(
         "--speed", type=_number, default=1.0, metavar="FACTOR", help="replay speed, like ros2 bag play --rate"
     )
@@ -105,6 +112,31 @@ def build_parser() -> argparse.ArgumentParser:
         help="several robots (every namespace with a robot_description): the frames they share, comma-separated, "
         "never prefixed with a robot's namespace (default: map,world,earth)",
     )
+    fleet = parser.add_argument_group("fleets: many bags, one Rerun dataset")
+    fleet.add_argument(
+        "--save-dir", type=Path, default=None, metavar="DIR", help="convert every --bag to DIR/<bag name>.rrd"
+    )
+    fleet.add_argument("--jobs", type=int, default=None, metavar="N", help="bags converted at once (default: cores)")
+    fleet.add_argument("--force", action="store_true", help="convert again the bags whose output is up to date")
+    fleet.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="convert as Ray tasks: a running cluster (auto, HOST:PORT) or, without ADDRESS, a local Ray",
+    )
+    fleet.add_argument(
+        "--dataset", type=Path, default=None, metavar="DIR", help="serve DIR's recordings as one dataset"
+    )
+    fleet.add_argument(
+        "--summary",
+        nargs="?",
+        const="-",
+        default=None,
+        metavar="OUT",
+        help="with --dataset: print one row per recording, or write it to OUT (.csv, .parquet)",
+    )
     ros = parser.add_argument_group("joining a running ROS 2 graph (Cyclone DDS; ROS_DOMAIN_ID and friends apply)")
     ros.add_argument(
         "--ros",
@@ -138,7 +170,9 @@ def build_parser() -> argparse.ArgumentParser:
     sinks.add_argument("--headless", action="store_true", help="compute everything, show nothing (checks a URDF)")
     sinks.add_argument("--realtime", action="store_true", help="pace --save to the wall clock like a live run")
     sinks.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address --serve listens on")
-    sinks.add_argument("--port", type=int, default=9876, help="gRPC port for --spawn / --serve (default 9876)")
+    sinks.add_argument(
+        "--port", type=int, default=None, help="gRPC port for --spawn / --serve (default 9876; --dataset: 51234)"
+    )
     sinks.add_argument("--web-port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
     return parser
 
@@ -193,6 +227,18 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from r2d2_viz.runner import RunConfig, print_summary, run
     from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
+    if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
+        args.xacro_args = [*(str(b) for b in args.bag if ":=" in str(b)), *args.xacro_args]
+        args.bag = [b for b in args.bag if ":=" not in str(b)] or None
+    fleet = (args.save_dir, args.dataset, args.jobs, args.ray, args.summary)
+    if args.force or any(value is not None for value in fleet):
+        from r2d2_viz.fleet.commands import fleet_main
+
+        return fleet_main(args)
+    if args.bag is not None and len(args.bag) > 1:
+        raise UsageError(f"{len(args.bag)} bags: give --save-dir DIR to convert them (one .rrd each)")
+    args.bag = args.bag[0] if args.bag else None
+    args.port = 9876 if args.port is None else args.port
     if args.connect is not None and ":=" in args.connect:  # "--connect ur_type:=ur5e": a xacro argument, not a URL
         args.xacro_args = [args.connect, *args.xacro_args]
         args.connect = CONNECT_DEFAULT

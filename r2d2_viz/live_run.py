@@ -42,10 +42,9 @@ from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
-from r2d2_viz.viewer.live_robots import LiveRobots, robot_namespaces
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
-from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.tf_recorded import RecordedTf
 
 POLL_SECONDS = 0.02
@@ -112,7 +111,7 @@ def run_on(
     model = _Model(config)
     batches = _settle(source, model, deadline)
     plan, view = _plan(config, model.robot, batches)
-    output = _Output(config.sink, endless=deadline.end is None or config.sink.live)
+    output = _Output(config.sink)
     lateness = LatenessLog.from_env()
     try:
         recording = output.open(view, on_ready)
@@ -204,25 +203,22 @@ def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> 
 
 
 class _Output:
-    """Where a live run is written: the sinks, ``--save out.rrd`` (beside the target, renamed when done; without a
-    footer when ``endless``: its manifest would grow in memory) or ``--save out.mcap`` (what was received)."""
+    """Where a live run is written: the sinks, ``--save out.rrd`` (beside the target, renamed when done, with its
+    footer) or ``--save out.mcap`` (what was received)."""
 
-    def __init__(self, sink: SinkConfig, *, endless: bool) -> None:
+    def __init__(self, sink: SinkConfig) -> None:
         save = sink.save
         self.bag_path = save if save is not None and save.suffix == ".mcap" else None
         self.rrd = save if self.bag_path is None else None
         self.sink = dataclasses.replace(sink, save=None, headless=not sink.live) if self.bag_path else sink
         self.tmp = self.rrd.with_name(f".{self.rrd.name}.{os.getpid()}.partial") if self.rrd is not None else None
-        self.endless = endless
         self.recording: Recording | None = None
         self.bag: LiveBagRecorder | None = None
 
     def open(self, view: ViewPlan, on_ready: Callable[[str], None] | None) -> Recording:
         self.bag = LiveBagRecorder(self.bag_path) if self.bag_path is not None else None
         blueprint = generate_blueprint(view.spec, layout=view.layout)
-        self.recording = open_recording(
-            self.sink, save_to=self.tmp, live=self.endless, on_ready=on_ready, blueprint=blueprint
-        )
+        self.recording = open_recording(self.sink, save_to=self.tmp, on_ready=on_ready, blueprint=blueprint)
         return self.recording
 
     def close(self) -> None:
@@ -283,7 +279,7 @@ class _Scene:
             load_mesh=uri_loader(model.packages, Path(".")),
         )
         self.robots = LiveRobots(self, batches, model.packages, lateness.sent)
-        """The namespaced robots (several robots: :mod:`r2d2_viz.viewer.live_robots`)."""
+        """The namespaced robots (several robots: :class:`r2d2_viz.viewer.stream.LiveRobots`)."""
         if model.robot is not None:
             self._load(model.robot)
         else:

@@ -28,7 +28,7 @@ from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.base import Clock, Source
 from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
-from r2d2_viz.sources.playback import Window, read_ahead
+from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, read_ahead
 from r2d2_viz.sources.robots import SHARED_FRAMES, robots_read
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
@@ -192,7 +192,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
-        recording = open_recording(config.sink, save_to=tmp, live=config.live, on_ready=on_ready, blueprint=blueprint)
+        recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         try:
             rec = recording.rec
             streamers = _robot_streams(recording, plan, view, clock) if tree is not None else []
@@ -288,7 +288,11 @@ def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> 
         size = _live_block(config)
     else:
         size = batch_chunk_samples(len(plan.tree.moving) if plan.tree is not None else 0)
-    windows = plan.windows(size, predecode=displays.decode if displays is not None else None)
+    windows = plan.windows(
+        size,
+        predecode=displays.decode if displays is not None else None,
+        max_bytes=LIVE_WINDOW_BYTES if config.live else WINDOW_BYTES,
+    )
     return read_ahead(windows) if plan.replay is not None else windows
 
 

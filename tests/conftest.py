@@ -1,12 +1,22 @@
-"""Shared fixtures: the installed CLI, the tutorial model, one recording made once per session."""
+"""Shared fixtures: the installed CLI, the tutorial model, one recording made once per run.
+
+The suite runs on pytest-xdist workers (``-n auto --dist worksteal`` in pyproject), each test on whichever
+worker is free: session fixtures are made once per worker, and anything expensive that tests of several
+workers read is made once per run with :func:`made_once`. Nothing may assume it runs alone: ports are free
+ports, files go to ``tmp_path``, processes are found by their own pid or port.
+"""
 
 from __future__ import annotations
 
+import fcntl
+import json
 import os
+import shutil
 import socket
 import subprocess
 import sys
 import sysconfig
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -45,13 +55,39 @@ def tutorial_urdf() -> Path:
     return default_urdf_path()
 
 
+def made_once(tmp_path_factory: pytest.TempPathFactory, name: str, make: Callable[[Path], None]) -> Path:
+    """The folder ``name``, filled by ``make(folder)`` once per test run and shared by every xdist worker.
+
+    The first caller makes it under a file lock while the others wait; a ``make`` that raised left no mark,
+    so the next caller tries again (and fails the same way). Tests only read what is inside.
+    """
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # …/pytest-N/popen-gwK: the parent is the run's, shared by its workers
+    folder = root / "made-once" / name
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    with open(folder.parent / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (folder.parent / f"{name}.done").exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
+            make(folder)
+            (folder.parent / f"{name}.done").touch()
+    return folder
+
+
 @pytest.fixture(scope="session")
 def lap_recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, subprocess.CompletedProcess[str]]:
     """``r2d2-viz --save out.rrd`` with every default: one 48 s lap of the tutorial."""
-    out = tmp_path_factory.mktemp("lap") / "out.rrd"
-    result = cli("--save", str(out))
-    assert result.returncode == 0, result.stderr
-    return out, result
+
+    def make(folder: Path) -> None:
+        result = cli("--save", str(folder / "out.rrd"))
+        assert result.returncode == 0, result.stderr
+        (folder / "result.json").write_text(json.dumps([result.args, result.returncode, result.stdout, result.stderr]))
+
+    folder = made_once(tmp_path_factory, "lap", make)
+    args, returncode, stdout, stderr = json.loads((folder / "result.json").read_text())
+    return folder / "out.rrd", subprocess.CompletedProcess(args, returncode, stdout, stderr)
 
 
 def rerun_viewer() -> str | None:

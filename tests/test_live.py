@@ -54,6 +54,38 @@ def _wait_for_port(port: int, timeout: float = 30) -> None:
     raise TimeoutError(f"nothing listens on {port}")
 
 
+def _verified(path: Path) -> None:
+    """``rerun rrd verify`` (Rerun's own check, footers included) accepts the file."""
+    viewer = rerun_viewer()
+    assert viewer, "the rerun binary ships with rerun-sdk"
+    check = subprocess.run([viewer, "rrd", "verify", str(path)], capture_output=True, text=True, timeout=120)
+    assert check.returncode == 0, check.stdout + check.stderr
+
+
+@pytest.mark.parametrize("how", ["batch", "realtime", "connect", "spawn"])
+def test_every_recording_the_app_writes_has_its_footer(tmp_path: Path, how: str) -> None:
+    """Rerun pages an .rrd from disk only with its footer (the chunk manifest): batch and live saves alike."""
+    out = tmp_path / "out.rrd"
+    args, env = [*_command(), "--save", str(out), "--duration", "1"], dict(os.environ)
+    if how == "realtime":
+        args.append("--realtime")
+    port = _free_port()
+    viewer = rerun_viewer()
+    assert viewer, "the rerun binary ships with rerun-sdk"
+    with _process([viewer, "--port", str(port), "--save", str(tmp_path / "received.rrd")]) as server:
+        _wait_for_port(port)
+        if how == "connect":
+            args += ["--connect", f"rerun+http://127.0.0.1:{port}/proxy"]
+        elif how == "spawn":  # a viewer already listens on the port: --spawn streams to it, starts nothing
+            args += ["--spawn", "--port", str(port)]
+            env["DISPLAY"] = env.get("DISPLAY") or ":99"
+        result = subprocess.run(args, capture_output=True, text=True, timeout=120, env=env)
+        os.killpg(server.pid, signal.SIGINT)
+    assert result.returncode == 0, result.stderr
+    assert len(tf_by_child(read_recording(out))["axis"].times) == 30
+    _verified(out)
+
+
 def test_connect_streams_paced_frames_to_a_running_rerun_server(tmp_path: Path) -> None:
     viewer = rerun_viewer()
     assert viewer, "the rerun binary ships with rerun-sdk"
@@ -95,6 +127,7 @@ def test_a_signal_finalises_a_live_save(tmp_path: Path, signum: int) -> None:
     reported = int(stderr.split("r2d2-viz: ")[1].split(" samples")[0])
     assert frames == reported and frames >= 30
     assert not list(tmp_path.glob("*.partial"))
+    _verified(out)  # finalised on the signal: footer and all
 
 
 def test_an_interrupted_batch_save_removes_its_partial_file_and_keeps_the_old_one(tmp_path: Path) -> None:
@@ -126,4 +159,5 @@ def test_serve_listens_on_loopback_only_and_a_signal_finalises_its_save(tmp_path
     assert proc.returncode == 0, stderr
     assert f"rerun rerun+http://localhost:{port}/proxy" in stderr  # tells the user where to look
     assert len(tf_by_child(read_recording(out))["axis"].times) >= 15
+    _verified(out)
     assert not listening_addresses(port) and not listening_addresses(web_port)  # the server went with the app

@@ -1,4 +1,5 @@
-"""nav_msgs Path, OccupancyGrid (RViz's map / costmap / raw palettes) and GridCells."""
+"""nav_msgs Path, OccupancyGrid (RViz's map / costmap / raw palettes), map_msgs OccupancyGridUpdate (applied to its
+map) and GridCells."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import numpy as np
 from r2d2_viz.msgs.colormaps import PALETTES
 from r2d2_viz.msgs.geometry import header_of, one_color, points3, pose_of
 from r2d2_viz.msgs.shapes import Boxes, Decoded, DecodeOptions, GridMap, LineStrips
-from r2d2_viz.msgs.typestore import MsgError, deserialize
+from r2d2_viz.msgs.typestore import MsgError, deserialize, typestore
 
 PATH_COLOR = (25, 255, 0, 255)  # RViz's Path and GridCells default
 MAX_CELLS = 1 << 28
@@ -39,6 +40,29 @@ def decode_occupancy_grid(data: bytes | memoryview, options: DecodeOptions) -> D
     index = np.asarray(cells).view(np.uint8).reshape(height, width)
     rgba = PALETTES[options.map_scheme][index]
     return Decoded(frame, stamp, (GridMap(rgba, resolution, pose_of(info.origin)),))
+
+
+def apply_grid_update(map_data: bytes | memoryview, update_data: bytes | memoryview) -> memoryview:
+    """The OccupancyGrid ``map_data`` (CDR) with the ``map_msgs/msg/OccupancyGridUpdate`` ``update_data`` (CDR)
+    applied, as RViz's Map display does (nav2's costmap updates): the update's ``width`` x ``height`` cells copied row
+    by row to cell (``x``, ``y``) on; the map's header and info kept. An update outside the map is refused, as RViz
+    refuses it ("Update area outside of original map area"): ``MsgError``; so is one with fewer cells than it says.
+    (RViz 2's ``updateMapDataInMemory`` copies the update's first row to every row; this copies each row, as RViz 1
+    and nav2's costmap subscriber do.)"""
+    grid = deserialize(map_data, "nav_msgs/msg/OccupancyGrid")
+    update = deserialize(update_data, "map_msgs/msg/OccupancyGridUpdate")
+    width, height = int(grid.info.width), int(grid.info.height)
+    x, y, w, h = int(update.x), int(update.y), int(update.width), int(update.height)
+    if len(grid.data) != width * height:
+        raise MsgError(f"{width}x{height} map with {len(grid.data)} cells")
+    if x < 0 or y < 0 or x + w > width or y + h > height:
+        raise MsgError(f"update area {w}x{h} at ({x}, {y}) outside of the {width}x{height} map")
+    if len(update.data) < w * h:
+        raise MsgError(f"{w}x{h} update with {len(update.data)} cells")
+    cells = np.array(grid.data, dtype=np.int8).reshape(height, width)
+    cells[y : y + h, x : x + w] = np.asarray(update.data[: w * h], dtype=np.int8).reshape(h, w)
+    grid.data = cells.reshape(-1)
+    return typestore().serialize_cdr(grid, "nav_msgs/msg/OccupancyGrid")
 
 
 def decode_grid_cells(data: bytes | memoryview, options: DecodeOptions) -> Decoded:

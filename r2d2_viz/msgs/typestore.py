@@ -19,16 +19,25 @@ class MsgError(ValueError):
 
 
 DISTROS = {"humble": "ROS2_HUMBLE", "jazzy": "ROS2_JAZZY", "kilted": "ROS2_KILTED"}
+EXTRA_TYPES = {
+    "map_msgs/msg/OccupancyGridUpdate": "std_msgs/Header header\nint32 x\nint32 y\nuint32 width\nuint32 height\n"
+    "int8[] data\n",
+}
+"""Types RViz displays that rosbags' stores lack (nav2's costmap updates), added to every store."""
 
 
 @functools.cache
 def typestore(distro: str = "humble") -> Typestore:
-    """rosbags' typestore of a ROS 2 distro (built once each; rosbags is imported on first use)."""
-    from rosbags.typesys import Stores, get_typestore
+    """rosbags' typestore of a ROS 2 distro with :data:`EXTRA_TYPES` (built once each; rosbags is imported on first
+    use)."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     if distro not in DISTROS:
         raise MsgError(f"unknown ROS 2 distro {distro!r} (known: {', '.join(DISTROS)})")
-    return get_typestore(getattr(Stores, DISTROS[distro]))
+    store = get_typestore(getattr(Stores, DISTROS[distro]))
+    for name, text in EXTRA_TYPES.items():
+        store.register(get_types_from_msg(text, name))
+    return store
 
 
 def deserialize(data: bytes | memoryview, typename: str) -> Any:

@@ -13,6 +13,8 @@ from r2d2_viz.msgs.shapes import Decoded, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.bag import Bag
 
+GRID_UPDATE = "map_msgs/msg/OccupancyGridUpdate"
+"""A map's partial update (nav2's costmaps): applied to the map of the topic it updates (``<map>_updates``)."""
 OURS = ("/joint_states", "/tf", "/tf_static", "/robot_description")
 """Topics the robot pipeline itself reads."""
 
@@ -39,7 +41,7 @@ def display_topics(bag: Bag) -> tuple[dict[str, str], dict[str, str]]:
     for topic, info in sorted(bag.topics.items()):
         if topic in OURS:
             continue
-        (shown if info.msgtype in DECODERS else other)[topic] = info.msgtype
+        (shown if info.msgtype in DECODERS or info.msgtype == GRID_UPDATE else other)[topic] = info.msgtype
     return shown, other
 
 

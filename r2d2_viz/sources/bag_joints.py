@@ -59,7 +59,7 @@ class JointStateDecoder:
         self.time = time
         self._deserialize = deserialize
         self._column = {name: i for i, name in enumerate(self.joints)}
-        self.skipped = self.undecodable = self.nonfinite = 0
+        self.skipped = self.undecodable = self.nonfinite = self.nameless = 0
         self.unknown: set[str] = set()
         self._layouts: list[JointStateLayout] = []
 
@@ -71,6 +71,10 @@ class JointStateDecoder:
             out.append(f"ignored joints that are not actuated joints of the robot: {names}")
         if self.skipped:
             out.append(f"skipped {self.skipped} messages whose name and position lengths differ")
+        if self.nameless:
+            out.append(
+                f"skipped {self.nameless} messages with an empty name list (nothing says which joints they move)"
+            )
         if self.undecodable:
             out.append(f"skipped {self.undecodable} messages that cannot be decoded")
         if self.nonfinite:
@@ -125,7 +129,10 @@ class JointStateDecoder:
                     continue
                 key_end = 12 + len(layout.key)
                 same = np.all(raw[left, 12:key_end] == raw[first, 12:key_end], axis=1)
-                if layout.count != len(layout.names):  # name and position lengths differ: all of them skipped
+                if not layout.names:  # ROS 1 publishers that send positions only: nothing says which joint
+                    bad[rows[left[same]]] = True
+                    self.nameless += int(np.count_nonzero(same))
+                elif layout.count != len(layout.names):  # name and position lengths differ: all of them skipped
                     bad[rows[left[same]]] = True
                     self.skipped += int(np.count_nonzero(same))
                 else:

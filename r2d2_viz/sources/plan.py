@@ -26,7 +26,16 @@ from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.base import JointState, SampleChunk, Source, TfRecords, tf_root
 from r2d2_viz.sources.motion import ODOM
-from r2d2_viz.sources.playback import JOINTS, TF, BagPass, Segment, Window, bag_topics_read, source_windows
+from r2d2_viz.sources.playback import (
+    JOINTS,
+    TF,
+    WINDOW_BYTES,
+    BagPass,
+    Segment,
+    Window,
+    bag_topics_read,
+    source_windows,
+)
 from r2d2_viz.sources.robots import (
     SHARED_FRAMES,
     RobotPlan,
@@ -103,9 +112,7 @@ class RunPlan:
 
     def placed(self, root: str) -> bool:
         """Whether the recorded TF gives the frame ``root`` a parent (or it is the fixed frame)."""
-        return root == self.fixed_frame or any(
-            root in r.children for r in (self.static_tf, self.moving_tf) if r is not None
-        )
+        return root == self.fixed_frame or any(root in r.children for r in (self.static_tf, self.moving_tf) if r)
 
     @property
     def root_placed(self) -> bool:
@@ -121,7 +128,11 @@ class RunPlan:
         return self.source is not None
 
     def windows(
-        self, max_samples: int, *, predecode: Callable[[TopicMessage], TopicMessage] | None = None
+        self,
+        max_samples: int,
+        *,
+        predecode: Callable[[TopicMessage], TopicMessage] | None = None,
+        max_bytes: int = WINDOW_BYTES,
     ) -> Iterator[Window]:
         """The run, stretch by stretch (a bag's one pass, or a motion's chunks); ``predecode`` decodes each
         display message as it is read."""
@@ -139,7 +150,7 @@ class RunPlan:
                 tf_topics=dict(r.tf_topics),
                 shared=r.shared_frames,
             )
-            yield from bag_pass.windows(max_samples)
+            yield from bag_pass.windows(max_samples, max_bytes)
         elif self.source is not None:
             yield from source_windows(self.source, max_samples)
 
@@ -212,7 +223,9 @@ def plan_bag(
     joints, messages, more_joints = _preview(preview)
     if robot is None:
         what = "its transforms and display topics" if shown else "a TF-only replay (frames, axes, arrows)"
-        notes.append(f"{bag.path}: no --urdf and no /robot_description: no robot, {what}")
+        ros1 = any(f.suffix == ".bag" for f in bag.files) and JOINTS in bag.topics
+        why = " (in ROS 1, robot_description is a parameter, not a topic: give the robot with --urdf)" if ros1 else ""
+        notes.append(f"{bag.path}: no --urdf and no /robot_description: no robot, {what}{why}")
     frame = fixed_frame or tf_root(records) or _one_display_frame(records, robot, messages) or ODOM
     skip: frozenset[tuple[str, str]] = frozenset()
     if tree is not None:
@@ -224,8 +237,7 @@ def plan_bag(
             if message:
                 notes.append(f"{bag.path}: {message}")
     if len(robots) > 1:
-        parents = parents_of(records)
-        notes += [f"{bag.path}: {line}" for r in robots if (line := unreached(r, frame, parents))]
+        notes += [f"{bag.path}: {line}" for r in robots if (line := unreached(r, frame, parents_of(records)))]
     segments = [Segment(read, start, stop)]
     if start > span[0]:  # a seek: the state before it
         before = tuple(t for t in (JOINTS, TF, *robot_topics) if t in segments[0].topics)

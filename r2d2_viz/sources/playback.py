@@ -28,6 +28,8 @@ from r2d2_viz.sources.robots import renamed
 JOINTS, TF = "/joint_states", "/tf"
 WINDOW_BYTES = 32 << 20
 """A window holds about this many bytes of messages at most (a few images and clouds)…"""
+LIVE_WINDOW_BYTES = 4 << 20
+"""…and a live replay's, this many: its first data goes out as soon as the first few megabytes are read."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,16 +103,16 @@ class BagPass:
         self._last_ns = np.iinfo(np.int64).min
         self._moved = 0
 
-    def windows(self, max_samples: int) -> Iterator[Window]:
-        """Every window, each with at most ``max_samples`` joint states and about WINDOW_BYTES of messages (the
+    def windows(self, max_samples: int, max_bytes: int = WINDOW_BYTES) -> Iterator[Window]:
+        """Every window, each with at most ``max_samples`` joint states and about ``max_bytes`` of messages (the
         storages' blocks gathered or cut to that size)."""
         pending: list[Block] = []
         size = samples = 0
         for segment in self.segments:
             for block in self.bag.blocks(segment.topics, start_ns=segment.start_ns, stop_ns=segment.stop_ns):
-                for piece in self._pieces(block, max_samples):
+                for piece in self._pieces(block, max_samples, max_bytes):
                     n = len(piece.rows(self.joints_topic)) if self.joints is not None else 0
-                    if pending and (size + piece.nbytes > WINDOW_BYTES or samples + n > max_samples):
+                    if pending and (size + piece.nbytes > max_bytes or samples + n > max_samples):
                         yield self._window(pending)
                         pending, size, samples = [], 0, 0
                     pending.append(piece)
@@ -119,15 +121,15 @@ class BagPass:
             yield self._window(pending)
         self._finish()
 
-    def _pieces(self, block: Block, max_samples: int) -> Iterator[Block]:
-        """``block`` cut where it holds ``max_samples`` joint states or WINDOW_BYTES."""
+    def _pieces(self, block: Block, max_samples: int, max_bytes: int) -> Iterator[Block]:
+        """``block`` cut where it holds ``max_samples`` joint states or ``max_bytes``."""
         joint_rows = block.rows(self.joints_topic) if self.joints is not None else np.zeros(0, dtype=np.int64)
         cuts = {0, len(block)}
         if len(joint_rows) > max_samples:  # a long stretch of joint states: cut where a chunk is full
             cuts |= {int(r) for r in joint_rows[max_samples::max_samples]}
-        if block.nbytes > WINDOW_BYTES:
+        if block.nbytes > max_bytes:
             sizes = np.cumsum(block.lengths)
-            cuts |= {int(r) for r in np.searchsorted(sizes, np.arange(WINDOW_BYTES, sizes[-1], WINDOW_BYTES))}
+            cuts |= {int(r) for r in np.searchsorted(sizes, np.arange(max_bytes, sizes[-1], max_bytes))}
         edges = sorted(cuts)
         for lo, hi in itertools.pairwise(edges):
             if hi > lo:

@@ -15,10 +15,11 @@ from dataclasses import dataclass, field
 
 import rerun as rr
 
+from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp, MeshResource
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.sources.bag_displays import TopicMessage
+from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.decay import FixedFramePlacer
 from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
@@ -26,6 +27,7 @@ from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
 
 _FOREVER = 2**63 - 1
+GRID = "nav_msgs/msg/OccupancyGrid"
 FLUSH_BYTES = 64 << 20
 """Wait for the sinks after this many bytes of messages (clouds and images are megabytes each)."""
 KEEP = {"nav_msgs/msg/Odometry": 100}
@@ -79,6 +81,8 @@ class DisplayFeed:
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
         self._topic_types = dict(topics or {})
+        self.maps: dict[str, bytes] = {}
+        """The latest OccupancyGrid (CDR) of each map topic: what its updates apply to."""
         self._start_ns = start_ns
         self._anchored: tuple[int, str] | None = None
         decayed = any(style.decay for style in self.styles.values())
@@ -129,6 +133,11 @@ class DisplayFeed:
 
     def log(self, message: TopicMessage) -> None:
         """Decode and log one message (a live source calls this as messages arrive)."""
+        if message.msgtype == GRID_UPDATE:
+            _update_map(self, message)
+            return
+        if message.msgtype == GRID:
+            self.maps[message.topic] = bytes(message.data)
         state = self.topics.setdefault(message.topic, _TopicState())
         state.markers.anchor = self._anchored
         state.messages += 1
@@ -185,7 +194,7 @@ class DisplayFeed:
     def decode(self, message: TopicMessage) -> TopicMessage:
         """``message`` with what it draws (or why it cannot), in its topic's style; pure, so a bag's reader
         thread can call it ahead of :meth:`log`."""
-        if message.decoded is not None:
+        if message.decoded is not None or message.msgtype == GRID_UPDATE:  # updates: applied when logged
             return message
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
@@ -224,6 +233,28 @@ class DisplayFeed:
                 self.notices.report(
                     f"{self._where(topic)}: {state.problems} of {state.messages} messages could not be shown"
                 )
+
+
+def _update_map(feed: DisplayFeed, message: TopicMessage) -> None:
+    """An OccupancyGridUpdate applied to the latest map of the topic it updates, as RViz's Map display does
+    (``/costmap_updates`` updates ``/costmap``); the map is drawn again."""
+    state = feed.topics.setdefault(message.topic, _TopicState())
+    state.messages += 1
+    topic = message.topic.removesuffix("_updates")
+    base = feed.maps.get(topic)
+    try:
+        if base is None:
+            raise MsgError(f"no map on {topic} before it")
+        updated = apply_grid_update(base, message.data)
+    except MsgError as exc:
+        state.problems += 1
+        feed.notices.report(
+            f"{feed.source_name + ': ' if feed.source_name else ''}{message.topic}: a map update cannot be applied: "
+            f"{exc} (further problems on this topic are counted)",
+            key=f"display problem {message.topic}",
+        )
+        return
+    feed.log(TopicMessage(message.time_ns, topic, GRID, updated))
 
 
 IMAGES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from bagmaker import BagSpec, tf_message, write_bag
+from conftest import made_once
 from msgs_build import T, cdr, color, header, marker_msg, pose, quat, vec
 
 from . import viewers
@@ -137,11 +138,12 @@ def record(bag: Path, out: Path) -> Path:
 
 @pytest.fixture(scope="module")
 def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    root = tmp_path_factory.mktemp("display_bags")
-    return {
-        name: record(write_pixel_bag(root / f"{name}_bag", displays=name == "displays"), root / f"{name}.rrd")
-        for name in ("displays", "control")
-    }
+    def make(root: Path) -> None:
+        for name in ("displays", "control"):
+            record(write_pixel_bag(root / f"{name}_bag", displays=name == "displays"), root / f"{name}.rrd")
+
+    root = made_once(tmp_path_factory, "display_recordings", make)
+    return {name: root / f"{name}.rrd" for name in ("displays", "control")}
 
 
 # --------------------------------------------------------------------------------------------------

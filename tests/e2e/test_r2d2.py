@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import listening_addresses
+from conftest import listening_addresses, made_once
 
 from . import viewers
 
@@ -58,9 +58,15 @@ def _r2d2_viz(*args: str) -> None:
 
 @pytest.fixture(scope="module")
 def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """The recordings of CASES, made once for every worker that runs these tests."""
+    root = made_once(tmp_path_factory, "r2d2_recordings", _record)
+    return {name: root / f"{name}.rrd" for name in CASES}
+
+
+def _record(root: Path) -> None:
+    """The four recordings of CASES, as ``root/<case>.rrd``."""
     from r2d2_viz.robot.model import default_urdf_path
 
-    root = tmp_path_factory.mktemp("recordings")
     out = {name: root / f"{name}.rrd" for name in CASES}
     _r2d2_viz("--save", str(out["r2d2"]), "--duration", DURATION_S)
     invisible = root / "invisible_r2d2.urdf"
@@ -83,7 +89,6 @@ def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
             timeout=120,
             cwd=root,  # not the checkout: the installed package, as a user has it
         )
-    return out
 
 
 def layout_problems(img: np.ndarray) -> list[str]:
@@ -140,7 +145,7 @@ def test_web_viewer(case: str, recordings: dict[str, Path], chromium_browser, ar
         png,
         browser=chromium_browser,
         viewport=WEB_VIEWPORT,
-        timeout=120,
+        timeout=240,  # bounded; 120 s ran out beside a second xdist worker on a busy 2-core box
         log_dir=artifacts_dir,
         ready=(lambda img: not any("joint plot" in p for p in layout_problems(img))) if ours else None,
     )
@@ -216,6 +221,7 @@ def serve_in_browser(chromium_browser, artifacts_dir: Path, args: list[str], nam
         context = chromium_browser.new_context(
             viewport={"width": WEB_VIEWPORT[0], "height": WEB_VIEWPORT[1]}, color_scheme="dark"
         )
+        context.set_default_timeout(150_000)  # bounded like the wait below, not by playwright's 30 s
         context.route("**/*", lambda route: route.continue_() if "127.0.0.1" in route.request.url else route.abort())
         page = context.new_page()
         url = f"http://127.0.0.1:{web_port}/?url={quote(f'rerun+http://127.0.0.1:{grpc_port}/proxy', safe='')}"

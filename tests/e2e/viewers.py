@@ -482,6 +482,9 @@ def screenshot_web(
             color_scheme=color_scheme,
         )
         stack.callback(context.close)
+        # playwright's own 30 s (a screenshot of a big page on SwiftShader, beside other work) is not ours to
+        # choose: every step is bounded by this call's timeout
+        context.set_default_timeout(timeout * 1000)
         context.route(
             "**/*",
             lambda route: route.continue_() if _is_loopback_url(route.request.url) else route.abort(),

@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 import pytest
-from msgs_build import T, cdr, header, pose, quat, vec
+from msgs_build import TS, T, cdr, header, pose, quat, vec
 
 from r2d2_viz.msgs import shapes
-from r2d2_viz.msgs.nav import decode_grid_cells, decode_occupancy_grid, decode_path
+from r2d2_viz.msgs.nav import apply_grid_update, decode_grid_cells, decode_occupancy_grid, decode_path
 from r2d2_viz.msgs.shapes import DecodeOptions
 from r2d2_viz.msgs.typestore import MsgError
 
@@ -87,3 +87,33 @@ def test_grid_cells_are_flat_boxes() -> None:
     assert isinstance(boxes, shapes.Boxes)
     np.testing.assert_allclose(boxes.centers, [[1, 2, 0], [3, 4, 0]])
     np.testing.assert_allclose(boxes.half_sizes, [[0.25, 0.125, 0]] * 2)
+
+
+def _update(x: int, y: int, w: int, h: int, cells: list[int]) -> bytes:
+    """A map_msgs/msg/OccupancyGridUpdate, serialised by rosbags from its ROS 2 definition (nav2's costmap
+    updates; rosbags' stores lack the type)."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    text = "std_msgs/Header header\nint32 x\nint32 y\nuint32 width\nuint32 height\nint8[] data\n"
+    store.register(get_types_from_msg(text, "map_msgs/msg/OccupancyGridUpdate"))
+    msg = store.types["map_msgs/msg/OccupancyGridUpdate"](
+        header=header(), x=x, y=y, width=w, height=h, data=np.array(cells, dtype=np.int8)
+    )
+    return bytes(store.serialize_cdr(msg, "map_msgs/msg/OccupancyGridUpdate"))
+
+
+def test_a_grid_update_is_applied_as_rviz_does() -> None:
+    """A 4x3 map of zeros, a 2x2 update at (1, 1): by hand, rows 1-2 columns 1-2 take the update, row by row."""
+    base = grid([0] * 12, 4, 3)
+    new = apply_grid_update(base, _update(1, 1, 2, 2, [10, 20, 30, -1]))
+    msg = TS.deserialize_cdr(bytes(new), "nav_msgs/msg/OccupancyGrid")  # rosbags' own Humble store
+    assert msg.data.reshape(3, 4).tolist() == [[0, 0, 0, 0], [0, 10, 20, 0], [0, 30, -1, 0]]
+    assert (msg.info.width, msg.info.height) == (4, 3)
+    assert decode_occupancy_grid(new, DecodeOptions()).items  # the usual decoder draws the result
+    with pytest.raises(MsgError, match="outside"):
+        apply_grid_update(base, _update(3, 0, 2, 1, [1, 2]))
+    with pytest.raises(MsgError, match="outside"):
+        apply_grid_update(base, _update(-1, 0, 1, 1, [1]))
+    with pytest.raises(MsgError, match="cells"):
+        apply_grid_update(base, _update(0, 0, 2, 2, [1, 2, 3]))

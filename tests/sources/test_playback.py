@@ -15,7 +15,6 @@ from bagmaker import T0, TS, BagSpec, joint_state, storage_file, string, tf_mess
 from displaybags import odometry
 from rosbags.rosbag2 import Reader
 
-import r2d2_viz.sources.playback as playback
 from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.base import ArraySource
 from r2d2_viz.sources.playback import BagPass, Segment, Window, read_ahead, source_windows
@@ -106,8 +105,7 @@ def test_windows_are_bounded_by_samples_and_by_bytes(tmp_path: Path, monkeypatch
         assert sum(w.nbytes for w in windows) == total  # progress counts every byte once
         assert _times(windows)["/joint_states"] == [t for t, _ in expected["/joint_states"]]
         limit = 4096
-        monkeypatch.setattr(playback, "WINDOW_BYTES", limit)
-        small = list(_pass(bag).windows(100_000))
+        small = list(_pass(bag).windows(100_000, max_bytes=limit))
     biggest = max(len(d) for _, d in wanted)
     assert len(small) > total // limit and all(w.nbytes <= limit + biggest for w in small)
     assert sum(w.nbytes for w in small) == total

@@ -31,3 +31,23 @@ def test_a_port_in_use_is_named() -> None:
         port = taken.getsockname()[1]
         with pytest.raises(SinkError, match=f"cannot listen on 127.0.0.1:{port} for the web viewer"):
             _check_port_free("127.0.0.1", port, "web viewer")
+
+
+def test_a_recording_id_and_properties_given_to_the_sink(tmp_path: Path) -> None:
+    """Issue 25: a fleet recording carries the id derived from its bag and what it says of the bag."""
+    from rerun.chunk import RrdReader
+
+    from r2d2_viz.viewer.sinks import SinkConfig, close_recording, open_recording
+
+    rid = "6f1c2d3e-0000-4000-8000-00000000abcd"
+    config = SinkConfig(recording_id=rid, properties=(("bag", "run_07"),))
+    close_recording(open_recording(config, save_to=tmp_path / "a.rrd"))
+    reader = RrdReader(tmp_path / "a.rrd")
+    store = reader.recordings()[0]
+    assert str(store.recording_id) == rid
+    values = [
+        chunk.to_record_batch().column("value").to_pylist()
+        for chunk in reader.stream(store=store)
+        if chunk.entity_path == "/__properties/bag"
+    ]
+    assert values == [[["run_07"]]]

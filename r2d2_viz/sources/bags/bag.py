@@ -21,9 +21,10 @@ from types import TracebackType
 from typing import Any
 
 from r2d2_viz.errors import BagError, listed
-from r2d2_viz.msgs.typestore import deserialize
+from r2d2_viz.msgs.definitions import Convert
+from r2d2_viz.msgs.typestore import MsgError, deserialize
 from r2d2_viz.sources.bags.mcap_scan import McapScan
-from r2d2_viz.sources.bags.storage import Block, Storage, TopicInfo
+from r2d2_viz.sources.bags.storage import Block, Storage, TopicInfo, block_of
 
 Warn = Callable[[str], None]
 
@@ -32,8 +33,8 @@ def to_stderr(message: str) -> None:
     print(f"warning: {message}", file=sys.stderr, flush=True)
 
 
-STORAGES = (".db3", ".mcap")
-"""Storage files a bag is made of."""
+STORAGES = (".db3", ".mcap", ".bag")
+"""Storage files a bag is made of (``.bag``: a ROS 1 bag)."""
 
 
 def _open_storage(path: Path) -> Storage:
@@ -41,6 +42,10 @@ def _open_storage(path: Path) -> Storage:
         from r2d2_viz.sources.bags.db3 import Db3
 
         return Db3(path)
+    if path.suffix == ".bag":
+        from r2d2_viz.sources.bags.rosbag1 import Rosbag1
+
+        return Rosbag1(path)
     return McapScan(path)
 
 
@@ -56,6 +61,9 @@ class Bag:
         self.path, self.warn = path, warn
         self._files: list[Storage] = []
         self._damage_said = False
+        self._convert: dict[str, Convert] = {}
+        """Topics whose definitions are not Humble's layout → the conversion of each message to it."""
+        self._bad: dict[str, int] = {}
         try:
             self._open()
         except BagError:
@@ -75,7 +83,9 @@ class Bag:
         elif path.suffix in STORAGES:
             files = [path]
         else:
-            raise BagError(f"{path}: not a ROS 2 bag (expected a rosbag2 directory, a .mcap or a .db3 file)")
+            raise BagError(
+                f"{path}: not a bag (expected a rosbag2 directory, a .mcap or .db3 file, or a ROS 1 .bag file)"
+            )
         for file in files:
             try:
                 storage = _open_storage(file)
@@ -84,7 +94,7 @@ class Bag:
             except Exception as exc:
                 raise BagError(f"{file}: cannot read this bag: {_problem(exc)}") from None
             self._files.append(storage)
-            if storage.note:
+            if storage.note and any(t.count for t in storage.topics.values()):  # nothing read: the error says it
                 listed = sum(expected.values()) if len(files) == 1 else 0
                 self.warn(f"{file}: {storage.note}" + (f" (the metadata lists {listed})" if listed else ""))
         topics: dict[str, TopicInfo] = {}
@@ -98,9 +108,9 @@ class Bag:
         for topic, count in expected.items():  # the metadata's counts, where it has them
             if topic in topics:
                 topics[topic] = dataclasses.replace(topics[topic], count=max(count, topics[topic].count))
-        self.topics = topics
         if sum(t.count for t in topics.values()) == 0:
             raise BagError(f"{path}: empty bag (no messages)")
+        self.topics, self._convert = own_definitions(path, topics, self.warn)
 
     @property
     def files(self) -> tuple[Path, ...]:
@@ -139,7 +149,7 @@ class Bag:
             try:
                 for block in f.blocks(wanted, start_ns=start_ns, stop_ns=stop_ns):
                     got += len(block)
-                    yield block
+                    yield self._converted(block) if self._convert.keys() & set(block.topics) else block
             except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
                 if got == 0 and len(self._files) == 1:
                     raise BagError(f"{f.path}: cannot read {listed(wanted)}: {_problem(exc)}") from None
@@ -153,11 +163,35 @@ class Bag:
             self._damage_said = True
             self.warn("; ".join(said))
 
+    def _converted(self, block: Block) -> Block:
+        """``block`` with its messages of non-Humble layouts converted (those that cannot be: left out, counted)."""
+        out: list[tuple[int, str, bytes | memoryview]] = []
+        for t, topic, data in block.messages():
+            convert = self._convert.get(topic)
+            if convert is None:
+                out.append((t, topic, data))
+                continue
+            try:
+                out.append((t, topic, convert(data)))
+            except MsgError:
+                self._bad[topic] = self._bad.get(topic, 0) + 1
+        return block_of(out, block.topics)
+
     def _problems(self, f: Storage) -> list[str]:
-        """The damaged chunks a storage met (each chunk is counted once, on the pass that met it)."""
+        """The damaged chunks (each counted once, on the pass that met it) and messages that do not fit their
+        definitions a storage met."""
         problems: dict[str, int] = getattr(f, "problems", {})
         out = [f"{f.path}: {kind}: {n} chunk{'s' if n > 1 else ''} skipped" for kind, n in sorted(problems.items())]
         problems.clear()
+        bad: dict[str, tuple[int, str]] = getattr(f, "bad_messages", {})
+        for topic, (n, why) in sorted(bad.items()):
+            out.append(f"{f.path}: {topic}: {n} message{'s' if n > 1 else ''} that do not fit their definition ({why})")
+        bad.clear()
+        for topic, n in sorted(self._bad.items()):
+            out.append(
+                f"{f.path}: {topic}: {n} message{'s' if n > 1 else ''} that cannot be converted to Humble's layout"
+            )
+        self._bad.clear()
         return out
 
     def raw(self, topic: str) -> Iterator[tuple[int, memoryview]]:
@@ -176,6 +210,11 @@ class Bag:
             except Exception as exc:
                 self.warn(f"{f.path}: {topic}: cannot read its last message ({_problem(exc)})")
                 continue
+            if found is not None and (convert := self._convert.get(topic)) is not None:
+                try:
+                    return found[0], bytes(convert(found[1]))
+                except MsgError:
+                    continue
             if found is not None:
                 return found
         return None
@@ -199,6 +238,31 @@ class Bag:
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.close()
+
+
+def own_definitions(
+    path: Path, topics: dict[str, TopicInfo], warn: Warn
+) -> tuple[dict[str, TopicInfo], dict[str, Convert]]:
+    """Each topic decoded with the definition its bag carries: those whose layout is not Humble's get a converter
+    (:func:`r2d2_viz.msgs.definitions.to_humble`); those whose definition cannot be used are left out, said in one
+    line."""
+    converters: dict[str, Convert] = {}
+    if not any(t.definition for t in topics.values()):
+        return topics, converters
+    from r2d2_viz.msgs.definitions import to_humble
+
+    unusable: dict[str, str] = {}
+    for name, info in sorted(topics.items()):
+        try:
+            convert = to_humble(info.msgtype, info.definition, info.encoding)
+        except MsgError as exc:
+            unusable[name] = f"{name} ({exc})"
+            continue
+        if convert is not None:
+            converters[name] = convert
+    if unusable:
+        warn(f"{path}: topics whose message definitions cannot be used, not shown: {listed(unusable.values())}")
+    return {n: t for n, t in topics.items() if n not in unusable}, converters
 
 
 def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:

@@ -110,10 +110,9 @@ class Db3:
         )
         pending: list[tuple[int, str, bytes | memoryview]] = []
         size = 0
-        while rows := cursor.fetchmany(64):
-            for t, topic_id, data in rows:
-                pending.append((int(t), self._topic_of[int(topic_id)], data))
-                size += len(data)
+        for t, topic_id, data in cursor:  # row by row: a block ends at its bound, even with images of megabytes
+            pending.append((int(t), self._topic_of[int(topic_id)], data))
+            size += len(data)
             if len(pending) >= BLOCK_ROWS or size >= BLOCK_BYTES:
                 yield block_of(pending, order)
                 pending, size = [], 0

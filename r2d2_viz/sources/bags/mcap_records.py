@@ -69,6 +69,8 @@ class ChunkIndex:
     length: int
     index_offsets: dict[int, int]
     """channel id → file offset of its message index record for this chunk."""
+    channels: frozenset[int] = frozenset()
+    """The channels it holds, where a scan found them (a file without a summary: no message indexes)."""
 
 
 def schema_at(buf: bytes | mmap.mmap | memoryview, at: int) -> tuple[int, Schema]:
@@ -100,7 +102,8 @@ def walk_records(buf: mmap.mmap | memoryview, at: int, end: int) -> Iterator[tup
 
 def holds(c: ChunkIndex, wanted: dict[int, int]) -> bool:
     """Whether the chunk holds messages of a wanted channel (a chunk index without message index offsets may)."""
-    return not c.index_offsets or not wanted.keys().isdisjoint(c.index_offsets)
+    found = c.index_offsets or c.channels
+    return not found or not wanted.keys().isdisjoint(found)
 
 
 def chunk_index(buf: mmap.mmap, at: int, stop: int, size: int) -> ChunkIndex:

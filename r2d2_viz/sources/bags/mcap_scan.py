@@ -2,7 +2,8 @@
 (summary: channels, schemas, statistics, one chunk index per chunk; each chunk's message indexes): chunks that hold
 none of the wanted topics, or lie outside the time asked for, are never read, and a chunk's wanted messages are
 found from its message indexes as numpy arrays, not record by record. A file without a summary (a recorder that was
-killed leaves none) is read from the start, record by record, up to the first damage. The file is memory-mapped:
+killed leaves none) is walked once when opened, record by record, up to the first damage, and the places, times
+and channels of its chunks noted: later reads go through that index as through the file's own. The file is mmapped:
 uncompressed chunks are handed on as views of the file's pages, not copies. MCAP: https://mcap.dev/spec; lz4 and zstd
 come with ``rosbags``.
 
@@ -21,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from r2d2_viz.sources.bags.mcap_records import (
+    HEAD,
     MAGIC,
     OP_CHANNEL,
     OP_CHUNK,
@@ -30,6 +32,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     OP_MESSAGE,
     OP_SCHEMA,
     OP_STATISTICS,
+    U64,
     BrokenError,
     Channel,
     ChunkIndex,
@@ -63,9 +66,11 @@ class McapScan:
         self.channels: dict[int, Channel] = {}
         self.schemas: dict[int, Schema] = {}
         self.chunks: list[ChunkIndex] | None = None
-        """The chunk index (None: the file has no usable summary and is read from the start)."""
+        """The chunk index: the summary's, or the one noted by the walk of a file without one (None: messages lie
+        outside chunks, and every read walks the file from the start)."""
         self._counts: dict[int, int] = {}
         self._span: tuple[int, int] | None = None
+        self._loose: np.ndarray | None = None
         with path.open("rb") as f:
             size = f.seek(0, 2)
             if size < len(MAGIC):
@@ -132,11 +137,12 @@ class McapScan:
     ) -> Iterator[Block]:
         order = topic_tuple(topics)
         wanted = self._wanted(order)
-        if self.chunks is None:
-            yield from self._scan_blocks(order, wanted, start_ns, stop_ns)
-            return
         lo = -1 if start_ns is None else start_ns
         hi = 2**64 if stop_ns is None else stop_ns
+        if self.chunks is None:
+            found = _loose_block(self._loose, self._map, order, wanted, lo, hi) if self._loose is not None else None
+            yield from (found,) if found is not None and len(found) else self._scan_blocks(order, wanted, lo, hi)
+            return
         chosen = [c for c in self.chunks if c.end_ns >= lo and c.start_ns < hi and holds(c, wanted)]
         for cluster in overlapping(chosen):
             parts = [b for c in cluster if (b := self._chunk_block(c, order, wanted, lo, hi)) is not None]
@@ -167,16 +173,10 @@ class McapScan:
     # --- files without a summary ----------------------------------------------------------------------------------
 
     def _scan_everything(self) -> None:
-        """Channels, schemas, counts and span of a file without a summary: one walk up to its first damage."""
-        first, last, total = 2**64, -1, 0
-        for op, _, body, start, end in self._walk_file():
-            if op != OP_CHUNK:
-                continue
-            for channel_id, t in message_times(body, start, end):
-                self._counts[channel_id] = self._counts.get(channel_id, 0) + 1
-                first, last, total = min(first, t), max(last, t), total + 1
-        if total:
-            self._span = (first, last)
+        """Channels, schemas, counts and span of a file without a summary: one walk up to its first damage. Its
+        chunks' places, times and channels are noted as it goes: later reads go through that index (each a stretch
+        or a few topics) instead of walking the file again, as long as no message lies outside a chunk."""
+        self._counts, self._span, total, self.chunks, self._loose = _scan_index(self._walk_file(), self._map)
         if self.note:
             self.note = f"{self.note}: recovered {total} messages"
 
@@ -208,11 +208,7 @@ class McapScan:
             elif op == OP_CHANNEL:
                 self.channels.update([channel_at(data, at)])
 
-    def _scan_blocks(
-        self, order: tuple[str, ...], wanted: dict[int, int], start_ns: int | None, stop_ns: int | None
-    ) -> Iterator[Block]:
-        lo = -1 if start_ns is None else start_ns
-        hi = 2**64 if stop_ns is None else stop_ns
+    def _scan_blocks(self, order: tuple[str, ...], wanted: dict[int, int], lo: int, hi: int) -> Iterator[Block]:
         for _, _, data, start, end in self._walk_file():
             wanted = self._wanted(order)  # channels appear as the file goes on
             block = walk_messages(data[start:end], order, wanted)
@@ -254,3 +250,49 @@ def _topics(channels: dict[int, Channel], schemas: dict[int, Schema], counts: di
         count = (old.count if old else 0) + counts.get(channel.id, 0)
         topics[channel.topic] = TopicInfo(channel.topic, schema.name, count, schema.data, schema.encoding)
     return topics
+
+
+def _scan_index(
+    walked: Iterator[tuple[int, int, memoryview, int, int]], buf: mmap.mmap
+) -> tuple[dict[int, int], tuple[int, int] | None, int, list[ChunkIndex] | None, np.ndarray | None]:
+    """Counts per channel, span, message total, chunk index of a walk through a file (:meth:`McapScan._walk_file`)
+    (None when messages lie outside chunks) and the index of those messages (None unless all are)."""
+    counts: dict[int, int] = {}
+    first, last, total = 2**64, -1, 0
+    chunks: list[ChunkIndex] = []
+    loose: list[tuple[int, int, int, int]] = []  # messages outside chunks: time, channel, record start, record end
+    for op, offset, body, start, end in walked:
+        if op != OP_CHUNK:
+            continue
+        times: list[int] = []
+        channels: set[int] = set()
+        for channel_id, t in message_times(body, start, end):
+            counts[channel_id] = counts.get(channel_id, 0) + 1
+            times.append(t)
+            channels.add(channel_id)
+        if times:
+            first, last, total = min(first, *times), max(last, *times), total + len(times)
+            if start == 0:  # a chunk's records (start != 0: a message outside chunks)
+                (size,) = U64.unpack_from(buf, offset + 1)
+                chunks.append(ChunkIndex(min(times), max(times), offset, 9 + size, {}, frozenset(channels)))
+            else:
+                loose.append((times[0], next(iter(channels)), start, end))
+    index = sorted(chunks, key=lambda c: (c.start_ns, c.offset)) if not loose else None
+    rows = np.array(loose, dtype=np.int64).reshape(-1, 4)
+    found = rows[np.argsort(rows[:, 0], kind="stable")] if loose and not chunks else None  # both: every read walks
+    return counts, ((first, last) if total else None), total, index, found
+
+
+def _loose_block(
+    loose: np.ndarray, buf: mmap.mmap, order: tuple[str, ...], wanted: dict[int, int], lo: int, hi: int
+) -> Block:
+    """The wanted messages of a file whose messages lie outside chunks (``loose``: rows of time, channel, record
+    start, record end, in time order), as one block over the file's pages."""
+    topic_of = np.full(1 << 16, -1, dtype=np.int32)
+    topic_of[list(wanted)] = list(wanted.values())
+    index = topic_of[loose[:, 1]]
+    keep = (index >= 0) & (loose[:, 0] >= lo) & (loose[:, 0] < hi)
+    rows = loose[keep]
+    return Block(
+        rows[:, 0].copy(), index[keep], order, memoryview(buf), rows[:, 2] + HEAD, rows[:, 3] - rows[:, 2] - HEAD
+    )

@@ -8,9 +8,9 @@ import shutil
 from pathlib import Path
 
 import pytest
-from bagmaker import T0, TS, BagSpec, joint_state, storage_file, string, write_bag
+from bagmaker import T0, TS, BagSpec, joint_state, storage_file, string, tf_message, write_bag
 from conftest import REPO
-from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, Reader, StoragePlugin, Writer
 from rosbags.rosbag2.storage_mcap import McapReader
 
 from r2d2_viz.errors import BagError
@@ -94,7 +94,9 @@ def _error(path: Path) -> str:
 def test_missing_and_wrong_paths(tmp_path: Path) -> None:
     assert "no such file" in _error(tmp_path / "nothing.mcap")
     (tmp_path / "notes.txt").write_text("hi")
-    assert "not a ROS 2 bag" in _error(tmp_path / "notes.txt")
+    assert "not a bag (expected a rosbag2 directory, a .mcap or .db3 file, or a ROS 1 .bag file)" in _error(
+        tmp_path / "notes.txt"
+    )
     (tmp_path / "dir").mkdir()
     (tmp_path / "dir" / "notes.txt").write_text("hi")
     assert "not a ROS 2 bag (no metadata.yaml, no .db3 or .mcap file" in _error(tmp_path / "dir")
@@ -252,3 +254,63 @@ def test_wrong_type_on_a_topic(tmp_path: Path) -> None:
     path = write_bag(tmp_path / "b", spec)
     with open_bag(path) as bag, pytest.raises(BagError, match="is std_msgs/msg/String, expected sensor_msgs"):
         bag.require_type("/joint_states", "sensor_msgs/msg/JointState")
+
+
+def _three_topics(path: Path, storage: str) -> Path:
+    """Joint states every 10 ms, /tf every 2nd, a description every 50th, over 3 s."""
+    spec = BagSpec()
+    for k in range(300):
+        t = T0 + k * 10**7
+        spec.add("/joint_states", t, joint_state(t, ["a"], [k]))
+        if k % 2 == 0:
+            spec.add("/tf", t + 1, tf_message([(t, "odom", "base", (k, 0, 0), (0, 0, 0, 1))]))
+        if k % 50 == 0:
+            spec.add("/robot_description", t + 2, string(f"<robot name='r{k}'/>"))
+    return write_bag(path, spec, storage=storage)
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_several_topics_in_one_pass_a_stretch_and_the_last_before(tmp_path: Path, storage: str) -> None:
+    """Bag.blocks and Bag.last against rosbags' own reader, both storages."""
+    path = _three_topics(tmp_path / "b", storage)
+    with Reader(path) as reader:
+        everything = sorted(((t, c.topic, bytes(d)) for c, t, d in reader.messages()), key=lambda m: m[0])
+    warnings: list[str] = []
+    with open_bag(path, warn=warnings.append) as bag:
+        assert bag.span == (everything[0][0], everything[-1][0])
+        for topics, start, stop in [
+            (["/joint_states", "/tf"], None, None),
+            (["/tf", "/robot_description", "/joint_states"], T0 + 5 * 10**8, T0 + 15 * 10**8 + 1),
+            (["/robot_description", "/nothing"], T0 + 10**8, None),
+        ]:
+            got = [
+                (t, topic, bytes(d))
+                for b in bag.blocks(topics, start_ns=start, stop_ns=stop)
+                for t, topic, d in b.messages()
+            ]
+            lo, hi = start or 0, stop or 2**64
+            assert got == [m for m in everything if m[1] in topics and lo <= m[0] < hi], (topics, start, stop)
+        descriptions = [m for m in everything if m[1] == "/robot_description"]
+        assert bag.last("/robot_description") == (descriptions[-1][0], descriptions[-1][2])
+        before = T0 + 2 * 10**9 + 2  # the one of 2 s (received at 2 s + 2 ns) is not before it: 1.5 s
+        assert bag.last("/robot_description", before_ns=before) == (descriptions[-3][0], descriptions[-3][2])
+        assert bag.last("/robot_description", before_ns=T0) is None and bag.last("/nothing") is None
+    assert warnings == []
+
+
+def test_the_last_message_of_a_split_bag_is_in_its_last_file_that_has_one(tmp_path: Path) -> None:
+    bag_dir = tmp_path / "split"
+    bag_dir.mkdir()
+    parts = [
+        BagSpec().add("/robot_description", T0, string("<robot name='early'/>")),
+        BagSpec().add("/robot_description", T0 + 10**9, string("<robot name='late'/>")),
+        BagSpec().add("/joint_states", T0 + 2 * 10**9, joint_state(T0, ["a"], [1.0])),
+    ]
+    for k, spec in enumerate(parts):
+        shutil.copy(storage_file(write_bag(tmp_path / f"p{k}", spec)), bag_dir / f"bag_{k}.mcap")
+    with open_bag(bag_dir) as bag:
+        assert bag.span == (T0, T0 + 2 * 10**9)
+        found = bag.last("/robot_description")
+        assert found is not None and bag.deserialize(found[1], "std_msgs/msg/String").data == "<robot name='late'/>"
+        early = bag.last("/robot_description", before_ns=T0 + 10**9)
+        assert early is not None and early[0] == T0

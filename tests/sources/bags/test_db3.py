@@ -142,3 +142,21 @@ def test_folder_names_special_in_an_sqlite_uri(tmp_path: Path, name: str) -> Non
 
 def test_readonly_uri_quotes_the_path() -> None:
     assert readonly_uri(Path("/a#b/c?d/e%f g.db3")) == "file:/a%23b/c%3Fd/e%25f%20g.db3?mode=ro&immutable=1"
+
+
+def test_blocks_are_bounded_in_rows_and_bytes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import r2d2_viz.sources.bags.db3 as db3
+
+    path = storage_file(_wal_bag(tmp_path / "b"))
+    with open_bag(path) as bag:
+        whole = [(t, bytes(d)) for t, d in bag.raw("/joint_states")]
+        monkeypatch.setattr(db3, "BLOCK_ROWS", 6)
+        blocks = list(bag.blocks(["/joint_states"]))
+        assert [len(b) for b in blocks] == [6, 6, 6, 2]
+        monkeypatch.setattr(db3, "BLOCK_ROWS", 1000)
+        monkeypatch.setattr(db3, "BLOCK_BYTES", 3 * len(whole[0][1]))  # every message has the same length
+        by_bytes = list(bag.blocks(["/joint_states"]))
+        assert [len(b) for b in by_bytes] == [3] * 6 + [2]
+    for parts in (blocks, by_bytes):
+        assert [(t, bytes(d)) for b in parts for t, d in b.pairs()] == whole
+    assert [t for t, _ in whole] == TIMES

@@ -61,8 +61,21 @@ def _valid(python: Path, marker: Path, spec: str) -> bool:
     return check.returncode == 0
 
 
+_checked: dict[str, Path] = {}  # distro -> its Python, once checked by this process (the venv is never changed)
+
+
 def ensure_venv(distro: str) -> Path:
-    """The Python of the cached ``ros-rclpy`` venv of ``distro``, created (from PyPI) if missing or stale."""
+    """The Python of the cached ``ros-rclpy`` venv of ``distro``, created (from PyPI) if missing or stale.
+
+    Made and checked under a file lock, so that pytest-xdist workers (or two test runs) never build it twice;
+    a process checks it once."""
+    if distro in _checked:
+        return _checked[distro]
+    _checked[distro] = _ensure_venv(distro)
+    return _checked[distro]
+
+
+def _ensure_venv(distro: str) -> Path:
     requirements = DISTROS[distro]
     spec = "\n".join(requirements) + "\n"
     root = cache_root() / f"rclpy-{distro}"

@@ -1,0 +1,195 @@
+"""Many bags → ``DIR/<bag name>.rrd``, one process per bag at a time (``--jobs``), each through
+:func:`r2d2_viz.runner.run` as one bag is converted by hand.
+
+Each output is written under a hidden temporary name beside it and renamed into place when complete, so an
+interrupted or failed conversion leaves nothing half-written (what a killed worker left is removed at the
+end). A bag that fails is reported and the others go on; a worker that dies fails its bag — after one retry
+alone, since a dying worker also takes down the other conversions in flight in its pool.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import signal
+import time
+from collections.abc import Callable, Iterable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from r2d2_viz.errors import R2d2VizError, UsageError, one_line
+from r2d2_viz.fleet.identity import BagId, identify, is_up_to_date, output_path
+from r2d2_viz.signals import sigterm_raises
+from r2d2_viz.viewer.catalog import MARKER_PROPERTY, TOPICS_PROPERTY, recording_marker
+
+KILL_ENV = "R2D2_VIZ_FLEET_KILL"
+"""Fault injection for the tests: a worker converting the bag of this name kills itself (SIGKILL)."""
+
+
+@dataclass(frozen=True)
+class Job:
+    bag: Path
+    out: Path
+    name: str
+    size: int
+    recording_id: str
+    marker: str
+
+
+@dataclass(frozen=True)
+class Outcome:
+    job: Job
+    error: str | None = None
+    """None: converted; else one line saying why not."""
+    seconds: float = 0.0
+
+
+@dataclass
+class FleetReport:
+    converted: list[Outcome] = field(default_factory=list)
+    failed: list[tuple[Path, str]] = field(default_factory=list)
+    """(bag, why): bad input found before converting and conversions that failed."""
+    up_to_date: list[Path] = field(default_factory=list)
+    interrupted: bool = False
+
+
+Progress = Callable[[Outcome], None]
+
+
+def version() -> str:
+    from r2d2_viz import __version__
+
+    return __version__
+
+
+def plan_jobs(bags: Iterable[Path], out_dir: Path, *, force: bool, report: FleetReport) -> list[Job]:
+    """The bags to convert; bad ones (missing, unreadable, two of one name) and up-to-date ones go in ``report``."""
+    check_out_dir(out_dir)
+    found: dict[str, list[BagId]] = {}
+    for path in bags:
+        try:
+            bag = identify(path)
+        except UsageError as exc:
+            report.failed.append((path, str(exc)))
+            continue
+        found.setdefault(bag.name, []).append(bag)
+    jobs = []
+    for name, same in found.items():
+        if len(same) > 1:
+            listed = " and ".join(str(b.path) for b in same)
+            for bag in same:
+                report.failed.append((bag.path, f"{listed} would both be {name}.rrd: rename one (none converted)"))
+            continue
+        bag = same[0]
+        out = output_path(out_dir, bag)
+        if not force and out.exists() and is_up_to_date(out, bag, recording_marker(out), version()):
+            report.up_to_date.append(bag.path)
+            continue
+        jobs.append(Job(bag.path, out, bag.name, bag.size, bag.recording_id, bag.marker(version())))
+    return jobs
+
+
+def check_out_dir(out_dir: Path) -> None:
+    if out_dir.exists() and not out_dir.is_dir():
+        raise UsageError(f"--save-dir {out_dir}: not a directory")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"--save-dir {out_dir}: cannot create it ({exc.strerror})") from None
+    if not os.access(out_dir, os.W_OK | os.X_OK):
+        raise UsageError(f"--save-dir {out_dir}: not writable")
+
+
+def _topics(bag: Path) -> str | None:
+    """The bag's topics as JSON ``{topic: [type, count]}``, from its index (rosbags); None if it cannot say."""
+    try:
+        from rosbags.highlevel import AnyReader
+
+        with AnyReader([bag]) as reader:
+            topics: dict[str, list[object]] = {}
+            for c in reader.connections:
+                count = int(topics[c.topic][1]) if c.topic in topics else 0  # type: ignore[call-overload]
+                topics[c.topic] = [c.msgtype, count + c.msgcount]
+        return json.dumps(topics, sort_keys=True)
+    except Exception:
+        return None
+
+
+def temp_path(out: Path) -> Path:
+    return out.with_name(f".{out.name}.fleet-{os.getpid()}.partial")
+
+
+def convert_one(job: Job) -> Outcome:
+    """Convert one bag (in a worker process): never raises, never leaves a partial file."""
+    from r2d2_viz.runner import RunConfig, run
+    from r2d2_viz.viewer.sinks import SinkConfig
+
+    if os.environ.get(KILL_ENV) == job.name:
+        os.kill(os.getpid(), signal.SIGKILL)
+    start = time.perf_counter()
+    tmp = temp_path(job.out)
+    properties = [(MARKER_PROPERTY, job.marker)]
+    topics = _topics(job.bag)
+    if topics is not None:
+        properties.append((TOPICS_PROPERTY, topics))
+    sink = SinkConfig(save=tmp, recording_id=job.recording_id, properties=tuple(properties))
+    try:
+        run(RunConfig(bag=job.bag, sink=sink))
+        os.replace(tmp, job.out)
+    except R2d2VizError as exc:
+        return Outcome(job, one_line(exc), time.perf_counter() - start)
+    except Exception as exc:
+        return Outcome(job, f"unexpected {type(exc).__name__}: {one_line(exc)}", time.perf_counter() - start)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return Outcome(job, None, time.perf_counter() - start)
+
+
+def remove_partials(jobs: Iterable[Job]) -> None:
+    """What killed workers left: the hidden temporary files of these outputs (and the runner's own, inside)."""
+    for job in jobs:
+        mine = f".{job.out.name}.fleet-*.partial"
+        for pattern in (mine, f".{mine}.*.partial"):  # ours, and the runner's own beside it (".<ours>.<pid>.partial")
+            for leftover in job.out.parent.glob(pattern):
+                leftover.unlink(missing_ok=True)
+
+
+def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:
+    """Convert ``jobs`` in ``workers`` processes; False if interrupted (finished outputs kept)."""
+    try:
+        with sigterm_raises():  # SIGTERM stops it as Ctrl-C does
+            broken = _pool(jobs, workers, on_done)
+            for job in broken:  # alone, once more: a dying worker takes the others in its pool down with it
+                if _pool([job], 1, on_done):
+                    on_done(Outcome(job, "its worker process died (killed, or out of memory)"))
+    except KeyboardInterrupt:
+        for child in multiprocessing.active_children():
+            child.terminate()  # the runner turns SIGTERM into a clean stop: its partial file removed
+        return False
+    finally:
+        remove_partials(jobs)
+    return True
+
+
+def _pool(jobs: list[Job], workers: int, on_done: Progress) -> list[Job]:
+    """Run ``jobs``; the ones whose worker died are returned."""
+    broken: list[Job] = []
+    context = multiprocessing.get_context("spawn")  # no fork of a process holding Rerun's threads
+    with ProcessPoolExecutor(max_workers=max(1, min(workers, len(jobs) or 1)), mp_context=context) as pool:
+        pending: dict[Future[Outcome], Job] = {pool.submit(convert_one, job): job for job in jobs}
+        try:
+            while pending:
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    job = pending.pop(future)
+                    try:
+                        on_done(future.result())
+                    except BrokenProcessPool:
+                        broken.append(job)
+        except KeyboardInterrupt:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+    return broken

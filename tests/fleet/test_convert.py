@@ -1,0 +1,179 @@
+"""``r2d2-viz --bag BAG [BAG ...] --save-dir DIR`` (issue 25): the real CLI in subprocesses on bags written by
+rosbags — stable recording ids, up-to-date outputs skipped, failing bags one line each while the rest go on,
+a dying worker, Ctrl-C that keeps finished recordings and leaves no partial one."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+from pathlib import Path
+
+import pytest
+from bagmaker import storage_file
+from conftest import cli
+from fleetbags import still_bag
+from rerun.chunk import RrdReader
+
+NAMESPACE = uuid.UUID("5d6c1e1a-25f1-4c0e-9a55-2d2f1ee7a25e")  # the documented formula, in fleet/identity.py
+
+
+def _expected_id(bag: Path) -> str:
+    """UUID5 of name, total size and newest mtime of the bag's files (as the docstring of fleet/identity says)."""
+    files = [p for p in bag.iterdir() if p.is_file()] if bag.is_dir() else [bag]
+    name = bag.name if bag.is_dir() else bag.stem
+    size = sum(p.stat().st_size for p in files)
+    return str(uuid.uuid5(NAMESPACE, f"{name}\0{size}\0{max(p.stat().st_mtime_ns for p in files)}"))
+
+
+def _recording_id(rrd: Path) -> str:
+    return str(RrdReader(rrd).recordings()[0].recording_id)
+
+
+def _hidden(folder: Path) -> list[str]:
+    return [p.name for p in folder.iterdir() if p.name.startswith(".")]
+
+
+def test_each_bag_one_recording_with_a_stable_id_and_up_to_date_ones_skipped(tmp_path: Path) -> None:
+    a = still_bag(tmp_path / "a")
+    b = still_bag(tmp_path / "b", samples=7, storage="sqlite3")
+    single = storage_file(still_bag(tmp_path / "c_dir", samples=3))  # a bare .mcap file: named by its stem
+    out = tmp_path / "out"
+    result = cli("--bag", str(a), str(b), str(single), "--save-dir", str(out), "--jobs", "2")
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.splitlines() == [result.stderr.strip()]  # off a terminal: the summary line alone
+    assert "3 converted" in result.stderr
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(["a.rrd", "b.rrd", f"{single.stem}.rrd"])
+    ids = {p.name: _recording_id(p) for p in out.iterdir()}
+    assert ids == {"a.rrd": _expected_id(a), "b.rrd": _expected_id(b), f"{single.stem}.rrd": _expected_id(single)}
+    assert len(set(ids.values())) == 3
+    before = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
+
+    again = cli("--bag", str(a), str(b), str(single), "--save-dir", str(out))
+    assert again.returncode == 0 and "0 converted, 3 up to date" in again.stderr, again.stderr
+    assert {p.name: p.stat().st_mtime_ns for p in out.iterdir()} == before
+
+    os.utime(storage_file(a))  # the bag changed: converted again, under its new id
+    forced = cli("--bag", str(a), str(b), str(single), "--save-dir", str(out))
+    assert "1 converted, 2 up to date" in forced.stderr, forced.stderr
+    assert _recording_id(out / "a.rrd") == _expected_id(a) != ids["a.rrd"]
+    forced = cli("--bag", str(a), str(b), "--save-dir", str(out), "--force")
+    assert "2 converted" in forced.stderr and _recording_id(out / "b.rrd") == ids["b.rrd"]  # the same id again
+
+
+def test_bad_bags_are_one_line_each_and_the_rest_are_converted(tmp_path: Path) -> None:
+    good = still_bag(tmp_path / "good")
+    corrupt = tmp_path / "corrupt.mcap"
+    corrupt.write_bytes(b"\x89MCAP0\r\n" + os.urandom(500))
+    (tmp_path / "x").mkdir()
+    (tmp_path / "y").mkdir()
+    twin_a, twin_b = still_bag(tmp_path / "x" / "twin"), still_bag(tmp_path / "y" / "twin")
+    missing = tmp_path / "missing"
+    out = tmp_path / "out"
+    result = cli("--bag", str(good), str(corrupt), str(twin_a), str(twin_b), str(missing), "--save-dir", str(out))
+    assert result.returncode == 2
+    lines = result.stderr.splitlines()
+    assert len(lines) == 5, result.stderr  # corrupt, two twins, missing, the summary
+    assert any(str(corrupt) in line for line in lines[:-1])
+    assert sum("would both be twin.rrd" in line for line in lines) == 2
+    assert any(f"{missing}: no such bag" in line for line in lines)
+    assert "1 converted, 4 failed" in lines[-1]
+    assert "Traceback" not in result.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["good.rrd"]  # nothing half-written, no hidden leftovers
+
+
+def test_an_unusable_output_folder_is_one_line(tmp_path: Path) -> None:
+    bag = still_bag(tmp_path / "bag")
+    afile = tmp_path / "file"
+    afile.write_text("")
+    result = cli("--bag", str(bag), "--save-dir", str(afile))
+    assert result.returncode == 2 and result.stderr.strip() == f"error: --save-dir {afile}: not a directory"
+    result = cli("--bag", str(bag), "--save-dir", str(afile / "sub"))
+    assert result.returncode == 2 and "cannot create it" in result.stderr and len(result.stderr.splitlines()) == 1
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or not Path("/usr/bin/setpriv").exists(), reason="needs root and setpriv")
+def test_an_unwritable_folder_and_an_unreadable_bag_as_another_user() -> None:
+    with tempfile.TemporaryDirectory() as where:  # /tmp/pytest-of-root is root's alone: a folder nobody reaches
+        _as_nobody(Path(where))
+
+
+def _as_nobody(tmp_path: Path) -> None:
+    tmp_path.chmod(0o755)
+    bag = still_bag(tmp_path / "bag")
+    locked = still_bag(tmp_path / "locked")
+    for p in [bag, *bag.iterdir(), locked, *locked.iterdir()]:
+        p.chmod(0o755 if p.is_dir() else 0o644)
+    storage_file(locked).chmod(0o600)
+    out = tmp_path / "out"
+    out.mkdir(mode=0o755)
+    exe = str(Path(sys.executable).parent / "r2d2-viz")
+    nobody = ["/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", exe]
+    env = {**os.environ, "HOME": str(tmp_path)}
+    result = subprocess.run(
+        [*nobody, "--bag", str(bag), "--save-dir", str(out)], capture_output=True, text=True, env=env
+    )
+    assert result.returncode == 2 and result.stderr.strip() == f"error: --save-dir {out}: not writable"
+    out.chmod(0o777)  # (the bag alone: this venv's python lives under /root, where nobody starts a worker)
+    result = subprocess.run(
+        [*nobody, "--bag", str(locked), "--save-dir", str(out)], capture_output=True, text=True, env=env
+    )
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.splitlines()[0] == f"error: {storage_file(locked)}: not readable (permission denied)"
+    assert "0 converted, 1 failed" in result.stderr and not list(out.iterdir())
+
+
+def test_a_worker_that_dies_fails_its_bag_and_the_rest_finish(tmp_path: Path) -> None:
+    bags = [still_bag(tmp_path / name) for name in ("one", "two", "three")]
+    out = tmp_path / "out"
+    result = cli(*["--bag", *map(str, bags)], "--save-dir", str(out), "--jobs", "2", env={"R2D2_VIZ_FLEET_KILL": "two"})
+    assert result.returncode == 2
+    assert f"error: {bags[1]}: its worker process died" in result.stderr
+    assert "2 converted, 1 failed" in result.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["one.rrd", "three.rrd"]
+
+
+@pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
+def test_ctrl_c_keeps_finished_recordings_and_leaves_no_partial_one(tmp_path: Path, how: str) -> None:
+    bags = [still_bag(tmp_path / f"bag{k}", samples=20) for k in range(6)]
+    out = tmp_path / "out"
+    exe = str(Path(sys.executable).parent / "r2d2-viz")
+    proc = subprocess.Popen(
+        [exe, "--bag", *map(str, bags), "--save-dir", str(out), "--jobs", "1"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not list(out.glob("*.rrd")) and proc.poll() is None:
+        time.sleep(0.05)
+    if how == "ctrl-c":
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal does: to the whole foreground group
+    else:
+        proc.send_signal(signal.SIGTERM)  # to the app alone: it stops its workers
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    finished = sorted(out.glob("*.rrd"))
+    assert 1 <= len(finished) < 6 and not _hidden(out)
+    time.sleep(1)
+    assert not _hidden(out) and sorted(out.glob("*.rrd")) == finished  # no worker went on writing
+    for rrd in finished:
+        assert _recording_id(rrd) == _expected_id(tmp_path / rrd.stem)
+
+
+def test_one_bag_still_works_as_before_and_several_need_a_folder(tmp_path: Path) -> None:
+    bag = still_bag(tmp_path / "bag")
+    result = cli("--bag", str(bag), "--save", str(tmp_path / "one.rrd"))
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.rrd").exists()
+    result = cli("--bag", str(bag), str(bag), "--save", str(tmp_path / "two.rrd"))
+    assert result.returncode == 2 and "give --save-dir DIR" in result.stderr
+    result = cli("--bag", str(bag), "--jobs", "2")
+    assert result.returncode == 2 and "--jobs goes with --save-dir" in result.stderr

@@ -1,0 +1,125 @@
+"""``r2d2-viz --dataset DIR`` (issue 25): the real CLI serving a folder of fleet recordings through Rerun's catalog
+server on loopback — a catalog client sees one segment per recording, keyed by the bag's recording id; it listens
+on 127.0.0.1 only; ``--serve`` adds a web viewer; Ctrl-C stops both — and bad folders are one line."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+from conftest import cli, listening_addresses
+from fleetbags import still_bag
+from rerun.chunk import RrdReader
+
+EXE = str(Path(sys.executable).parent / "r2d2-viz")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture(scope="module")
+def fleet(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("fleet")
+    bags = [still_bag(root / name, samples=3) for name in ("alpha", "beta")]
+    result = cli("--bag", *map(str, bags), "--save-dir", str(root / "out"))
+    assert result.returncode == 0, result.stderr
+    return root / "out"
+
+
+def _start(*args: str) -> tuple[subprocess.Popen[str], str]:
+    proc = subprocess.Popen(
+        [EXE, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
+    assert proc.stderr is not None
+    lines = []
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        lines.append(line)
+        if line.startswith("serving dataset") or not line:
+            break
+    return proc, "".join(lines)
+
+
+def _stop(proc: subprocess.Popen[str], how: signal.Signals = signal.SIGINT) -> int:
+    """Ctrl-C as a terminal sends it (to the whole group), or SIGTERM to the app alone."""
+    if how == signal.SIGINT:
+        os.killpg(proc.pid, how)
+    else:
+        proc.send_signal(how)
+    return proc.wait(timeout=30)
+
+
+def test_a_catalog_client_sees_one_segment_per_recording(fleet: Path) -> None:
+    from rerun.catalog import CatalogClient
+
+    port = _free_port()
+    proc, said = _start("--dataset", str(fleet), "--headless", "--port", str(port))
+    try:
+        assert f"serving dataset 'out' ({fleet}) at rerun+http://127.0.0.1:{port}" in said, said
+        assert listening_addresses(port) == {"127.0.0.1"}
+        client = CatalogClient(f"rerun+http://127.0.0.1:{port}")
+        dataset = client.get_dataset("out")
+        expected = {str(RrdReader(p).recordings()[0].recording_id) for p in fleet.glob("*.rrd")}
+        assert set(dataset.segment_ids()) == expected and len(expected) == 2
+    finally:
+        code = _stop(proc, signal.SIGTERM)
+    assert code == 0
+    assert not listening_addresses(port)
+
+
+def test_serve_adds_a_web_viewer_and_ctrl_c_stops_both(fleet: Path) -> None:
+    port, web = _free_port(), _free_port()
+    proc, said = _start("--dataset", str(fleet), "--serve", "--port", str(port), "--web-port", str(web))
+    try:
+        assert f"open http://localhost:{web}/?url=rerun%2Bhttp%3A%2F%2F127.0.0.1%3A{port}" in said, said
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and not listening_addresses(web):
+            time.sleep(0.1)
+        with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=10) as page:
+            assert page.status == 200
+        assert listening_addresses(web) == {"127.0.0.1"}
+    finally:
+        code = _stop(proc)
+    assert code == 0
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline and (listening_addresses(web) or listening_addresses(port)):
+        time.sleep(0.1)
+    assert not listening_addresses(web) and not listening_addresses(port)
+
+
+def test_bad_folders_are_one_line(fleet: Path, tmp_path: Path) -> None:
+    (tmp_path / "link.rrd").symlink_to(next(fleet.glob("*.rrd")))
+    result = cli("--dataset", str(tmp_path), "--headless")
+    assert result.returncode == 2
+    lines = result.stderr.splitlines()
+    assert len(lines) == 2 and "1 symlinked .rrd file(s) the catalog skips" in lines[0]
+    assert lines[1] == f"error: --dataset {tmp_path}: no .rrd recordings in it"
+    result = cli("--dataset", str(fleet), env={"DISPLAY": "", "WAYLAND_DISPLAY": ""})
+    assert result.returncode == 2 and "--spawn: no display" in result.stderr
+    result = cli("--dataset", str(fleet), "--bag", str(fleet))
+    assert result.returncode == 2 and "--bag goes with --save-dir" in result.stderr
+
+
+def test_the_example_sums_up_the_fleet(fleet: Path, tmp_path: Path) -> None:
+    example = Path(__file__).resolve().parents[2] / "examples" / "fleet_summary.py"
+    result = subprocess.run(
+        [sys.executable, str(example), str(fleet), "--csv", str(tmp_path / "f.csv")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    # still_bag: no transforms, so the base never moves (0 m); 3 samples 0.1 s apart
+    assert result.stdout.splitlines()[0] == "2 runs, 0.00 h, the robots' bases travelled 0.0 m in all"
+    assert "alpha" in result.stdout and "beta" in result.stdout and (tmp_path / "f.csv").exists()
