@@ -105,6 +105,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FRAME",
         help="the 3D view's frame (default: the TF tree's root, or odom)",
     )
+    bags.add_argument(
+        "--shared-frames",
+        default=None,
+        metavar="FRAMES",
+        help="several robots (every namespace with a robot_description): the frames they share, comma-separated, "
+        "never prefixed with a robot's namespace (default: map,world,earth)",
+    )
     fleet = parser.add_argument_group("fleets: many bags, one Rerun dataset")
     fleet.add_argument(
         "--save-dir", type=Path, default=None, metavar="DIR", help="convert every --bag to DIR/<bag name>.rrd"
@@ -293,6 +300,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         speed=args.speed,
         time=args.time,
         fixed_frame=args.fixed_frame,
+        shared_frames=_frames(args.shared_frames),
         rviz=args.rviz,
         ros=args.ros,
         start_offset=args.start_offset,
@@ -313,6 +321,18 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise
     print_summary(result, config)
     return EXIT_OK
+
+
+def _frames(text: str | None) -> tuple[str, ...] | None:
+    """``--shared-frames map,world`` → its frames."""
+    if text is None:
+        return None
+    from r2d2_viz.errors import UsageError
+
+    frames = tuple(f.strip() for f in text.split(",") if f.strip())
+    if not frames:
+        raise UsageError(f"--shared-frames {text!r}: expected frame names separated by commas, such as map,world")
+    return frames
 
 
 def _no_display(serving: str, port: int, web_port: int) -> str:

@@ -17,14 +17,14 @@ import os
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Protocol, TextIO
+from typing import Protocol
 
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
-from r2d2_viz.pacing import PACING_LOG_ENV
+from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import load_robot
@@ -44,7 +44,7 @@ from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
-from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.tf_recorded import RecordedTf
 
 POLL_SECONDS = 0.02
@@ -57,31 +57,6 @@ SETTLE_SECONDS = 1.5
 TF_TOPICS = ("/tf", "/tf_static")
 FLUSH_SECONDS = 5.0
 """Wait for the sinks this often (backpressure: a slow sink makes the run lag instead of piling up memory)."""
-
-
-class LatenessLog:
-    """The benchmark hook (``benchmarks/live_app.py``): when ``R2D2_VIZ_PACING_LOG`` names a file, one line per
-    message handed to Rerun, ``topic lateness_seconds`` — the wall time (``time.time()``) when its send returned
-    minus its DDS source timestamp (for ``/joint_states`` the chunk's times: header stamps with ``--time header``).
-    """
-
-    def __init__(self, file: TextIO | None) -> None:
-        self.file = file
-
-    @classmethod
-    def from_env(cls) -> LatenessLog:
-        path = os.environ.get(PACING_LOG_ENV)
-        return cls(open(path, "w", buffering=1 << 16) if path else None)
-
-    def sent(self, topic: str, stamps_ns: Iterable[int]) -> None:
-        """``stamps_ns``' messages were just handed to Rerun."""
-        if self.file is not None:
-            now = time.time()
-            self.file.write("".join(f"{topic} {now - int(t) * 1e-9:.6f}\n" for t in stamps_ns))
-
-    def close(self) -> None:
-        if self.file is not None:
-            self.file.close()
 
 
 class LiveConfig(Protocol):
@@ -140,12 +115,13 @@ def run_on(
     lateness = LatenessLog.from_env()
     try:
         recording = output.open(view, on_ready)
-        scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness)
+        scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
         latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
         for k, batch in enumerate(batches):
             if k < latest:  # a description the settle's latest one replaced: not worth a word
                 batch.descriptions.clear()
             scene.handle(batch, output.bag)
+        scene.robots.check()
         flushed = time.monotonic()
         while not deadline.done():
             scene.handle(source.poll(), output.bag)
@@ -220,7 +196,10 @@ def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> 
     root = tree.robot.root if tree is not None else None
     frame = config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
     plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
-    return plan, plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    if names := robot_namespaces(batches):  # several robots: a plot each, shapes under /robots/<namespace>
+        view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=names))
+    return plan, view
 
 
 class _Output:
@@ -279,6 +258,7 @@ class _Scene:
         fixed_frame: str,
         recording: Recording,
         lateness: LatenessLog,
+        batches: Sequence[LiveBatch] = (),
     ) -> None:
         rec = recording.rec
         self.model, self.source, self.view, self.fixed_frame, self.rec = model, source, view, fixed_frame, rec
@@ -298,6 +278,8 @@ class _Scene:
             styles=view.display_styles,
             load_mesh=uri_loader(model.packages, Path(".")),
         )
+        self.robots = LiveRobots(self, batches, model.packages, lateness.sent)
+        """The namespaced robots (several robots: :class:`r2d2_viz.viewer.stream.LiveRobots`)."""
         if model.robot is not None:
             self._load(model.robot)
         else:
@@ -319,7 +301,7 @@ class _Scene:
         )
         self.streamer.notices = self.notices
         self.streamer.log_static()
-        self.recorded.skip = set(urdf_edges(tree))
+        self.recorded.skip = set(urdf_edges(tree)) | self.robots.edges
         self.source.set_joints(tree.actuated)
 
     def _describe(self, text: str) -> None:
@@ -351,6 +333,7 @@ class _Scene:
             text = batch.descriptions[-1]
             if text != self.model.description:
                 self._describe(text)
+        self.robots.describe(batch)
         for records in batch.tf:
             self.children.update(records.children)
             self.recorded.log(records)
@@ -360,6 +343,7 @@ class _Scene:
             self.streamer.send(self.streamer.prepare(batch.joints))
             self.samples += len(batch.joints)
             self.lateness.sent("/joint_states", batch.joints.times_ns)
+        self.samples += self.robots.send(batch)
         for message in batch.displays:
             self.feed.log(message)
             self.lateness.sent(message.topic, (message.time_ns,))
@@ -370,6 +354,7 @@ class _Scene:
         self.feed.finish()
         if self.streamer is not None:
             self.streamer.finish()
+        self.robots.finish()
 
 
 def _say_received(source: LiveSource, seconds: float) -> None:

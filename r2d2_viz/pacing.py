@@ -14,7 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Iterable
 from contextlib import nullcontext
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TextIO
 
 import numpy as np
@@ -23,7 +23,7 @@ from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.base import SampleChunk
 from r2d2_viz.sources.playback import Window
 from r2d2_viz.viewer.display_feed import DisplayFeed
-from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.tf_recorded import TfFeed
 
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
@@ -34,12 +34,39 @@ MAX_SLEEP = 0.1
 """Sleep at most this long at a time, so a signal (which sets the stop event) is seen soon."""
 
 
+class LatenessLog:
+    """The benchmark hook (``benchmarks/live_app.py``): when ``R2D2_VIZ_PACING_LOG`` names a file, one line per
+    message handed to Rerun, ``topic lateness_seconds`` — the wall time (``time.time()``) when its send returned
+    minus its DDS source timestamp (for ``/joint_states`` the chunk's times: header stamps with ``--time header``).
+    """
+
+    def __init__(self, file: TextIO | None) -> None:
+        self.file = file
+
+    @classmethod
+    def from_env(cls) -> LatenessLog:
+        path = os.environ.get(PACING_LOG_ENV)
+        return cls(open(path, "w", buffering=1 << 16) if path else None)
+
+    def sent(self, topic: str, stamps_ns: Iterable[int]) -> None:
+        """``stamps_ns``' messages were just handed to Rerun."""
+        if self.file is not None:
+            now = time.time()
+            self.file.write("".join(f"{topic} {now - int(t) * 1e-9:.6f}\n" for t in stamps_ns))
+
+    def close(self) -> None:
+        if self.file is not None:
+            self.file.close()
+
+
 @dataclass
 class Feeds:
     """Recorded transforms and display messages, handed on in time order as far as a replay has got."""
 
     tf: TfFeed
     displays: DisplayFeed | None = None
+    robots: list[RobotFeed] = field(default_factory=list)
+    """Several robots: the second, third… (the first is the run's streamer)."""
 
     def push(self, window: Window) -> None:
         """A stretch's transforms and display messages, logged by :meth:`until` when due."""
@@ -48,17 +75,25 @@ class Feeds:
             self.displays.add_tf(window.tf)
             if window.displays:
                 self.displays.push(window.displays)
+        for robot, chunk in zip(self.robots, window.more_joints, strict=False):
+            robot.push(chunk)
 
     @property
     def next_time_ns(self) -> int | None:
         tf = self.tf.next_time_ns
         shown = self.displays.next_time_ns if self.displays is not None else None
-        return shown if tf is None else tf if shown is None else min(tf, shown)
+        first = shown if tf is None else tf if shown is None else min(tf, shown)
+        for robot in self.robots:
+            t = robot.next_time_ns
+            first = t if first is None else first if t is None else min(first, t)
+        return first
 
     def until(self, time_ns: int | None = None) -> None:
         self.tf.until(time_ns)
         if self.displays is not None:
             self.displays.until(time_ns)
+        for robot in self.robots:
+            robot.until(time_ns)
 
     @property
     def sent(self) -> int:

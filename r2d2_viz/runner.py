@@ -29,12 +29,13 @@ from r2d2_viz.sources.base import Clock, Source
 from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
 from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, read_ahead
+from r2d2_viz.sources.robots import SHARED_FRAMES, robots_read
 from r2d2_viz.viewer.display_feed import DisplayFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
-from r2d2_viz.viewer.layout.plan import plan_view
+from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
-from r2d2_viz.viewer.sinks import SinkConfig, close_recording, open_recording
-from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
+from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
@@ -74,6 +75,8 @@ class RunConfig:
     time: TimeSource = "receive"
     """A bag's times: when each message was received (recorded), or its header stamp."""
     fixed_frame: str | None = None
+    shared_frames: tuple[str, ...] | None = None
+    """Several robots: the frames they share, never prefixed (None: :data:`r2d2_viz.sources.robots.SHARED_FRAMES`)."""
     rviz: Path | None = None
     """Lay the viewer out as this RViz config does (default: the tutorial's r2d2.rviz, fitted to the robot)."""
     ros: bool = False
@@ -123,6 +126,9 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
         if save is not None and save.suffix == ".mcap":
             from r2d2_viz.ros_out.bag_out import write_bag
 
+            if len(plan.robots) > 1:
+                first = plan.robots[0].name
+                print(f"warning: {config.bag}: several robots: {save} holds only the first, {first}", file=sys.stderr)
             with sigterm_raises():
                 samples = write_bag(save, plan, plan.description or _description_text(config))
             return RunResult(samples=samples, interrupted=False, saved=save)
@@ -171,6 +177,7 @@ def _plan(config: RunConfig, inputs: ExitStack) -> RunPlan:
             fixed_frame=config.fixed_frame,
             packages=packages,
             choice=BagChoice(config.start_offset, config.duration, config.topics),
+            shared_frames=config.shared_frames or SHARED_FRAMES,
         )
     loaded = robot()
     return plan_motion(compile_tree(loaded), config.source(loaded), config.fixed_frame or ODOM)
@@ -188,18 +195,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         try:
             rec = recording.rec
-            streamer = None
-            if tree is not None:
-                streamer = RobotStream(
-                    rec,
-                    tree,
-                    frames=plan.source.frames if plan.source is not None else (),
-                    clock=clock,
-                    fixed_frame=plan.fixed_frame,
-                    root_placed=plan.root_placed,
-                    axis_length=view.axis_length,
-                    show_names=view.show_names,
-                )
+            streamers = _robot_streams(recording, plan, view, clock) if tree is not None else []
+            streamer = streamers[0] if streamers else None
             notices = streamer.notices if streamer is not None else Notices(rec)
             for note in (*plan.notes, *view.notes):
                 notices.report(note)
@@ -223,9 +220,9 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.push(plan.seek_messages)
-            feeds = Feeds(TfFeed(recorded), displays)
-            if streamer is not None:
-                streamer.log_static()
+            feeds = Feeds(TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]])
+            for robot in streamers:
+                robot.log_static()
             with progress_bar(plan, config) as shown:
                 windows = _windows(plan, config, displays)
                 if config.live:
@@ -236,8 +233,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             _other_topics(plan, config, notices)
             if displays is not None:
                 displays.finish()
-            if streamer is not None:
-                streamer.finish()
+            for robot in streamers:
+                robot.finish()
         finally:
             close_recording(recording)
         if tmp is not None and save is not None:
@@ -247,6 +244,42 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             tmp.unlink(missing_ok=True)
         raise
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
+
+
+def _robot_streams(recording: Recording, plan: RunPlan, view: ViewPlan, clock: Clock) -> list[RobotStream]:
+    """A stream per robot: the plan's one, or each of several (:mod:`r2d2_viz.sources.robots`), its shapes and
+    plots under ``/robots/<namespace>/`` when there are several."""
+    rec = recording.rec
+    if plan.tree is None:
+        return []
+    if not plan.robots:
+        return [
+            RobotStream(
+                rec,
+                plan.tree,
+                frames=plan.source.frames if plan.source is not None else (),
+                clock=clock,
+                fixed_frame=plan.fixed_frame,
+                root_placed=plan.root_placed,
+                axis_length=view.axis_length,
+                show_names=view.show_names,
+            )
+        ]
+    several = len(plan.robots) > 1
+    return [
+        RobotStream(
+            rec,
+            robot.tree,
+            clock=clock,
+            fixed_frame=plan.fixed_frame,
+            root_placed=plan.placed(robot.tree.robot.root),
+            axis_length=view.axis_length,
+            show_names=view.show_names,
+            robot_name=robot.namespace if several else "",
+            frame_prefix=robot.prefix,
+        )
+        for robot in plan.robots
+    ]
 
 
 def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> Iterator[Window]:
@@ -287,7 +320,7 @@ def _batch(
         if progress is not None:
             progress(window)
     feed.until(None)
-    return samples or feed.sent
+    return (samples + sum(r.sent for r in feed.robots)) or feed.sent
 
 
 def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:
@@ -297,7 +330,8 @@ def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:
     if plan.mcap_files and skipped and not config.live:
         from r2d2_viz.viewer.bag_topics import OURS, log_other_topics
 
-        result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=(*OURS, *plan.displays))
+        exclude = (*OURS, *plan.displays, *robots_read(plan.robots))
+        result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=exclude)
         for topic in result.logged:
             skipped.pop(topic, None)
     if skipped:

@@ -41,8 +41,15 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
     ("RobotModel", "Alpha", "the URDF colours' alpha; below 1 noted"),
     (
         "RobotModel",
-        "Description Source, Topic, File, TF Prefix",
-        "none: r2d2-viz reads the URDF itself (`--urdf`, or a bag's `/robot_description`)",
+        "Description Topic, TF Prefix",
+        "several robots: each RobotModel display's settings apply to the robot of its Description Topic "
+        "(`/robot2/robot_description` → `/robots/robot2/**`); a TF Prefix other than the one the recording shows is "
+        "noted",
+    ),
+    (
+        "RobotModel",
+        "Description Source, File",
+        "none: r2d2-viz reads the URDF itself (`--urdf`, or a bag's `<namespace>/robot_description`)",
     ),
     (
         "LaserScan, PointCloud2, PointCloud, Marker, MarkerArray, Path, Odometry, Pose, PoseWithCovariance, "

@@ -104,6 +104,7 @@ class Reader:
         grid: Grid | None = None
         tf: Tf | None = None
         robot: RobotModel | None = None
+        more_robots: list[RobotModel] = []
         topics: list[TopicDisplay] = []
         for display, where in self.displays(manager.get("Displays") or [], "Displays"):
             kind = short_class(display.get("Class"))
@@ -113,6 +114,8 @@ class Reader:
                 tf = self.tf(display, where)
             elif kind == "RobotModel" and robot is None:
                 robot = self.robot(display, where)
+            elif kind == "RobotModel":
+                more_robots.append(self.robot(display, where))
             elif kind in SCENE_ROBOT_DISPLAYS and isinstance(display.get("Scene Robot"), dict):
                 # MoveIt's planning displays draw the robot themselves (their "Scene Robot")
                 if robot is None and self.enabled(display, where):
@@ -134,7 +137,8 @@ class Reader:
         views = manager.get("Views") or {}
         current = views.get("Current") if isinstance(views, dict) else None
         camera = read_camera(self, current, fixed) if isinstance(current, dict) else None
-        return ViewSpec(self.source, fixed, background, grid, tf, robot, camera, tuple(topics), tuple(self.notes))
+        shown, notes = tuple(topics), tuple(self.notes)
+        return ViewSpec(self.source, fixed, background, grid, tf, robot, camera, shown, notes, tuple(more_robots))
 
     def tools_and_panels(self, tools: Any, panels: Any) -> None:
         """One note naming every tool and panel (none has a counterpart: Rerun's viewer has its own camera,
@@ -222,6 +226,8 @@ class Reader:
             collision=self.flag(d, collision_key, False, where),
             alpha=alpha,
             hidden_links=hidden,
+            description_topic=self.text(d, "Description Topic", "", where) or "/robot_description",
+            tf_prefix=self.text(d, "TF Prefix", "", where).strip("/"),
         )
 
 

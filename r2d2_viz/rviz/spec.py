@@ -109,6 +109,10 @@ class RobotModel:
     collision: bool = False
     alpha: float = 1.0
     hidden_links: tuple[str, ...] = ()
+    description_topic: str = "/robot_description"
+    """Which robot it draws (several robots: ``/robot2/robot_description``)."""
+    tf_prefix: str = ""
+    """The prefix of the robot's frames (robot_state_publisher's ``frame_prefix``), ``robot1`` or ``""``."""
 
 
 @dataclass(frozen=True)
@@ -147,6 +151,8 @@ class ViewSpec:
     topics: tuple[TopicDisplay, ...] = ()
     notes: tuple[str, ...] = ()
     """One line per thing with no counterpart in Rerun, naming it."""
+    more_robots: tuple[RobotModel, ...] = ()
+    """The config's other RobotModel displays (several robots, each its own Description Topic)."""
 
 
 def orbit_eye(

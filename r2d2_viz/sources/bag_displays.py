@@ -56,3 +56,21 @@ def frames_of(messages: Iterable[TopicMessage]) -> set[str]:
         parts = [decoded] if isinstance(decoded, Decoded) else [op.decoded for op in decoded if op.decoded]
         frames.update(d.frame_id for d in parts if d.frame_id)
     return frames
+
+
+def first_messages(
+    bag: Bag, shown: dict[str, str], start: int, stop: int, wanted: int, max_bytes: int = 64 << 20
+) -> tuple[TopicMessage, ...]:
+    """The first ``wanted`` messages of the display topics ``shown`` in ``[start, stop)``, reading no more than
+    about ``max_bytes`` of them (a bag whose displays start late: what the view is fitted to)."""
+    found: list[TopicMessage] = []
+    seen = 0
+    for block in bag.blocks(tuple(shown), start_ns=start, stop_ns=stop):
+        for t, topic, data in block.messages():
+            found.append(TopicMessage(t, topic, shown[topic], bytes(data)))
+            if len(found) >= wanted:
+                return tuple(found)
+        seen += block.nbytes
+        if seen > max_bytes:
+            break
+    return tuple(found)

@@ -23,6 +23,7 @@ from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bags.storage import Block
 from r2d2_viz.sources.base import SampleChunk, Source, TfRecords
+from r2d2_viz.sources.robots import renamed
 
 JOINTS, TF = "/joint_states", "/tf"
 WINDOW_BYTES = 32 << 20
@@ -41,6 +42,8 @@ class Window:
     displays: tuple[TopicMessage, ...] = ()
     nbytes: int = 0
     """Bytes of bag messages in it (progress)."""
+    more_joints: tuple[SampleChunk | None, ...] = ()
+    """Several robots: the joint states of the second, third… (``joints`` holds the first's)."""
 
 
 def source_windows(source: Source, max_samples: int) -> Iterator[Window]:
@@ -60,7 +63,9 @@ class Segment:
 
 class BagPass:
     """The bag's wanted topics read once, in time order, as windows (see the module docstring). ``actuated``: the
-    robot's joints (None: joint states are not read); ``displays``: display topic → type."""
+    robot's joints (None: joint states are not read); ``displays``: display topic → type. Several robots
+    (:mod:`r2d2_viz.sources.robots`): ``robots`` lists each one's joint-states topic and joints (None: not read) and
+    replaces ``actuated``; ``tf_topics`` maps each TF topic read to the prefix its frames take."""
 
     def __init__(
         self,
@@ -72,14 +77,27 @@ class BagPass:
         time: TimeSource = "receive",
         quiet: bool = False,
         predecode: Callable[[TopicMessage], TopicMessage] | None = None,
+        robots: Sequence[tuple[str, Sequence[str] | None]] = (),
+        tf_topics: Mapping[str, str] | None = None,
+        shared: Sequence[str] = (),
     ) -> None:
         self.bag, self.segments, self.displays, self.time = bag, tuple(segments), dict(displays), time
         self.quiet = quiet
         """Say nothing of what was skipped (a look-ahead: the pass itself says it)."""
         self.predecode = predecode
         """Decodes each display message as it is read (in :func:`read_ahead`'s thread, beside the writing)."""
+        self.joints_topic = robots[0][0] if robots else JOINTS
+        if robots:
+            actuated = robots[0][1]
         self.joints = JointStateDecoder(actuated, time=time, deserialize=bag.deserialize) if actuated else None
+        self.others = [
+            (topic, JointStateDecoder(joints, time=time, deserialize=bag.deserialize) if joints else None)
+            for topic, joints in robots[1:]
+        ]
+        self._others_last = [(np.iinfo(np.int64).min, 0) for _ in self.others]
         self.tf = TfDecoder(bag.deserialize, static=False, time=time)
+        self.tf_topics = dict(tf_topics) if tf_topics is not None else {TF: ""}
+        self.shared = tuple(shared)
         self.read_ns = 0
         """How far the pass has read (receive time)."""
         self._last_ns = np.iinfo(np.int64).min
@@ -93,7 +111,7 @@ class BagPass:
         for segment in self.segments:
             for block in self.bag.blocks(segment.topics, start_ns=segment.start_ns, stop_ns=segment.stop_ns):
                 for piece in self._pieces(block, max_samples, max_bytes):
-                    n = len(piece.rows(JOINTS)) if self.joints is not None else 0
+                    n = len(piece.rows(self.joints_topic)) if self.joints is not None else 0
                     if pending and (size + piece.nbytes > max_bytes or samples + n > max_samples):
                         yield self._window(pending)
                         pending, size, samples = [], 0, 0
@@ -105,7 +123,7 @@ class BagPass:
 
     def _pieces(self, block: Block, max_samples: int, max_bytes: int) -> Iterator[Block]:
         """``block`` cut where it holds ``max_samples`` joint states or ``max_bytes``."""
-        joint_rows = block.rows(JOINTS) if self.joints is not None else np.zeros(0, dtype=np.int64)
+        joint_rows = block.rows(self.joints_topic) if self.joints is not None else np.zeros(0, dtype=np.int64)
         cuts = {0, len(block)}
         if len(joint_rows) > max_samples:  # a long stretch of joint states: cut where a chunk is full
             cuts |= {int(r) for r in joint_rows[max_samples::max_samples]}
@@ -121,14 +139,24 @@ class BagPass:
         chunks: list[SampleChunk] = []
         records: list[TfRecords] = []
         messages: list[TopicMessage] = []
+        others: list[list[SampleChunk]] = [[] for _ in self.others]
         for block in pieces:
-            if self.joints is not None and len(rows := block.rows(JOINTS)):
+            if self.joints is not None and len(rows := block.rows(self.joints_topic)):
                 chunk = self.joints.decode_block(block.take(rows))
                 if chunk is not None:
                     chunk, self._last_ns, self._moved = monotonic(chunk, self._last_ns, self._moved)
                     chunks.append(chunk)
-            if len(rows := block.rows(TF)):
-                records.append(self.tf.decode(block.take(rows).pairs()))
+            for i, (topic, decoder) in enumerate(self.others):
+                if decoder is not None and len(rows := block.rows(topic)):
+                    chunk = decoder.decode_block(block.take(rows))
+                    if chunk is not None:
+                        chunk, last_ns, moved = monotonic(chunk, *self._others_last[i])
+                        self._others_last[i] = (last_ns, moved)
+                        others[i].append(chunk)
+            for topic, prefix in self.tf_topics.items():
+                if len(rows := block.rows(topic)):
+                    decoded = self.tf.decode(block.take(rows).pairs())
+                    records.append(renamed(decoded, prefix, self.shared) if prefix else decoded)
             for topic, msgtype in self.displays.items():
                 for t, data in block.take(block.rows(topic)).pairs():
                     messages.append(TopicMessage(t, topic, msgtype, data))
@@ -137,21 +165,23 @@ class BagPass:
             messages = [self.predecode(m) for m in messages]
         self.read_ns = int(pieces[-1].times_ns[-1])
         tf = concatenate([r for r in records if len(r)])
-        return Window(self.read_ns, _joined(chunks), tf, tuple(messages), sum(p.nbytes for p in pieces))
+        more = tuple(_joined(c) for c in others)
+        return Window(self.read_ns, _joined(chunks), tf, tuple(messages), sum(p.nbytes for p in pieces), more)
 
     def _finish(self) -> None:
         if self.quiet:
             return
         warn, path = self.bag.warn, self.bag.path
-        if self.joints is not None:
-            for problem in self.joints.problems():
-                warn(f"{path}: {JOINTS}: {problem}")
-        if self._moved:
-            warn(
-                f"{path}: {JOINTS}: {self._moved} header stamps went back in time; they are shown at the previous stamp"
-            )
+        decoders = [(self.joints_topic, self.joints, self._moved)]
+        decoders += [(t, d, last[1]) for (t, d), last in zip(self.others, self._others_last, strict=True)]
+        for topic, decoder, moved in decoders:
+            for problem in decoder.problems() if decoder is not None else ():
+                warn(f"{path}: {topic}: {problem}")
+            if moved:
+                warn(f"{path}: {topic}: {moved} header stamps went back in time; they are shown at the previous stamp")
         if self.tf.bad:
-            warn(f"{path}: {TF}: skipped {self.tf.bad} messages that cannot be decoded")
+            tf = TF if len(self.tf_topics) == 1 else "TF topics"
+            warn(f"{path}: {tf}: skipped {self.tf.bad} messages that cannot be decoded")
 
 
 def bag_topics_read(bag: Bag, actuated: Sequence[str] | None, displays: Mapping[str, str]) -> tuple[str, ...]:

@@ -25,7 +25,9 @@ def urdf_edges(tree: KinematicTree) -> dict[tuple[str, str], tuple[str, int]]:
     return out
 
 
-def disagreement(tree: KinematicTree, records: TfRecords, times_ns: I64, q: F64) -> str | None:
+def disagreement(
+    tree: KinematicTree, records: TfRecords, times_ns: I64, q: F64, *, joints_topic: str = "/joint_states"
+) -> str | None:
     """The worst disagreement, in words, between ``records`` and the kinematics of the joint positions ``q``
     ``(T, A)`` held from ``times_ns`` ``(T,)`` on (the latest state at or before each record), if it exceeds
     1 mm or 1 mrad on some edge the URDF defines; else None. Records before the first state are not checked."""
@@ -55,7 +57,7 @@ def disagreement(tree: KinematicTree, records: TfRecords, times_ns: I64, q: F64)
     if worst[0] <= TOLERANCE_M and worst[1] <= TOLERANCE_RAD:
         return None
     return (
-        f"the recorded /tf disagrees with the kinematics of /joint_states by up to {worst[0] * 1e3:.3g} mm and "
+        f"the recorded /tf disagrees with the kinematics of {joints_topic} by up to {worst[0] * 1e3:.3g} mm and "
         f"{worst[1] * 1e3:.3g} mrad (e.g. {worst[2]}); shown: the kinematics"
     )
 

@@ -37,6 +37,17 @@ def tf_arrow(child: str) -> str:
     return path("tf_arrows", child)
 
 
-def robot_shape(kind: str, link: str, index: int) -> str:
-    """``kind``: ``visual`` or ``collision``."""
-    return path("robot", kind, link, str(index))
+def robot_root(robot: str = "") -> str:
+    """Where a robot's shapes go: ``/robot`` (one robot, or the root namespace's), ``/robots/<namespace>`` (each
+    namespaced robot when a run shows several)."""
+    return path("robots", *robot.strip("/").split("/")) if robot.strip("/") else "/robot"
+
+
+def robot_shape(kind: str, link: str, index: int, robot: str = "") -> str:
+    """``kind``: ``visual`` or ``collision``; ``robot``: the robot's namespace when a run shows several."""
+    return robot_root(robot) + path(kind, link, str(index))
+
+
+def joints_root(robot: str = "") -> str:
+    """Where a robot's joint plots go: ``/joints`` (one robot), ``/joints/<namespace>`` (several)."""
+    return path("joints", *robot.strip("/").split("/")) if robot.strip("/") else "/joints"

@@ -25,14 +25,19 @@ from r2d2_viz.viewer.columns import Encoded, encoded, send, time_array
 class JointPlots:
     """Series styles, per-sample plot columns, limit lines and out-of-limit checks for one robot."""
 
-    def __init__(self, tree: KinematicTree, *, timeline: str, clock: Clock) -> None:
+    def __init__(self, tree: KinematicTree, *, timeline: str, clock: Clock, robot: str = "") -> None:
         self.tree, self.timeline, self.clock = tree, timeline, clock
+        root = entities.joints_root(robot)
+        self.limits_entity = entities.LIMITS if not robot.strip("/") else f"{root}/limited/limits"
         self.limits = tree.limits
         limited = [m for m, name in enumerate(tree.moving) if name in self.limits]
         continuous = [m for m, name in enumerate(tree.moving) if name not in self.limits]
         self.series = [
             (entity, np.array(ms, dtype=np.intp))
-            for entity, ms in ((entities.JOINTS_LIMITED, limited), (entities.JOINTS_CONTINUOUS, continuous))
+            for entity, ms in (
+                (entities.JOINTS_LIMITED if not robot.strip("/") else f"{root}/limited", limited),
+                (entities.JOINTS_CONTINUOUS if not robot.strip("/") else f"{root}/continuous", continuous),
+            )
             if ms
         ]
         """Each plot entity and the moving joints (columns of the values) it shows."""
@@ -56,7 +61,7 @@ class JointPlots:
         if len(self._limited):  # lower, upper for each joint, in the order of the limit row
             names = [self.tree.moving[m] for m in self._limited]
             rec.log(
-                entities.LIMITS,
+                self.limits_entity,
                 rr.SeriesLines(
                     colors=[(*palette[m][:3], 140) for m in self._limited for _ in range(2)],
                     names=[f"{name} {bound} limit" for name in names for bound in ("lower", "upper")],
@@ -78,7 +83,7 @@ class JointPlots:
         joints has two thousand lines; a chunk per line made the cost of a sample grow with their square)."""
         if len(self._limited):
             times = time_array(np.array([time_ns], dtype=np.int64), self.clock)
-            send(rec, entities.LIMITS, self.timeline, times, self._limit_row)
+            send(rec, self.limits_entity, self.timeline, times, self._limit_row)
 
     def outside(self, values: F64) -> dict[int, int]:
         """Each limited joint not yet reported that leaves its limits in ``values`` → the first sample (a row

@@ -34,8 +34,12 @@ def log_scene(
     root_is_static: bool,
     axis_length: float = AXIS_LENGTH,
     show_names: bool = False,
+    robot_name: str = "",
+    frame_prefix: str = "",
 ) -> None:
-    """Model warnings, fixed transforms and static arrows, TF axes and the robot's shapes, all static."""
+    """Model warnings, fixed transforms and static arrows, TF axes and the robot's shapes, all static. Several robots:
+    ``robot_name`` (its namespace) puts the shapes under ``/robots/<namespace>/``, named by link without the
+    ``frame_prefix`` its frames carry."""
     robot = tree.robot
     for message in (*robot.warnings, *tree.warnings):
         notices.report(message)
@@ -82,7 +86,7 @@ def log_scene(
     for link in robot.links:
         for kind, shapes in (("visual", link.visuals), ("collision", link.collisions)):
             for i, shape in enumerate(shapes):
-                entity = entities.robot_shape(kind, link.name, i)
+                entity = entities.robot_shape(kind, link.name.removeprefix(frame_prefix), i, robot_name)
                 log_shape(rec, entity, link.name, shape, visual=kind == "visual", cache=meshes, warn=warn)
 
 

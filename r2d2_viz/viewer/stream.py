@@ -10,28 +10,44 @@
 4. :meth:`RobotStream.finish` — pending plots and the limit lines up to the last sample.
 
 Named frames are the URDF link names plus the fixed frame (``odom``). Quaternions enter Rerun as ``xyzw``.
+
+Several robots on a live graph (``r2d2-viz --ros``): :class:`LiveRobots` — every ``/<namespace>/robot_description``
+a robot drawn from its description and moved by its ``/<namespace>/joint_states`` by its own :class:`RobotStream`,
+its frames prefixed as :func:`r2d2_viz.sources.robots.choose_prefix` says (the root namespace's robot is the run's).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections import deque
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import pyarrow as pa
 import rerun as rr
 
 from r2d2_viz.arrays import F64, I64
-from r2d2_viz.kinematics.tree import KinematicTree, moving_values
+from r2d2_viz.errors import R2d2VizError
+from r2d2_viz.kinematics.tree import KinematicTree, compile_tree, moving_values
+from r2d2_viz.robot.model import parse_urdf
 from r2d2_viz.sources.base import Clock, JointState, SampleChunk
 from r2d2_viz.sources.motion import ODOM
+from r2d2_viz.sources.robots import RobotPlan, choose_prefix, prefixed_robot, unreached
+from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer import entities
 from r2d2_viz.viewer.columns import Encoded, send, time_array
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH
 from r2d2_viz.viewer.notices import Notices, Warn, to_stderr
 from r2d2_viz.viewer.plots import JointPlots
 from r2d2_viz.viewer.scene import log_scene
+from r2d2_viz.viewer.tf_recorded import RecordedTf
 from r2d2_viz.viewer.tf_rows import TfRows
+
+if TYPE_CHECKING:  # a plain save imports no live source (nor rosbags)
+    from r2d2_viz.robot.packages import PackageIndex
+    from r2d2_viz.sources.live.source import LiveBatch, LiveSource
+    from r2d2_viz.viewer.layout.plan import ViewPlan
 
 PLOT_PERIOD_NS = 500_000_000
 """Live runs send plot values twice a second (each with its own timestamp), transforms every sample."""
@@ -71,7 +87,8 @@ class RobotStream:
 
     ``joints`` and ``frames`` are the source's (:class:`r2d2_viz.sources.base.Source`); ``clock`` says whether
     sample times are durations since the start or timestamps. ``root_placed``: something else (a bag's /tf)
-    gives the root its parent frame, so the stream does not pin it to the fixed frame's origin."""
+    gives the root its parent frame, so the stream does not pin it to the fixed frame's origin. ``robot_name``: the
+    robot's namespace when a run shows several (its shapes and plots under ``/robots/<namespace>/``)."""
 
     def __init__(
         self,
@@ -86,13 +103,16 @@ class RobotStream:
         root_placed: bool = False,
         axis_length: float = AXIS_LENGTH,
         show_names: bool = False,
+        robot_name: str = "",
+        frame_prefix: str = "",
     ) -> None:
         self.rec, self.tree, self.clock, self.timeline = rec, tree, clock, timeline
         self.fixed_frame = fixed_frame
         self.notices = Notices(rec, warn=warn, timeline=timeline)
         self.state = JointState(tree.actuated)
         self.tf = TfRows(tree, tracks=tuple(frames), fixed_frame=fixed_frame)
-        self.plots = JointPlots(tree, timeline=timeline, clock=clock)
+        self.plots = JointPlots(tree, timeline=timeline, clock=clock, robot=robot_name)
+        self.robot_name, self.frame_prefix = robot_name, frame_prefix
         self._root_is_static = not root_placed and not any(child == tree.robot.root for _, child in frames)
         self.axis_length, self.show_names = axis_length, show_names
         self._pending: PreparedSamples | None = None
@@ -112,6 +132,8 @@ class RobotStream:
             root_is_static=self._root_is_static,
             axis_length=self.axis_length,
             show_names=self.show_names,
+            robot_name=self.robot_name,
+            frame_prefix=self.frame_prefix,
         )
         self.tf.log_static(self.rec, entities.TF)
         self.plots.log_styles(self.rec)
@@ -200,3 +222,156 @@ class RobotStream:
         self._flush_plots()
         if self._last_ns is not None:
             self.plots.log_limits(self.rec, self._last_ns)
+
+
+class RobotFeed:
+    """Another robot's joint states, sent by its own :class:`RobotStream` in time order as far as a run has got
+    (several robots: the first is the run's streamer, the others feeds beside the recorded transforms): a run
+    :meth:`push` es each stretch's chunk, and :meth:`until` sends the samples due."""
+
+    def __init__(self, stream: RobotStream) -> None:
+        self.stream = stream
+        self._pending: deque[tuple[PreparedSamples, int]] = deque()
+        self.sent = 0
+
+    def push(self, chunk: SampleChunk | None) -> None:
+        if chunk is not None and len(chunk):
+            self._pending.append((self.stream.prepare(chunk), 0))
+
+    @property
+    def next_time_ns(self) -> int | None:
+        if not self._pending:
+            return None
+        prepared, at = self._pending[0]
+        return int(prepared.times_ns[at])
+
+    def until(self, time_ns: int | None = None) -> None:
+        """Send the pending samples up to ``time_ns`` (inclusive; all of them when None)."""
+        while self._pending:
+            prepared, at = self._pending[0]
+            n = len(prepared)
+            stop = n if time_ns is None else int(np.searchsorted(prepared.times_ns, time_ns, side="right"))
+            if stop <= at:
+                return
+            self.stream.send(prepared, at, stop)
+            self.sent += stop - at
+            if stop < n:
+                self._pending[0] = (prepared, stop)
+                return
+            self._pending.popleft()
+
+
+# --- several robots on a live graph ---------------------------------------------------------------
+
+
+class LiveScene(Protocol):
+    """What of a live run's scene the robots draw into."""
+
+    rec: rr.RecordingStream
+    notices: Notices
+    recorded: RecordedTf
+    source: LiveSource
+    view: ViewPlan
+    fixed_frame: str
+    children: set[str]
+
+
+def robot_namespaces(batches: Iterable[LiveBatch]) -> tuple[str, ...]:
+    """The namespaces of the robots the settle's ``batches`` described (``""``: ``/robot_description``'s), sorted,
+    when there are several; else ``()`` (one robot keeps the single-robot names)."""
+    names: set[str] = set()
+    for batch in batches:
+        names |= {namespace for namespace, _ in batch.robot_descriptions}
+        names |= {""} if batch.descriptions else set()
+    return tuple(sorted(names)) if len(names) > 1 else ()
+
+
+class LiveRobots:
+    """The namespaced robots of a live run (see the module docstring). ``batches``: what the settle received (which
+    robots there are, which frames the graph has); ``sent``: the lateness hook, told of each chunk sent."""
+
+    def __init__(
+        self,
+        scene: LiveScene,
+        batches: Sequence[LiveBatch],
+        packages: PackageIndex,
+        sent: Callable[[str, Iterable[int]], None],
+    ) -> None:
+        self.scene, self.packages, self.sent = scene, packages, sent
+        self.several = bool(robot_namespaces(batches))
+        self.frames = {f for b in batches for r in b.tf for f in (*r.parents, *r.children)}
+        self.parents: dict[str, str] = {}
+        """Child frame → parent of the transforms received (:meth:`check`)."""
+        self.texts: dict[str, str] = {}
+        self.streams: dict[str, RobotStream] = {}
+        self.plans: dict[str, RobotPlan] = {}
+        self.edges: set[tuple[str, str]] = set()
+        """The robots' URDF edges: drawn by their kinematics, not as recorded transforms."""
+
+    def describe(self, batch: LiveBatch) -> None:
+        """The batch's new namespaced descriptions, each robot (re)loaded."""
+        for namespace, text in batch.robot_descriptions:
+            if self.texts.get(namespace) != text:
+                self._load(namespace, text)
+
+    def _load(self, namespace: str, text: str) -> None:
+        """A (new) description of the robot in ``namespace``: (re)loaded, or one line when it does not parse."""
+        first = namespace not in self.texts
+        self.texts[namespace] = text
+        scene, topic = self.scene, f"{namespace}/robot_description"
+        try:
+            robot = parse_urdf(text, source=topic, packages=self.packages)
+        except R2d2VizError as exc:
+            scene.notices.report(f"{exc} (robot {namespace} not shown)", key=f"description {hash(text)}")
+            return
+        own_tf = any(f"{namespace}/{name}" in scene.source.subscribed for name in ("tf", "tf_static"))
+        prefix = choose_prefix(namespace, robot.root, own_tf=own_tf, frames=self.frames, several=True)
+        tree = compile_tree(prefixed_robot(robot, prefix))
+        if (old := self.streams.pop(namespace, None)) is not None:
+            old.finish()
+        if not first:
+            scene.notices.report(f"{topic} changed: robot {robot.name!r} reloaded", key=f"loaded {hash(text)}")
+        stream = RobotStream(
+            scene.rec,
+            tree,
+            clock="timestamp",
+            fixed_frame=scene.fixed_frame,
+            root_placed=tree.robot.root == scene.fixed_frame or tree.robot.root in scene.children,
+            axis_length=scene.view.axis_length,
+            show_names=scene.view.show_names,
+            robot_name=namespace if self.several else "",
+            frame_prefix=prefix,
+        )
+        stream.notices = scene.notices
+        stream.log_static()
+        self.streams[namespace] = stream
+        self.plans[namespace] = RobotPlan(namespace, tree, f"{namespace}/joint_states", prefix, text)
+        self.edges |= set(urdf_edges(tree))
+        scene.recorded.skip |= self.edges
+        scene.source.set_joints(tree.actuated, namespace)
+
+    def send(self, batch: LiveBatch) -> int:
+        """The batch's namespaced joint states; how many were sent."""
+        for records in batch.tf:
+            self.parents.update(zip(records.children, records.parents, strict=True))
+        count = 0
+        for namespace, chunk in batch.robot_joints.items():
+            if (stream := self.streams.get(namespace)) is not None:
+                stream.send(stream.prepare(chunk))
+                count += len(chunk)
+                self.sent(f"{namespace}/joint_states", (int(t) for t in chunk.times_ns))
+        return count
+
+    def check(self) -> None:
+        """One line for each robot (when there are several) whose tree does not reach the fixed frame (said once)."""
+        if not self.several:
+            return
+        for namespace, robot in self.plans.items():
+            line = unreached(robot, self.scene.fixed_frame, self.parents)
+            if line is not None:
+                self.scene.notices.report(line, key=f"unreached {namespace}")
+
+    def finish(self) -> None:
+        self.check()
+        for stream in self.streams.values():
+            stream.finish()

@@ -26,3 +26,11 @@ def test_odd_names_are_one_part_each_and_read_back(tmp_path: Path) -> None:
         assert path.replace("\\/", "").count("/") == 2  # /tf_axes/<one part>, whatever the name holds
         assert recording[path].static["CoordinateFrame:frame"][-1] == [name]
     assert entities.robot_shape("visual", "arm/2", 0) == "/robot/visual/" + rr.escape_entity_path_part("arm/2") + "/0"
+
+
+def test_several_robots_each_have_their_own_paths_and_one_robot_keeps_the_old_ones() -> None:
+    assert entities.robot_root() == entities.robot_root("") == "/robot"
+    assert entities.robot_shape("visual", "base_link", 1) == "/robot/visual/base_link/1"
+    assert entities.robot_shape("collision", "base_link", 0, "/robot2") == "/robots/robot2/collision/base_link/0"
+    assert entities.robot_shape("visual", "l", 0, "/fleet/r1") == "/robots/fleet/r1/visual/l/0"
+    assert entities.joints_root() == "/joints" and entities.joints_root("/robot2") == "/joints/robot2"

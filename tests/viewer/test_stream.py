@@ -12,8 +12,9 @@ from rrd import read_recording, tf_by_child
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.robot.model import default_urdf_path, load_urdf
 from r2d2_viz.sources.base import SampleChunk
+from r2d2_viz.sources.live.source import LiveBatch
 from r2d2_viz.sources.motion import make_motion
-from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.stream import RobotStream, robot_namespaces
 
 
 def _record(out: Path, send) -> dict:
@@ -69,3 +70,10 @@ def test_a_subset_of_joints_keeps_the_others_and_timestamps(tmp_path: Path) -> N
     assert [r["tilt"] for r in rows] == [-0.2, -0.3, -0.3] and [r["periscope"] for r in rows] == [-0.1] * 3
     swivel = read_recording(out)["/joints/continuous"].temporal["Scalars:scalars"]
     assert [v[0] for v in swivel] == [0.5, 0.5, 0.5]
+
+
+def test_several_robots_are_named_and_one_keeps_the_single_robot_names() -> None:
+    two = [LiveBatch(robot_descriptions=[("/robot2", "<robot/>")]), LiveBatch(robot_descriptions=[("/robot1", "x")])]
+    assert robot_namespaces(two) == ("/robot1", "/robot2")
+    assert robot_namespaces([LiveBatch(descriptions=["<robot/>"]), *two[:1]]) == ("", "/robot2")
+    assert robot_namespaces(two[:1]) == () and robot_namespaces([LiveBatch(descriptions=["x"])]) == ()

@@ -29,6 +29,7 @@ from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder
 from r2d2_viz.sources.base import SampleChunk, TfRecords
 from r2d2_viz.sources.live.dds import Publication, Sample
 from r2d2_viz.sources.live.names import LiveError
+from r2d2_viz.sources.robots import SHARED_FRAMES, prefix_of, renamed
 
 EXPECTED = {
     "/joint_states": JOINT_STATE,
@@ -36,7 +37,16 @@ EXPECTED = {
     "/tf_static": TF_MESSAGE,
     "/robot_description": STRING,
 }
-"""The robot pipeline's own topics and the one type each is read as (a publisher of another type is reported)."""
+"""The robot pipeline's own topics and the one type each is read as (a publisher of another type is reported); the
+same names in a namespace (``/robot2/joint_states``) are another robot's (:mod:`r2d2_viz.sources.robots`)."""
+
+
+def robot_topic(topic: str) -> tuple[str, str] | None:
+    """``/robot2/tf`` → ``("/robot2", "/tf")``; ``/tf`` → ``("", "/tf")``; None for other topics."""
+    namespace, _, name = topic.rpartition("/")
+    return (namespace, "/" + name) if "/" + name in EXPECTED else None
+
+
 PENDING_JOINT_STATES = 1000
 """Joint states kept while no robot is known yet (the newest), decoded when its description arrives."""
 MAX_DESCRIPTION_BYTES = 64 << 20
@@ -69,6 +79,10 @@ class LiveBatch:
     """Everything received, as it came (for ``--save out.mcap``)."""
     descriptions: list[str] = field(default_factory=list)
     joints: SampleChunk | None = None
+    robot_descriptions: list[tuple[str, str]] = field(default_factory=list)
+    """Namespaced robots: ``(namespace, URDF)`` from ``/<namespace>/robot_description``."""
+    robot_joints: dict[str, SampleChunk] = field(default_factory=dict)
+    """Namespaced robots: namespace → its ``/<namespace>/joint_states``."""
     tf: list[TfRecords] = field(default_factory=list)
     """Static records (``/tf_static``) before moving ones."""
     displays: list[TopicMessage] = field(default_factory=list)
@@ -91,6 +105,7 @@ class LiveSource:
         topics: Collection[str] | None = None,
         time: TimeSource = "receive",
         refresh: float = 1.0,
+        shared_frames: Sequence[str] = SHARED_FRAMES,
     ) -> None:
         self.graph, self.time, self.refresh_period = graph, time, refresh
         self.wanted = None if topics is None else {*topics, *OURS}
@@ -102,6 +117,9 @@ class LiveSource:
         self._pending: deque[tuple[int, bytes]] = deque(maxlen=PENDING_JOINT_STATES)
         self._tf = {t: TfDecoder(_deserialize, static=t == "/tf_static", time=time) for t in ("/tf", "/tf_static")}
         self._tf_nonfinite = {"/tf": 0, "/tf_static": 0}
+        self.shared_frames = tuple(shared_frames)
+        self._robot_joints: dict[str, JointStateDecoder] = {}
+        self._robot_pending: dict[str, deque[tuple[int, bytes]]] = {}
         self._dropped: dict[str, int] = {}
         self._notes: list[tuple[str, str]] = []
         self._said_joint_problems: set[str] = set()
@@ -118,10 +136,11 @@ class LiveSource:
             topic, rtype = pub.topic, pub.ros_type
             if topic in self.subscribed or (topic, rtype) in self._refused:
                 continue
-            expected = EXPECTED.get(topic)
+            ours = robot_topic(topic)
+            expected = EXPECTED[ours[1]] if ours is not None else None
             if expected is None and self.wanted is None and rtype not in DECODERS:
                 continue  # a topic no display draws
-            if self.wanted is not None and topic not in self.wanted:
+            if self.wanted is not None and topic not in self.wanted and ours is None:
                 continue
             if (expected is not None and rtype != expected) or (expected is None and rtype not in DECODERS):
                 self._refused.add((topic, rtype))
@@ -136,8 +155,15 @@ class LiveSource:
                 continue
             self.subscribed[topic] = rtype
 
-    def set_joints(self, actuated: Sequence[str] | None) -> None:
-        """The robot's actuated joints (a new description), or None: no robot, joint states are kept for later."""
+    def set_joints(self, actuated: Sequence[str] | None, namespace: str = "") -> None:
+        """The robot's actuated joints (a new description), or None: no robot, joint states are kept for later;
+        ``namespace``: another robot's (``/robot2``)."""
+        if namespace:
+            self._robot_joints.pop(namespace, None)
+            if actuated is not None:
+                decoder = JointStateDecoder(actuated, time=self.time, deserialize=_deserialize)
+                self._robot_joints[namespace] = decoder
+            return
         self._joints = None
         if actuated is not None:
             self._joints = JointStateDecoder(actuated, time=self.time, deserialize=_deserialize)
@@ -151,23 +177,34 @@ class LiveSource:
         batch = LiveBatch(samples=self.graph.poll())
         tf: dict[str, list[tuple[int, bytes]]] = {"/tf_static": [], "/tf": []}
         joints: list[tuple[int, bytes]] = []
+        robot_joints: dict[str, list[tuple[int, bytes]]] = {}
         for s in batch.samples:
             self.received[s.topic] = self.received.get(s.topic, 0) + 1
+            namespace, name = robot_topic(s.topic) or ("", "")
             if s.topic == "/joint_states":
                 joints.append((s.source_timestamp_ns, s.data))
-            elif s.topic in tf:
-                tf[s.topic].append((s.source_timestamp_ns, s.data))
-            elif s.topic == "/robot_description":
+            elif name == "/joint_states":
+                robot_joints.setdefault(namespace, []).append((s.source_timestamp_ns, s.data))
+            elif name in ("/tf", "/tf_static"):
+                tf.setdefault(s.topic, []).append((s.source_timestamp_ns, s.data))
+            elif name == "/robot_description":
                 text = self._description(s)
-                if text is not None:
+                if text is not None and namespace:
+                    batch.robot_descriptions.append((namespace, text))
+                elif text is not None:
                     batch.descriptions.append(text)
             else:
                 batch.displays.append(TopicMessage(s.source_timestamp_ns, s.topic, s.ros_type, s.data))
         batch.joints = self._decode_joints(joints)
-        for topic, messages in tf.items():
+        for namespace, messages in robot_joints.items():
+            pending = self._robot_pending.setdefault(namespace, deque(maxlen=PENDING_JOINT_STATES))
+            if (chunk := _held_or_decoded(self._robot_joints.get(namespace), pending, messages)) is not None:
+                batch.robot_joints[namespace] = chunk
+        for topic, messages in sorted(tf.items(), key=lambda item: not item[0].endswith("/tf_static")):
             records = self._decode_tf(topic, messages)
             if records is not None:
-                batch.tf.append(records)
+                namespace = topic.rpartition("/")[0]
+                batch.tf.append(renamed(records, prefix_of(namespace), self.shared_frames))
         self._check_dropped()
         batch.notes, self._notes = self._notes, []
         return batch
@@ -176,6 +213,8 @@ class LiveSource:
         """At the end: the count of every kind of problem seen (``(topic, line)``)."""
         lines = self._joints.problems() if self._joints else []
         out = [("/joint_states", line) for line in lines if not line.startswith("ignored")]  # named when first seen
+        for namespace, robot in sorted(self._robot_joints.items()):
+            out += [(f"{namespace}/joint_states", line) for line in robot.problems()]
         for topic, decoder in self._tf.items():
             if decoder.bad:
                 out.append((topic, f"skipped {decoder.bad} messages that cannot be decoded"))
@@ -216,14 +255,15 @@ class LiveSource:
             if getattr(decoder, kind) and kind not in said:
                 said.add(kind)
                 self._note(f"/joint_states {kind}", f"/joint_states: {what} (counted, said at the end)")
-        if chunk is None or not len(chunk):
-            return None
-        order = np.argsort(chunk.times_ns, kind="stable")  # several publishers' stamps may interleave
-        return SampleChunk(chunk.times_ns[order], chunk.joints, chunk.positions[order])
+        return _time_sorted(chunk)
 
     def _decode_tf(self, topic: str, messages: list[tuple[int, bytes]]) -> TfRecords | None:
         if not messages:
             return None
+        if topic not in self._tf:  # a robot's own /<namespace>/tf or /<namespace>/tf_static
+            static = topic.endswith("/tf_static")
+            self._tf[topic] = TfDecoder(_deserialize, static=static, time=self.time)
+            self._tf_nonfinite[topic] = 0
         decoder = self._tf[topic]
         bad = decoder.bad
         records = decoder.decode(messages)
@@ -245,3 +285,24 @@ class LiveSource:
                     f"{topic}: messages dropped, the viewer fell behind (oldest first; counted, said at the end)",
                 )
             self._dropped[topic] = n
+
+
+def _time_sorted(chunk: SampleChunk | None) -> SampleChunk | None:
+    """``chunk`` in time order (several publishers' stamps may interleave); None when empty."""
+    if chunk is None or not len(chunk):
+        return None
+    order = np.argsort(chunk.times_ns, kind="stable")
+    return SampleChunk(chunk.times_ns[order], chunk.joints, chunk.positions[order])
+
+
+def _held_or_decoded(
+    decoder: JointStateDecoder | None, pending: deque[tuple[int, bytes]], messages: list[tuple[int, bytes]]
+) -> SampleChunk | None:
+    """A namespaced robot's joint states: kept in ``pending`` until its description gives a ``decoder``, then
+    decoded with them (its problems counted by the decoder, said at the end)."""
+    if decoder is None:
+        pending.extend(messages)
+        return None
+    messages = [*pending, *messages]
+    pending.clear()
+    return _time_sorted(decoder.decode(messages)) if messages else None

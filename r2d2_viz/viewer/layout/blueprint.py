@@ -21,8 +21,19 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
-from r2d2_viz.rviz.spec import Camera, TopicDisplay, ViewSpec
-from r2d2_viz.viewer.entities import APP_ID, JOINTS_CONTINUOUS, JOINTS_LIMITED, LIMITS, TF, TIMELINE, WARNINGS, path
+from r2d2_viz.rviz.spec import Camera, RobotModel, TopicDisplay, ViewSpec
+from r2d2_viz.viewer.entities import (
+    APP_ID,
+    JOINTS_CONTINUOUS,
+    JOINTS_LIMITED,
+    LIMITS,
+    TF,
+    TIMELINE,
+    WARNINGS,
+    joints_root,
+    path,
+    robot_root,
+)
 
 DEFAULT_BLUEPRINT_PATH = Path("blueprints/r2d2.rbl")
 _ID_NAMESPACE = uuid.UUID("5f1b7a52-3c1e-4d0e-9a43-6b2f3f2d2d20")
@@ -48,6 +59,8 @@ class Layout:
     flat_images: tuple[str, ...] = ()
     """Image topics without a camera (no CameraInfo, so no pinhole): kept out of the 3D view, which cannot place
     them (RViz's 3D view draws none either; each has its 2D view)."""
+    robots: tuple[str, ...] = ()
+    """Several robots: their namespaces (shapes under ``/robots/<namespace>``, plots under ``/joints/<namespace>``)."""
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
@@ -82,7 +95,12 @@ def generate_blueprint(
     shares: list[float] = []
     # /joint_states as plots: joints with limits (and the limits), and continuous joints, which grow without
     # bound (the tutorial's swivel) and would flatten the others on a shared axis. No empty panels.
-    if layout.limited is None or layout.limited > 0:
+    for ns in layout.robots:  # several robots: a plot each
+        plots = rrb.TimeSeriesView(name=f"Joint states {ns or '/'}", origin=joints_root(ns))
+        parts[f"joints {ns}"] = plots
+        side.append(plots)
+        shares.append(2)
+    if not layout.robots and (layout.limited is None or layout.limited > 0):
         many = layout.limited is not None and layout.limited > MANY_JOINTS
         limited = rrb.TimeSeriesView(
             name="Joint states",
@@ -93,7 +111,7 @@ def generate_blueprint(
         parts["limited"] = limited
         side.append(limited)
         shares.append(3)
-    if layout.continuous is None or layout.continuous > 0:
+    if not layout.robots and (layout.continuous is None or layout.continuous > 0):
         many = layout.continuous is not None and layout.continuous > MANY_JOINTS
         continuous = rrb.TimeSeriesView(
             name="Continuous joints",
@@ -156,18 +174,34 @@ def _eye(camera: Camera | None) -> rrb.EyeControls3D | None:
     )
 
 
+def robot_display(spec: ViewSpec, namespace: str) -> RobotModel | None:
+    """The RobotModel display drawing the robot of ``namespace``: the one naming its description topic, else the
+    one naming ``/robot_description`` (a config for one robot shows them all); None: no display draws it."""
+    displays = [d for d in (spec.robot, *spec.more_robots) if d is not None]
+    own = [d for d in displays if d.description_topic == f"{namespace}/robot_description"]
+    default = [d for d in displays if d.description_topic == "/robot_description"]
+    found = own or default
+    return found[0] if found else None
+
+
+def _robot_hidden(robot: RobotModel | None, root: str) -> list[str]:
+    """What a RobotModel display (None: none) hides of the robot whose shapes are under ``root``."""
+    if robot is None or not robot.enabled:
+        return [root]
+    hidden = [f"{root}/collision"] if not robot.collision else []
+    if not robot.visual:
+        hidden.append(f"{root}/visual")
+    return hidden + [root + path("visual", link) for link in robot.hidden_links]
+
+
 def _hidden(spec: ViewSpec, layout: Layout, hidden_links: Sequence[str]) -> dict[str, rrb.EntityBehavior]:
     """What RViz's unticked displays, frames and links hide."""
     hidden: list[str] = []
-    robot, tf = spec.robot, spec.tf
-    if robot is None or not robot.enabled:
-        hidden.append("/robot")
-    else:
-        if not robot.collision:
-            hidden.append("/robot/collision")
-        if not robot.visual:
-            hidden.append("/robot/visual")
-        hidden.extend(path("robot", "visual", link) for link in robot.hidden_links)
+    tf = spec.tf
+    if not layout.robots:
+        hidden += _robot_hidden(spec.robot, "/robot")
+    for ns in layout.robots:  # each robot as the RobotModel display of its description topic says
+        hidden += _robot_hidden(robot_display(spec, ns), robot_root(ns))
     hidden.extend(path("robot", "visual", link) for link in hidden_links)
     if tf is None or not tf.enabled or not tf.show_axes:
         hidden.append("/tf_axes")

@@ -25,7 +25,7 @@ from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
 from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle, camera_images
-from r2d2_viz.viewer.layout.blueprint import Layout
+from r2d2_viz.viewer.layout.blueprint import Layout, robot_display
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
 
 PREVIEW_TIMES = 256
@@ -88,17 +88,34 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
         notes.append(missing)
     elif plan.preview_messages:  # (a fixed frame that does not exist is said already)
         notes.extend(unconnected_frames(plan, frame))
+    if rviz is not None:
+        notes += _prefix_notes(spec, plan)
     layout = Layout(
         limited=n_limited if tree is not None else 0,
         continuous=n_continuous,
         camera=camera,
         show_arrows=arrows,
         fixed_frame=frame,
+        robots=tuple(r.namespace for r in plan.robots) if len(plan.robots) > 1 else (),
         flat_images=_flat_images(plan.displays),
     )
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
     return ViewPlan(spec, layout, axis_length, show_names, tuple(notes), styles)
+
+
+def _prefix_notes(spec: ViewSpec, plan: RunPlan) -> list[str]:
+    """A RobotModel display whose TF Prefix is not the one the recording gives its robot's frames."""
+    notes = []
+    for robot in plan.robots:
+        display = robot_display(spec, robot.namespace)
+        if display is not None and display.tf_prefix and display.tf_prefix + "/" != robot.prefix:
+            shown = robot.prefix.rstrip("/") or "none"
+            notes.append(
+                f"RobotModel ({display.description_topic}) / TF Prefix {display.tf_prefix!r}: the recording's frames "
+                f"of robot {robot.name} carry the prefix {shown!r}; shown with that"
+            )
+    return notes
 
 
 def unconnected_frames(plan: RunPlan, fixed: str) -> list[str]:
@@ -107,8 +124,8 @@ def unconnected_frames(plan: RunPlan, fixed: str) -> list[str]:
     viewer's 3D view (it cannot place them either)."""
     neighbours: dict[str, set[str]] = {}
     edges = [e for r in (plan.static_tf, plan.moving_tf) if r is not None for e in r.edges()]
-    if plan.tree is not None:
-        edges += [(plan.tree.robot.root, link) for link in plan.tree.links]
+    for tree in [r.tree for r in plan.robots] or ([plan.tree] if plan.tree is not None else []):
+        edges += [(tree.robot.root, link) for link in tree.links]  # every robot's links, when there are several
     for parent, child in edges:
         neighbours.setdefault(parent, set()).add(child)
         neighbours.setdefault(child, set()).add(parent)
@@ -184,7 +201,8 @@ def _orbit_angles(spec: ViewSpec) -> tuple[float, float]:
 
 
 def _recorded_fit(plan: RunPlan) -> ViewFit | None:
-    """A bag's view: the robot (its size) along the trajectory its recorded TF gives its root, the TF frames of
+    """A bag's view: the robot (its size) along the trajectory its recorded TF gives its root (every robot's, when
+    there are several), the TF frames of
     a replay without a robot, and what the first display messages draw, all in the fixed frame."""
     records = [r for r in (plan.static_tf, plan.moving_tf) if r is not None]
     moving = plan.moving_tf.times_ns if plan.moving_tf is not None else np.zeros(0, dtype=np.int64)
@@ -195,8 +213,9 @@ def _recorded_fit(plan: RunPlan) -> ViewFit | None:
     if plan.tree is not None:
         own = fit_view(plan.tree, _preview(plan))
         robot_radius, frames = own.radius, max(frames, own.frames)
-        root = plan.tree.robot.root
-        points.append(frame_positions(records, plan.fixed_frame, [root], times).get(root, np.zeros((1, 3))))
+        roots = [r.tree.robot.root for r in plan.robots] or [plan.tree.robot.root]  # several robots: all of them
+        placed = frame_positions(records, plan.fixed_frame, roots, times)
+        points += [placed.get(root, np.zeros((1, 3))) for root in roots]
     else:
         children = sorted({c for r in records for c in r.children})
         points += list(frame_positions(records, plan.fixed_frame, children, times).values())

@@ -189,3 +189,15 @@ def test_images_without_a_pinhole_are_left_out_of_the_3d_view(tmp_path) -> None:
     view = _view(components, "3D")
     # the 3D view cannot place an image without a pinhole ("2D visualizers require a pinhole ancestor"): out
     assert components[f"{view}/ViewContents"]["ViewContents:query"][-1] == "- /bare/image/**"
+
+
+def test_each_robot_takes_the_robot_model_display_of_its_description_topic() -> None:
+    from r2d2_viz.rviz.spec import RobotModel, ViewSpec
+    from r2d2_viz.viewer.layout.blueprint import robot_display
+
+    default = RobotModel()
+    two = RobotModel(collision=True, description_topic="/robot2/robot_description", tf_prefix="robot2")
+    spec = ViewSpec("x.rviz", robot=default, more_robots=(two,))
+    assert robot_display(spec, "/robot2") is two
+    assert robot_display(spec, "/robot1") is default  # a display for /robot_description draws the others
+    assert robot_display(ViewSpec("x.rviz", robot=two), "/robot1") is None  # no display draws robot1: hidden

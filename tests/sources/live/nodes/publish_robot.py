@@ -23,9 +23,10 @@ def joint_names(urdf: str, joints: int) -> list[str]:
     return names
 
 
-def joint_state_values(k: int, count: int) -> tuple[int, int, list[float], list[float]]:
-    """Message ``k``: header stamp (sec, nanosec), positions and velocities of ``count`` joints."""
-    return 1000 + k // 1000, (k % 1000) * 1_000_000, [0.001 * k + i for i in range(count)], [float(k)] * count
+def joint_state_values(k: int, count: int, shift: float = 0.0) -> tuple[int, int, list[float], list[float]]:
+    """Message ``k``: header stamp (sec, nanosec), positions (``shift`` added) and velocities of ``count`` joints."""
+    position = [0.001 * k + i + shift for i in range(count)]
+    return 1000 + k // 1000, (k % 1000) * 1_000_000, position, [float(k)] * count
 
 
 def bad_samples(names: list[str]) -> list[bytes]:
@@ -62,6 +63,8 @@ def main() -> int:
     parser.add_argument("--linger", type=float, default=2.0)
     parser.add_argument("--subscribers", type=int, default=1, help="wait for this many /joint_states readers")
     parser.add_argument("--bad", action="store_true", help="first publish the malformed samples of bad_samples()")
+    parser.add_argument("--namespace", default="", help="publish /<namespace>/robot_description and joint_states")
+    parser.add_argument("--shift", type=float, default=0.0, help="added to every position")
     args = parser.parse_args()
 
     import rclpy
@@ -74,8 +77,8 @@ def main() -> int:
     rclpy.init()
     node = rclpy.create_node("r2d2_viz_test_robot")
     latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
-    description = node.create_publisher(String, "/robot_description", latched)
-    states = node.create_publisher(JointState, "/joint_states", 10)
+    description = node.create_publisher(String, f"{args.namespace}/robot_description", latched)
+    states = node.create_publisher(JointState, f"{args.namespace}/joint_states", 10)
     description.publish(String(data=urdf))
     deadline = time.monotonic() + args.wait
     while states.get_subscription_count() < args.subscribers and time.monotonic() < deadline:
@@ -91,7 +94,7 @@ def main() -> int:
     msg.header.frame_id = "base"
     start = time.perf_counter()
     for k in range(args.count):
-        sec, nanosec, position, velocity = joint_state_values(k, len(names))
+        sec, nanosec, position, velocity = joint_state_values(k, len(names), args.shift)
         msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
         msg.position, msg.velocity = position, velocity
         states.publish(msg)
