@@ -147,7 +147,7 @@ def sdk_floor(rate: float, seconds: float, out: Path, started: Path, per: int = 
     from r2d2_viz.viewer.columns import send
     from r2d2_viz.viewer.sinks import SinkConfig, close_recording, open_recording
 
-    recording = open_recording(SinkConfig(save=out), save_to=out, live=False)
+    recording = open_recording(SinkConfig(save=out), save_to=out)
     rows, block = JOINTS, 100
     columns = rr.Transform3D.columns(
         translation=np.zeros((rows * block, 3)),

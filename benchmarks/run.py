@@ -364,7 +364,7 @@ def sdk_floor(rate: float, seconds: float, out: Path) -> None:
     from r2d2_viz.viewer.columns import send
     from r2d2_viz.viewer.sinks import SinkConfig, close_recording, open_recording
 
-    recording = open_recording(SinkConfig(save=out), save_to=out, live=True)
+    recording = open_recording(SinkConfig(save=out), save_to=out)
     rows, block = 4, max(1, round(rate))
     columns = rr.Transform3D.columns(
         translation=np.zeros((rows * block, 3)),
