@@ -673,19 +673,24 @@ def native_viewer(display: str, window: tuple[int, int], log: Path, timeout: flo
             start_new_session=True,
         )
     try:
-        deadline = time.monotonic() + timeout
-        while True:
-            if proc.poll() is not None:
-                raise RuntimeError(f"rerun exited with {proc.returncode}:\n{_tail(log)}")
-            with socket.socket() as s:
-                if s.connect_ex(("127.0.0.1", port)) == 0:
-                    break
-            if time.monotonic() > deadline:
-                raise TimeoutError(f"rerun did not listen on port {port} within {timeout:.0f} s:\n{_tail(log)}")
-            time.sleep(0.2)
+        _wait_listening(proc, port, log, timeout)
         yield ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
     finally:
         _stop_process_group(proc)
+
+
+def _wait_listening(proc: subprocess.Popen[bytes], port: int, log: Path, timeout: float) -> None:
+    """Until the viewer ``proc`` listens on ``port`` (its log's tail in the error when it exits or times out)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        if proc.poll() is not None:
+            raise RuntimeError(f"rerun exited with {proc.returncode}:\n{_tail(log)}")
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"rerun did not listen on port {port} within {timeout:.0f} s:\n{_tail(log)}")
+        time.sleep(0.2)
 
 
 @contextlib.contextmanager
@@ -703,16 +708,7 @@ def headless_viewer(log: Path, timeout: float = 60.0) -> Iterator[ViewerClient]:
             command, env=env, stdin=subprocess.DEVNULL, stdout=sink, stderr=subprocess.STDOUT, start_new_session=True
         )
     try:
-        deadline = time.monotonic() + timeout
-        while True:
-            if proc.poll() is not None:
-                raise RuntimeError(f"rerun exited with {proc.returncode}:\n{_tail(log)}")
-            with socket.socket() as s:
-                if s.connect_ex(("127.0.0.1", port)) == 0:
-                    break
-            if time.monotonic() > deadline:
-                raise TimeoutError(f"rerun did not listen on port {port} within {timeout:.0f} s:\n{_tail(log)}")
-            time.sleep(0.2)
+        _wait_listening(proc, port, log, timeout)
         yield ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
     finally:
         _stop_process_group(proc)

@@ -174,9 +174,8 @@ class RecordFile:
         self.conns: dict[int, Connection] = {}
         self.chunks: list[Chunk] = []
 
-    def read(self, pos: int, data: bool = True) -> tuple[dict[bytes, bytes], bytes, int, int]:
-        """The record at ``pos``: its header fields, its data (b"" unless ``data``), where its data starts and where
-        the next record starts. Raises ``BrokenError`` when it is cut or damaged."""
+    def _head(self, pos: int) -> tuple[dict[bytes, bytes], bytes, int]:
+        """The header fields of the record at ``pos``, its header bytes and data length field, the header length."""
         self.bio.seek(pos)
         head = self.bio.read(4)
         if len(head) < 4:
@@ -185,7 +184,12 @@ class RecordFile:
         if pos + 8 + hl > self.size:
             raise BrokenError
         raw = self.bio.read(hl + 4)
-        header = fields(raw, 0, hl)
+        return fields(raw, 0, hl), raw, hl
+
+    def read(self, pos: int, data: bool = True) -> tuple[dict[bytes, bytes], bytes, int, int]:
+        """The record at ``pos``: its header fields, its data (b"" unless ``data``), where its data starts and where
+        the next record starts. Raises ``BrokenError`` when it is cut or damaged."""
+        header, raw, hl = self._head(pos)
         (dl,) = _U32.unpack_from(raw, hl)
         start = pos + 8 + hl
         if start + dl > self.size:
@@ -309,15 +313,7 @@ class RecordFile:
 
     def chunk_data(self, pos: int, *, partial: bool = False) -> bytes:
         """The decompressed records of the chunk at ``pos`` (``partial``: what there is of one cut short)."""
-        self.bio.seek(pos)
-        head = self.bio.read(4)
-        if len(head) < 4:
-            raise BrokenError
-        (hl,) = _U32.unpack(head)
-        if pos + 8 + hl > self.size:
-            raise BrokenError
-        raw = self.bio.read(hl + 4)
-        header = fields(raw, 0, hl)
+        header, raw, hl = self._head(pos)
         if op_of(header) != OP_CHUNK:
             raise BrokenError
         (dl,) = _U32.unpack_from(raw, hl)
