@@ -91,10 +91,19 @@ def _mesh(item: shapes.MeshResource, load: MeshLoader | None) -> list[rr.AsCompo
     ]
 
 
+def _packed(colors: np.ndarray) -> np.ndarray:
+    """RGBA8 rows ``(n, 4)`` as ``0xRRGGBBAA`` uint32, what Rerun stores (it would convert them itself, slower)."""
+    if colors.dtype != np.uint8 or colors.ndim != 2 or colors.shape[1] != 4:
+        return colors
+    packed: np.ndarray = np.ascontiguousarray(colors).view(">u4").ravel().astype(np.uint32)
+    return packed
+
+
 def archetypes(item: shapes.Shape, load: MeshLoader | None = None) -> list[rr.AsComponents]:
     """The Rerun archetypes drawing one shape (without its ``CoordinateFrame``)."""
     if isinstance(item, shapes.Points):
-        return [rr.Points3D(item.positions, colors=item.colors, radii=item.radius), instance_pose(item.T_frame_item)]
+        points = rr.Points3D(item.positions, colors=_packed(item.colors), radii=item.radius)
+        return [points, instance_pose(item.T_frame_item)]
     if isinstance(item, shapes.LineStrips):
         radii = item.radius if item.radius > 0 else None
         return [rr.LineStrips3D(list(item.strips), colors=item.colors, radii=radii), instance_pose(item.T_frame_item)]
