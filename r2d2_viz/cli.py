@@ -67,7 +67,9 @@ def build_parser() -> argparse.ArgumentParser:
         "with --bag, the first SECONDS of the bag (from --start-offset)",
     )
     parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="samples per second (default 30)")
-    bags = parser.add_argument_group("replaying a bag (a rosbag2 directory, a .mcap or .db3 file, or a ROS 1 .bag file)")
+    bags = parser.add_argument_group(
+        "replaying a bag (a rosbag2 directory, a .mcap or .db3 file, or a ROS 1 .bag file)"
+    )
     bags.add_argument(
         "--bag",
         type=Path,

@@ -123,6 +123,12 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
     with ExitStack() as inputs:
         plan = _plan(config, inputs)
         save = config.sink.save
+        if save is not None and save.suffix == ".mcap" and plan.replay is not None and _ros1(plan.replay.bag.files):
+            from r2d2_viz.ros_out.bag_convert import convert_bag
+
+            with sigterm_raises():
+                written = convert_bag(plan.replay.bag, save)
+            return RunResult(samples=written, interrupted=False, saved=save, what="messages converted")
         if save is not None and save.suffix == ".mcap":
             from r2d2_viz.ros_out.bag_out import write_bag
 
@@ -135,6 +141,10 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
         result = _record(config, plan, on_ready)
         result.what = _counted(config, plan, result.samples)
         return result
+
+
+def _ros1(files: tuple[Path, ...]) -> bool:
+    return any(f.suffix == ".bag" for f in files)
 
 
 def _counted(config: RunConfig, plan: RunPlan, samples: int) -> str:

@@ -113,6 +113,11 @@ class Bag:
         self.topics, self._convert = own_definitions(path, topics, self.warn)
 
     @property
+    def humble_topics(self) -> frozenset[str]:
+        """Topics whose messages come out converted to Humble's layout (their own definitions differ)."""
+        return frozenset(self._convert)
+
+    @property
     def files(self) -> tuple[Path, ...]:
         """The storage files (``.mcap`` ones can go to :func:`r2d2_viz.viewer.bag_topics.log_other_topics`)."""
         return tuple(f.path for f in self._files)
