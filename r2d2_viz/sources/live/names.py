@@ -8,9 +8,9 @@
 * ``<Compatibility><IgnoreTypeInformation>1.15</…>``: Fast DDS 3 (Kilted) announces XTypes type information
   Cyclone rejects for some types; ignoring it for eProsima's vendor id falls back to name-based type matching;
 * ``<Internal><SocketReceiveBufferSize max="8MB"/>``: ask for an 8 MB UDP receive buffer (the kernel caps it at
-  ``net.core.rmem_max``; whatever it gives is accepted). With Cyclone's default (the kernel's default buffer,
-  208 KiB here) a 1.2 MB point cloud's fragments overflowed it on a loaded machine: 18 of 40 clouds lost in one
-  run, 6 in another, and scans and JPEGs sent beside them.
+  ``net.core.rmem_max``: 208 KiB on a stock kernel, 4 MB here; whatever it gives is accepted). With Cyclone's
+  default (the kernel's default buffer, 208 KiB) a 1.2 MB point cloud's fragments overflowed it on a loaded
+  machine: 18 of 40 clouds lost in one run, 6 in another, and scans and JPEGs sent beside them.
 """
 
 from __future__ import annotations
