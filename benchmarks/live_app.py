@@ -9,8 +9,9 @@ publish_sensors.py``, PyPI's rclpy wheels in the tests' cached venv) publishes, 
    over the steady part (``/proc/<pid>/stat``) — runs alternating with Rerun's SDK floor: a Python process
    sending one prebuilt 30-row Transform3D chunk per sample with ``rr.send_columns`` at the same rate to the same
    kind of sink (a file). Medians over ``--repeats``.
-2. 640x480 rgb8 images at 30 Hz and 50,000-point clouds (x y z rgb) at 10 Hz together: the count in the
-   recording against the published count, and the lateness.
+2. camera and lidar together: 640x480 rgb8 images at 30 Hz, a 640x480 JPEG (CompressedImage) at 30 Hz,
+   100,000-point clouds (x y z float32, 1.2 MB) at 10 Hz and 720-ray LaserScans at 20 Hz: the count in the
+   recording against the published count, the lateness, and the CPU of r2d2-viz (``--sensors-only``: this alone).
 
     python benchmarks/live_app.py [--seconds 60] [--repeats 3] [--json out.json]
     python benchmarks/live_app.py --smoke     # a few seconds each, no thresholds (CI; skips without root)
@@ -35,8 +36,8 @@ TESTS = HERE.parents[1] / "tests"
 NODE = TESTS / "sources" / "live" / "nodes" / "publish_sensors.py"
 PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
 JOINTS, JOINT_RATE = 30, 1000.0
-IMAGE_RATE, CLOUD_RATE, CLOUD_POINTS = 30.0, 10.0, 50_000
-IMAGE, CLOUD = "/camera/image_raw", "/points"
+IMAGE_RATE, CLOUD_RATE, CLOUD_POINTS, JPEG_RATE, SCAN_RATE = 30.0, 10.0, 100_000, 30.0, 20.0
+IMAGE, CLOUD, JPEG, SCAN = "/camera/image_raw", "/points", "/camera/image_raw/compressed", "/scan"
 BATCH = 20
 """Samples per chunk of the batched SDK floor: what arrives at 1 kHz between two of the app's polls (20 ms)."""
 
@@ -65,9 +66,10 @@ def cpu_seconds(pid: int) -> float | None:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def cpu_over(pid: int, started: Path, window: tuple[float, float], proc: subprocess.Popen[Any]) -> float | None:
-    """The share of one core ``pid`` used from ``window[0]`` to ``window[1]`` s after ``started`` has content."""
-    while (not started.exists() or started.stat().st_size == 0) and proc.poll() is None:
+def cpu_over(pid: int, started: Path | None, window: tuple[float, float], proc: subprocess.Popen[Any]) -> float | None:
+    """The share of one core ``pid`` used from ``window[0]`` to ``window[1]`` s after ``started`` has content (or
+    after now, ``started`` None)."""
+    while started and (not started.exists() or started.stat().st_size == 0) and proc.poll() is None:
         time.sleep(0.005)
     t0 = time.monotonic()
     time.sleep(window[0])
@@ -107,7 +109,8 @@ def scenario(spec: dict[str, Any]) -> dict[str, Any]:
     )
     try:
         window = spec.get("cpu_window")
-        cpu = cpu_over(app.pid, log, tuple(window), app) if window else None
+        # the pacing log is written in blocks: a stream of 90 messages a second fills one late; from the start then
+        cpu = cpu_over(app.pid, None if spec.get("cpu_from_start") else log, tuple(window), app) if window else None
         _, app_err = app.communicate(timeout=spec["seconds"] + 90)
         node_out, node_err = node.communicate(timeout=30)
     finally:
@@ -124,11 +127,13 @@ def scenario(spec: dict[str, Any]) -> dict[str, Any]:
     for line in log.read_text().splitlines():
         topic, seconds = line.split()
         late.setdefault(topic, []).append(float(seconds))
-    topics = {"/joint_states": "/joints/limited", IMAGE: IMAGE, CLOUD: CLOUD}
+    topics = {"/joint_states": "/joints/limited", IMAGE: IMAGE, CLOUD: CLOUD, JPEG: JPEG, SCAN: SCAN}
     sent = json.loads(lines[-1])["sent"]
     received = next((x for x in app_err.decode().splitlines() if x.startswith("r2d2-viz: received")), "")
     out = {"cpu": cpu, "sent": sent, "app_received": received, "in_file": {}, "lateness": late}
     out["in_file"] = {t: rows_in(rrd, topics[t], under=t != "/joint_states") for t in sent}
+    if IMAGE in sent and JPEG in sent:  # the JPEGs' entity is under the raw images'
+        out["in_file"][IMAGE] -= out["in_file"][JPEG]
     rrd.unlink()
     return out
 
@@ -220,6 +225,7 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--distro", default="jazzy", choices=["jazzy", "kilted"])
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--sensors-only", action="store_true", help="only the camera and lidar run (2.)")
     parser.add_argument("--scenario", help=argparse.SUPPRESS)
     parser.add_argument("--sdk-floor", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -247,14 +253,22 @@ def main() -> int:
         (tmp / "chain.urdf").write_text(chain_urdf(JOINTS))
         base = {"tmp": tmp_name, "ros_python": python}
         joint_runs, floors, batched = [], [], []
-        for _ in range(args.repeats):
+        (tmp / "cam.jpg").write_bytes(jpeg_bytes())
+        for _ in range(0 if args.sensors_only else args.repeats):
             node = ["--joints", str(JOINTS), "--joint-rate", str(JOINT_RATE)]
             spec = {**base, "name": "joints", "seconds": args.seconds, "node": node, "cpu_window": window}
             joint_runs.append(in_namespace(spec))
             floors.append(floor_cpu(tmp, args.seconds, window))
             batched.append(floor_cpu(tmp, args.seconds, window, per=BATCH))
-        node = ["--image-rate", str(IMAGE_RATE), "--cloud-rate", str(CLOUD_RATE), "--cloud-points", str(CLOUD_POINTS)]
-        sensors = in_namespace({**base, "name": "sensors", "seconds": args.sensor_seconds, "node": node})
+        node = ["--image-rate", str(IMAGE_RATE), "--cloud-rate", str(CLOUD_RATE), "--cloud-points", str(CLOUD_POINTS),
+                "--cloud-fields", "xyz", "--compressed-rate", str(JPEG_RATE), "--jpeg", str(tmp / "cam.jpg"),
+                "--scan-rate", str(SCAN_RATE)]  # fmt: skip
+        # from the app's start: it subscribes within ~2 s, the node then streams for --sensor-seconds
+        sensor_window = (4.0, args.sensor_seconds) if not args.smoke else (2.0, 3.0)
+        spec = {**base, "name": "sensors", "seconds": args.sensor_seconds, "node": node, "cpu_window": sensor_window,
+                "cpu_from_start": True}  # fmt: skip
+        figures["sensor_window_s"] = sensor_window
+        sensors = in_namespace(spec)
     figures["floor_batched_cpu"] = batched
     report(args, joint_runs, floors, sensors, figures)
     if args.json:
@@ -262,12 +276,22 @@ def main() -> int:
     return 0
 
 
-def report(
-    args: argparse.Namespace,
-    runs: list[dict[str, Any]],
-    floors: list[float | None],
-    sensors: dict[str, Any],
-    figures: dict[str, Any],
+def jpeg_bytes() -> bytes:
+    """A real 640x480 JPEG (Pillow, quality 80) of a gradient."""
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    yy, xx = np.indices((480, 640))
+    rgb = np.stack([xx % 256, yy % 256, (xx + yy) % 256], axis=2).astype(np.uint8)
+    out = io.BytesIO()
+    Image.fromarray(rgb).save(out, format="JPEG", quality=80)
+    return out.getvalue()
+
+
+def report_joints(
+    args: argparse.Namespace, runs: list[dict[str, Any]], floors: list[float | None], figures: dict[str, Any]
 ) -> None:
     js = "/joint_states"
     skip = int(2 * JOINT_RATE)  # the first 2 s: what arrived while the app settled is handed over at once
@@ -295,12 +319,29 @@ def report(
         print(f"   the SDK floor batched as the app sends ({BATCH} samples a chunk every {BATCH} ms):"
               f" {100 * med(batched):.1f} % (runs {', '.join(f'{100 * f:.1f}' for f in batched)}); the app beyond it"
               f" {100 * (med(cpu) - med(batched)):.1f} %")  # fmt: skip
-    print(f"2. images 640x480 rgb8 at {IMAGE_RATE:g} Hz + {CLOUD_POINTS:,}-point clouds at {CLOUD_RATE:g} Hz,"
-          f" {args.sensor_seconds:g} s")  # fmt: skip
-    for topic in (IMAGE, CLOUD):
+
+
+def report(
+    args: argparse.Namespace,
+    runs: list[dict[str, Any]],
+    floors: list[float | None],
+    sensors: dict[str, Any],
+    figures: dict[str, Any],
+) -> None:
+    js = "/joint_states"
+    skip = int(2 * JOINT_RATE)
+    if runs:
+        report_joints(args, runs, floors, figures)
+    print(f"2. images 640x480 rgb8 at {IMAGE_RATE:g} Hz + JPEGs at {JPEG_RATE:g} Hz + {CLOUD_POINTS:,}-point"
+          f" clouds (xyz) at {CLOUD_RATE:g} Hz + scans at {SCAN_RATE:g} Hz, {args.sensor_seconds:g} s")  # fmt: skip
+    for topic in (IMAGE, JPEG, CLOUD, SCAN):
         lat = sensors["lateness"].get(topic, [])
-        print(f"   {topic}: {sensors['in_file'][topic]}/{sensors['sent'][topic]} in the recording; lateness"
+        sent, got = sensors["sent"][topic], sensors["in_file"][topic]
+        print(f"   {topic}: {got}/{sent} in the recording ({100 * got / sent:.1f} %); lateness"
               f" p50/p99/max {pct(lat) if lat else '-'} [p99 <= 50 ms]")  # fmt: skip
+    if sensors["cpu"] is not None:
+        a, b = figures["sensor_window_s"]
+        print(f"   CPU of r2d2-viz: {100 * sensors['cpu']:.1f} % of a core ({a:g}-{b:g} s after its start)")
     print(f"   {sensors['app_received']}")
     figures.update(
         joints=[{k: v for k, v in r.items() if k != "lateness"} | {

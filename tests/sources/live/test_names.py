@@ -53,6 +53,8 @@ def test_environment_mapping(env: dict[str, str], domain: int, expected_range: D
     assert (found.domain_id, found.range, found.static_peers) == (domain, expected_range, peers)
     root = ET.fromstring(found.cyclone_xml(pid=7))
     assert root.findtext("Domain/Compatibility/IgnoreTypeInformation") == "1.15"  # eProsima's vendor id
+    # asked, never demanded (no min): a 1.2 MB cloud's fragments fit; a kernel that gives less is no error
+    assert root.find("Domain/Internal/SocketReceiveBufferSize").attrib == {"max": "8MB"}
     multicast = root.findtext("Domain/General/AllowMulticast")
     addresses = [p.get("address") for p in root.iter("Peer")]
     if expected_range is DiscoveryRange.LOCALHOST:
