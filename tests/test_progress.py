@@ -4,11 +4,7 @@ live replay's position; nothing when not wanted. Values worked out by hand from 
 from __future__ import annotations
 
 import io
-import os
-import pty
-import select
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +12,7 @@ import numpy as np
 import pytest
 from bagmaker import T0, BagSpec, joint_state, string, tf_message, write_bag
 from conftest import REPO, cli
+from terminal import on_a_terminal
 
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.progress import progress_bar
@@ -95,33 +92,9 @@ def _arm_bag(path: Path) -> Path:
     return write_bag(path, spec)
 
 
-def _on_a_terminal(args: list[str], timeout: float = 120) -> tuple[int, str]:
-    """The CLI with stdout and stderr on a pseudo-terminal: (exit code, what the terminal showed)."""
-    app = str(Path(sys.executable).parent / "r2d2-viz")
-    pid, fd = pty.fork()
-    if pid == 0:  # the child: the terminal is its stdin, stdout and stderr
-        os.environ["COLUMNS"] = "120"
-        os.execv(app, [app, *args])
-    out = b""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        ready, _, _ = select.select([fd], [], [], 0.5)
-        if ready:
-            try:
-                data = os.read(fd, 65536)
-            except OSError:  # the child closed the terminal
-                break
-            if not data:
-                break
-            out += data
-    _, status = os.waitpid(pid, 0)
-    os.close(fd)
-    return os.waitstatus_to_exitcode(status), out.decode("utf-8", "replace")
-
-
 def test_a_conversion_shows_a_bar_on_a_terminal(tmp_path: Path) -> None:
     bag = _arm_bag(tmp_path / "arm")
-    code, shown = _on_a_terminal(["--bag", str(bag), "--save", str(tmp_path / "out.rrd")])
+    code, shown = on_a_terminal("--bag", str(bag), "--save", str(tmp_path / "out.rrd"))
     assert code == 0, shown
     assert "100%" in shown  # the bar's percent of the bag, at the end
     assert "MB/s" in shown
@@ -141,8 +114,6 @@ def test_off_a_terminal_only_the_summary_line(tmp_path: Path) -> None:
 
 def test_a_live_replay_shows_its_position_in_the_bag(tmp_path: Path) -> None:
     bag = _arm_bag(tmp_path / "arm")
-    code, shown = _on_a_terminal(
-        ["--bag", str(bag), "--save", str(tmp_path / "out.rrd"), "--realtime", "--speed", "10"]
-    )
+    code, shown = on_a_terminal("--bag", str(bag), "--save", str(tmp_path / "out.rrd"), "--realtime", "--speed", "10")
     assert code == 0, shown
     assert "/ 20.0 s" in shown  # "12.3 / 20.0 s": its position in the 19.99 s bag

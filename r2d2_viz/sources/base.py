@@ -12,7 +12,7 @@ is at 0. A *sample* is a time step; a *frame* is always a TF frame. Pure numpy; 
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
@@ -187,12 +187,17 @@ def tf_root(records: Sequence[TfRecords]) -> str | None:
         return None
 
     def below(frame: str) -> int:
-        seen, stack = {frame}, [frame]
-        while stack:
-            for child in children.get(stack.pop(), ()):
-                if child not in seen:
-                    seen.add(child)
-                    stack.append(child)
-        return len(seen)
+        return len(reachable(children, frame))
 
     return max(sorted(roots), key=below)
+
+
+def reachable(links: Mapping[str, Iterable[str]], start: str) -> set[str]:
+    """The frames reached from ``start`` following ``links`` (frame → its neighbours), ``start`` included."""
+    seen, stack = {start}, [start]
+    while stack:
+        for other in links.get(stack.pop(), ()):
+            if other not in seen:
+                seen.add(other)
+                stack.append(other)
+    return seen

@@ -3,39 +3,15 @@ on a pseudo-terminal — and off one the summary line alone (tests/fleet/test_co
 
 from __future__ import annotations
 
-import os
-import pty
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 from fleetbags import still_bag
-
-
-def _on_a_terminal(*args: str) -> tuple[int, str]:
-    leader, follower = pty.openpty()
-    exe = str(Path(sys.executable).parent / "r2d2-viz")
-    env = {**os.environ, "COLUMNS": "160", "TERM": "xterm"}
-    proc = subprocess.Popen([exe, *args], stdin=follower, stdout=follower, stderr=follower, env=env)
-    os.close(follower)
-    chunks = []
-    deadline = time.monotonic() + 180
-    while time.monotonic() < deadline:
-        try:
-            data = os.read(leader, 65536)
-        except OSError:  # the child closed the terminal
-            break
-        if not data:
-            break
-        chunks.append(data)
-    os.close(leader)
-    return proc.wait(timeout=60), b"".join(chunks).decode(errors="replace")
+from terminal import on_a_terminal
 
 
 def test_one_overall_progress_bar_on_a_terminal(tmp_path: Path) -> None:
     bags = [still_bag(tmp_path / f"bag{k}") for k in range(3)]
-    code, screen = _on_a_terminal("--bag", *map(str, bags), "--save-dir", str(tmp_path / "out"), "--jobs", "2")
+    code, screen = on_a_terminal("--bag", *map(str, bags), "--save-dir", str(tmp_path / "out"), "--jobs", "2")
     assert code == 0, screen
     assert "converting" in screen and "/3 bags" in screen and "ETA" in screen
     assert screen.count("converting") >= 1 and "bag0" not in screen.split("r2d2-viz:")[0]  # one bar, not per bag

@@ -20,7 +20,7 @@ from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, TopicDisplay, ViewSpec, missing_fixed_frame, orbit_eye
 from r2d2_viz.sources.bag_displays import frames_of
-from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords
+from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords, reachable
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
@@ -129,12 +129,7 @@ def unconnected_frames(plan: RunPlan, fixed: str) -> list[str]:
     for parent, child in edges:
         neighbours.setdefault(parent, set()).add(child)
         neighbours.setdefault(child, set()).add(parent)
-    reached, todo = {fixed}, [fixed]
-    while todo:
-        for other in neighbours.get(todo.pop(), ()):
-            if other not in reached:
-                reached.add(other)
-                todo.append(other)
+    reached = reachable(neighbours, fixed)
     lost: dict[str, set[str]] = {}
     checked: dict[str, int] = {}
     for message in plan.preview_messages:
