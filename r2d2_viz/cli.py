@@ -38,7 +38,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="r2d2-viz",
         description="The ROS 2 'URDF with robot_state_publisher' tutorial robot, moving in the Rerun viewer.",
-        epilog="Without a sink flag, --spawn is used. Open a saved recording with: rerun out.rrd",
+        epilog="Without a sink flag: the native viewer (--spawn), or on a machine without a display a web viewer on "
+        "127.0.0.1 (--serve). Open a saved recording with: rerun out.rrd",
     )
     parser.add_argument(
         "--urdf", type=Path, default=None, help="robot description, URDF or xacro (default: the tutorial's R2D2)"
@@ -146,14 +147,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="show the live graph: /robot_description (or --urdf), /joint_states, /tf, /tf_static and display "
         "topics; --duration is then seconds of wall time",
     )
-    ros.add_argument(
-        "--list",
-        action="store_true",
-        help="with --ros: print the graph's topics, types and publishers; with --bag: every topic, type and "
-        "message count (like ros2 bag info); exit",
-    )
     parser.add_argument(
         "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
+    )
+    parser.add_argument(
+        "--list",
+        action="store_true",
+        help="print the topics and exit: with --bag every topic, type and message count (like ros2 bag info); "
+        "with --ros the graph's topics, types and publishers (like ros2 topic list -t)",
     )
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
     sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
@@ -360,12 +361,13 @@ def _list_topics() -> int:
     """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts; an empty graph says where
     it was searched and how to check (exit 0, like ``ros2 topic list``: an empty graph is an answer, not an error)."""
     from r2d2_viz.sources.live.dds import LIST_SECONDS, list_topics
-    from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT
+    from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, EMPTY_LIST_NEXT
 
     topics, discovery = list_topics()
     for topic, msgtype, publishers in topics:
         print(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}", flush=True)
     if not topics:
         searched = f"no topics after {LIST_SECONDS:g} s of discovery on {discovery.searched()}"
-        print(f"r2d2-viz: {searched}; {EMPTY_GRAPH_HINT}", file=sys.stderr, flush=True)
+        print(f"r2d2-viz: {searched}", file=sys.stderr)  # what was searched, then how to check: two short lines
+        print(f"r2d2-viz: {EMPTY_GRAPH_HINT}; {EMPTY_LIST_NEXT}", file=sys.stderr, flush=True)
     return EXIT_OK

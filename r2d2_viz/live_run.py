@@ -34,7 +34,7 @@ from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.base import tf_root
 from r2d2_viz.sources.live.dds import LiveGraph
-from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, RosDiscovery
+from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, EMPTY_RUN_NEXT, RosDiscovery
 from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
@@ -363,5 +363,7 @@ def _say_received(source: LiveSource, seconds: float) -> None:
     if not received:
         discovery: RosDiscovery | None = getattr(source.graph, "discovery", None)
         where = f" on {discovery.searched()}" if discovery is not None else ""
-        received = f"nothing in {seconds:.1f} s{where}; {EMPTY_GRAPH_HINT}"
+        print(f"r2d2-viz: received nothing in {seconds:.1f} s{where}", file=sys.stderr)
+        print(f"r2d2-viz: {EMPTY_GRAPH_HINT}; {EMPTY_RUN_NEXT}", file=sys.stderr, flush=True)
+        return
     print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)

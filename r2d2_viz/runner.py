@@ -111,6 +111,8 @@ class RunResult:
     what: str = "samples"
     """What ``samples`` counts, for the summary: a motion's samples, a bag's joint states, or — in a bag without
     joint states — its transforms and display messages."""
+    other_topics: tuple[str, ...] = ()
+    """The bag's topics written through Rerun's own MCAP decoders (no display of ours draws them)."""
 
 
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -197,6 +199,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     save = config.sink.save
     tmp = _temp_path(save) if save is not None else None
     samples, interrupted = 0, False
+    other: tuple[str, ...] = ()
     tree = plan.tree
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
@@ -240,7 +243,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                 else:
                     with sigterm_raises():
                         samples = _batch(streamer, windows, feeds, rec.flush, shown)
-            _other_topics(plan, config, notices)
+            other = _other_topics(plan, config, notices)
             if displays is not None:
                 displays.finish()
             for robot in streamers:
@@ -253,7 +256,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
         if tmp is not None:
             tmp.unlink(missing_ok=True)
         raise
-    return RunResult(samples=samples, interrupted=interrupted, saved=save)
+    return RunResult(samples=samples, interrupted=interrupted, saved=save, other_topics=other)
 
 
 def _robot_streams(recording: Recording, plan: RunPlan, view: ViewPlan, clock: Clock) -> list[RobotStream]:
@@ -333,22 +336,25 @@ def _batch(
     return (samples + sum(r.sent for r in feed.robots)) or feed.sent
 
 
-def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:
+def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> tuple[str, ...]:
     """The bag's topics no display of ours draws: what Rerun's own MCAP decoders show of them (batch runs, .mcap
-    storage), and one line naming the rest."""
+    storage), and one line naming the rest; returns the topics Rerun's decoders wrote."""
     skipped = dict(plan.undisplayed)
+    logged: tuple[str, ...] = ()
     if plan.mcap_files and skipped and not config.live:
         from r2d2_viz.viewer.bag_topics import OURS, log_other_topics
 
         exclude = (*OURS, *plan.displays, *robots_read(plan.robots))
         result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=exclude)
-        for topic in result.logged:
+        logged = result.logged
+        for topic in logged:
             skipped.pop(topic, None)
     if skipped:
         names = listed(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
         n = len(skipped)
         every = " (--list shows every topic)" if n > SHOWN + 1 else ""
         notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}")
+    return logged
 
 
 def _live_block(config: RunConfig) -> int:
@@ -388,4 +394,9 @@ def print_summary(result: RunResult, config: RunConfig) -> None:
     origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
     origin = "from the ROS 2 graph" if config.ros else origin
     what = "joint states" if config.ros else result.what
-    print(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}", file=sys.stderr)
+    counted = f"{result.samples} {what}"
+    n = len(result.other_topics)
+    if n:  # what Rerun's MCAP decoders wrote is in the file too: say so, not "0 transforms and display messages"
+        other = f"{n} topic{'s' * (n != 1)} decoded by Rerun ({listed(result.other_topics)})"
+        counted = other if result.samples == 0 else f"{counted} and {other}"
+    print(f"r2d2-viz: {counted} {origin}{where}{how}", file=sys.stderr)

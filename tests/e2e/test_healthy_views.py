@@ -35,7 +35,10 @@ def real_bag(name: str) -> Path:
     for place in PLACES:
         if (place / name / "metadata.yaml").is_file():
             return place / name
-    pytest.skip(f"bag {name} is not in this checkout (looked in {', '.join(str(p) for p in PLACES)})")
+    pytest.skip(
+        f"the third-party bag {name} is not in this clone: put its files in tests/data/bags/real/{name}/ "
+        "(tests/data/bags/real/README.md says where it comes from)"
+    )
 
 
 def record(bag: Path, out: Path, *args: str) -> tuple[Path, str]:

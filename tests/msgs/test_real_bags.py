@@ -67,7 +67,10 @@ def bag_dir(name: str) -> Path:
     for place in PLACES:
         if (place / name / "metadata.yaml").is_file():
             return place / name
-    pytest.skip(f"bag {name} is not in this checkout (looked in {', '.join(str(p) for p in PLACES)})")
+    pytest.skip(
+        f"the third-party bag {name} is not in this clone: put its files in tests/data/bags/real/{name}/ "
+        "(tests/data/bags/real/README.md says where it comes from)"
+    )
 
 
 def messages(name: str, topic: str) -> list[tuple[bytes, Any]]:
@@ -280,3 +283,11 @@ def test_every_message_decodes_to_what_the_message_says(bag: str, topic: str, ty
         out = decode(typename, raw)  # must not raise
         if check is not None:
             check(out, msg)
+
+
+def test_a_missing_bag_is_skipped_in_words_a_clone_understands() -> None:
+    # a user's clone has no ../shared folder (issue 29): the reason names where the bag goes and where it comes from
+    with pytest.raises(pytest.skip.Exception) as info:
+        bag_dir("no_such_bag")
+    reason = str(info.value)
+    assert "shared" not in reason and "tests/data/bags/real/no_such_bag/" in reason and "README.md" in reason

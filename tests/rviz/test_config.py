@@ -82,7 +82,10 @@ def test_the_json_copy_the_app_reads_is_the_configs_yaml() -> None:
 
 def test_the_shipped_config_is_the_tutorials_byte_for_byte() -> None:
     if not (SHARED_REFERENCE / "r2d2.rviz").exists():
-        pytest.skip("../shared/reference is not beside this clone; assets/r2d2.rviz is the repository's own copy")
+        pytest.skip(
+            "the ROS 2 tutorial's original r2d2.rviz is not on this machine (it is kept outside the repository); "
+            "assets/r2d2.rviz is the repository's copy of it"
+        )
     assert (REPO / "assets" / "r2d2.rviz").read_bytes() == (SHARED_REFERENCE / "r2d2.rviz").read_bytes()
 
 

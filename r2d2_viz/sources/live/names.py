@@ -69,11 +69,14 @@ RECEIVE_BUFFER = "8MB"
 
 
 EMPTY_GRAPH_HINT = (
-    "check that the publishers run with the same ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE "
-    "(ros2 topic list beside them shows their topics); on another machine, multicast must pass between the two "
-    "or ROS_STATIC_PEERS name it; r2d2-viz --ros --list shows what this machine sees"
+    "check that the publishers share ROS_DOMAIN_ID and discovery range (ros2 topic list beside them); "
+    "across machines, multicast or ROS_STATIC_PEERS"
 )
-"""How to check, when a live graph showed nothing."""
+"""How to check, when a live graph showed nothing (each command adds its own next step)."""
+EMPTY_RUN_NEXT = "r2d2-viz --ros --list lists what this machine sees"
+"""A live run that received nothing: the quick look at the graph."""
+EMPTY_LIST_NEXT = "r2d2-viz --ros keeps waiting for publishers"
+"""``--ros --list`` found nothing in its few seconds: the command that keeps waiting."""
 
 
 class DiscoveryRange(Enum):
