@@ -13,7 +13,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from r2d2_viz.errors import DEBUG_ENV, R2d2VizError
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, stderr_line
 from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -186,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return _main(args, parser)
     except R2d2VizError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(stderr_line(f"error: {exc}"), file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("r2d2-viz: interrupted; nothing saved", file=sys.stderr)
@@ -194,7 +194,10 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:
         if os.environ.get(DEBUG_ENV):
             traceback.print_exc()
-        print(f"error: unexpected {type(exc).__name__}: {exc} (set R2D2_VIZ_DEBUG=1 for details)", file=sys.stderr)
+        print(
+            stderr_line(f"error: unexpected {type(exc).__name__}: {exc} (set R2D2_VIZ_DEBUG=1 for details)"),
+            file=sys.stderr,
+        )
         return EXIT_UNEXPECTED
 
 

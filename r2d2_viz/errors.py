@@ -13,6 +13,12 @@ DEBUG_ENV = "R2D2_VIZ_DEBUG"
 the app starts (off otherwise: our own lines say what went wrong)."""
 SHOWN = 5
 """How many names a message line shows of a long list before counting the rest."""
+NAMES_WIDTH = 140
+"""At most this many characters of names in a message line (Gazebo's topic names are long)."""
+NAME_WIDTH = 100
+"""A single name longer than this (a hostile topic, say) is cut, ending in '…'."""
+LINE_LIMIT = 300
+"""No line the app prints to stderr is longer: :func:`stderr_line` cuts the middle of a longer one."""
 
 
 class R2d2VizError(Exception):
@@ -48,14 +54,32 @@ class XacroError(UrdfError):
     package); names the file and the include / macro chain."""
 
 
-def listed(names: Iterable[object], *, first: int = SHOWN) -> str:
+def listed(names: Iterable[object], *, first: int = SHOWN, width: int = NAMES_WIDTH) -> str:
     """Names in a message line: all of a short list (``a, b, c``), the first few of a long one and a count of
     the rest (``a, b, c, d, e and 73 more``) — a Gazebo bag's 78 undrawn topics are not a 6,000-character line.
-    Callers say the total where it matters (``78 topics …: a, b, …``)."""
-    items = [str(n) for n in names]
-    if len(items) <= first + 1:  # "and 1 more" says no less than the name would
+    At most ``width`` characters of names (at least one name, itself cut to ``NAME_WIDTH``). Callers say the total
+    where it matters (``78 topics …: a, b, …``)."""
+    items = [short(n) for n in names]
+    if len(items) <= first + 1 and len(", ".join(items)) <= width:  # "and 1 more" says no less than the name would
         return ", ".join(items)
-    return f"{', '.join(items[:first])} and {len(items) - first} more"
+    shown: list[str] = []
+    for item in items[:first]:
+        if shown and len(", ".join([*shown, item])) > width:
+            break
+        shown.append(item)
+    return f"{', '.join(shown)} and {len(items) - len(shown)} more"
+
+
+def short(name: object, width: int = NAME_WIDTH) -> str:
+    """A name for a message line: cut at ``width`` characters, ending in '…' (a hostile topic name)."""
+    text = str(name)
+    return text if len(text) <= width else text[: width - 1] + "…"
+
+
+def stderr_line(text: str, limit: int = LINE_LIMIT) -> str:
+    """``text`` with each of its lines at most ``limit`` characters: a longer one keeps its start and its last 80
+    characters (where "(further problems … are counted)" and the like are) around a '…'."""
+    return "\n".join(line if len(line) <= limit else f"{line[: limit - 81]}…{line[-80:]}" for line in text.split("\n"))
 
 
 def one_line(exc: BaseException) -> str:

@@ -21,7 +21,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Protocol
 
-from r2d2_viz.errors import R2d2VizError
+from r2d2_viz.errors import R2d2VizError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.pacing import LatenessLog
@@ -359,7 +359,7 @@ class _Scene:
 
 def _say_received(source: LiveSource, seconds: float) -> None:
     """The run's last line: each topic's count — or, when nothing came, what was searched and how to check."""
-    received = ", ".join(f"{t} {n}" for t, n in sorted(source.received.items()))
+    received = listed(f"{t} {n}" for t, n in sorted(source.received.items()))
     if not received:
         discovery: RosDiscovery | None = getattr(source.graph, "discovery", None)
         where = f" on {discovery.searched()}" if discovery is not None else ""

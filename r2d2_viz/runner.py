@@ -111,8 +111,7 @@ class RunResult:
     what: str = "samples"
     """What ``samples`` counts, for the summary: a motion's samples, a bag's joint states, or — in a bag without
     joint states — its transforms and display messages."""
-    other_topics: tuple[str, ...] = ()
-    """The bag's topics written through Rerun's own MCAP decoders (no display of ours draws them)."""
+    other_topics: tuple[str, ...] = ()  # the bag's topics Rerun's own MCAP decoders wrote (none of our displays)
 
 
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -339,15 +338,13 @@ def _batch(
 def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> tuple[str, ...]:
     """The bag's topics no display of ours draws: what Rerun's own MCAP decoders show of them (batch runs, .mcap
     storage), and one line naming the rest; returns the topics Rerun's decoders wrote."""
-    skipped = dict(plan.undisplayed)
-    logged: tuple[str, ...] = ()
+    skipped, logged = dict(plan.undisplayed), tuple[str, ...]()
     if plan.mcap_files and skipped and not config.live:
         from r2d2_viz.viewer.bag_topics import OURS, log_other_topics
 
         exclude = (*OURS, *plan.displays, *robots_read(plan.robots))
         result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=exclude)
-        logged = result.logged
-        for topic in logged:
+        for topic in (logged := result.logged):
             skipped.pop(topic, None)
     if skipped:
         names = listed(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))

@@ -1,7 +1,8 @@
 """A bag whose display messages lie, written by rosbags itself: markers with NaN, infinite and huge (1e300)
 scales, positions and colours, all-zero quaternions; a PointCloud2 and an Image whose sizes do not match their
-data. Nothing here is drawable as sent: the app must warn (grouped), not crash, and leak nothing from inside
-its libraries (numpy's ``RuntimeWarning: overflow encountered in cast`` among them)."""
+data; a map whose cells are 3e38 m wide. Nothing here is drawable as sent: the app must warn (grouped), not
+crash, and leak nothing from inside its libraries (numpy's ``RuntimeWarning: overflow encountered in cast`` among
+them)."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ TYPES = {
     "/cloud": "sensor_msgs/msg/PointCloud2",
     "/image": "sensor_msgs/msg/Image",
     "/tf": "tf2_msgs/msg/TFMessage",
+    "/map": "nav_msgs/msg/OccupancyGrid",
 }
 
 
@@ -73,6 +75,19 @@ def _image(sec: int) -> bytes:
     )
 
 
+def _map() -> bytes:
+    """A 2 x 2 map whose cells say they are 3e38 m wide (resolution is a float32: 3e38 fits, 6e38 would not): its
+    far corner, 6e38 m away, is infinite as a float32 (issue 29: the view fit handed it to Rerun's converters)."""
+    info = T("nav_msgs/msg/MapMetaData")(
+        map_load_time=T("builtin_interfaces/msg/Time")(sec=0, nanosec=0),
+        resolution=3e38,
+        width=2,
+        height=2,
+        origin=pose(0.0, 0.0, 0.0),
+    )
+    return cdr(T("nav_msgs/msg/OccupancyGrid")(header=header("odom"), info=info, data=np.zeros(4, np.int8)))
+
+
 def write_liar_bag(path: Path) -> Path:
     spec = BagSpec(types=TYPES)
     for k in range(3):
@@ -82,4 +97,5 @@ def write_liar_bag(path: Path) -> Path:
             spec.add("/markers", t + 10 + n, cdr(T("visualization_msgs/msg/MarkerArray")(markers=[liar])))
         spec.add("/cloud", t + 2, _cloud(int(t // S)))
         spec.add("/image", t + 3, _image(int(t // S)))
+        spec.add("/map", t + 4, _map())
     return write_bag(path, spec)

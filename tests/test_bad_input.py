@@ -120,6 +120,36 @@ def test_lying_display_messages_warn_grouped_and_leak_nothing(tmp_path: Path) ->
     assert "Warning" not in result.stderr, result.stderr
     lines = result.stderr.splitlines()
     assert all(line.startswith(("warning: ", "r2d2-viz: ")) for line in lines), result.stderr
-    for topic in ("/markers", "/cloud", "/image"):
+    for topic in ("/markers", "/cloud", "/image", "/map"):
         assert sum(f"{topic}: " in line and "could not be shown" in line for line in lines) == 1, result.stderr
     assert out.stat().st_size < 100_000_000
+
+
+def test_no_stderr_line_is_longer_than_300_characters(tmp_path: Path, tutorial_urdf: Path) -> None:
+    """Names are input too (issue 29: a Gazebo bag's undrawn topics made a 486-character line): 400-character topic
+    names, a scan on such a topic that cannot be decoded, 40 unknown 80-character joint names, 70 undrawn topics —
+    every line the run prints stays within 300 characters, and still names what it is about."""
+    from bagmaker import T0, BagSpec, joint_state, string, write_bag
+
+    undrawn = [f"/{'u' * 390}_{k:02d}" for k in range(70)]
+    scan = f"/{'s' * 400}/scan"
+    unknown = [f"{'j' * 76}_{k:02d}" for k in range(40)]
+    types = {**{t: "std_msgs/msg/String" for t in undrawn}, scan: "sensor_msgs/msg/LaserScan"}
+    spec = BagSpec(types={**types, "/joint_states": "sensor_msgs/msg/JointState"})
+    for k, topic in enumerate(undrawn):
+        spec.add(topic, T0 + k, string("x"))
+    spec.add(scan, T0 + 100, b"\x00\x01\x00\x00" + b"\x07" * 3)  # a CDR header and 3 bytes: truncated
+    spec.add("/joint_states", T0 + 200, joint_state(T0 + 200, ["swivel", *unknown], [0.1] * 41))
+    bag = write_bag(tmp_path / "names", spec, storage="sqlite3")  # .db3: Rerun's MCAP decoders take nothing
+    for args in (["--save", str(tmp_path / "n.rrd")], ["--list"]):  # the bag's full path (xdist makes it longer)
+        result = cli("--bag", str(bag), "--urdf", str(tutorial_urdf), *args, cwd=tmp_path)
+        assert result.returncode == 0, result.stderr
+        # stderr only: --list's stdout is the data asked for, full names as ros2 bag info prints them
+        assert max((len(line) for line in result.stderr.splitlines()), default=0) <= 300, result.stderr
+    # as a user types it, from the bag's folder: what each line says, whole
+    saved = cli("--bag", bag.name, "--urdf", str(tutorial_urdf), "--save", "m.rrd", cwd=tmp_path)
+    err = saved.stderr
+    assert "70 topics with no display, not shown: /uuu" in err and " and " in err and " more " in err, err
+    # the scan's problem: its topic cut short, its type, and the end of what went wrong
+    assert "/sss" in err and "a sensor_msgs/msg/LaserScan message" in err and "(actual buffer size is 3)" in err, err
+    assert "ignored joints" in err and f"{'j' * 76}_00" in err, err

@@ -37,3 +37,20 @@ def test_listed_shows_a_few_names_and_counts_the_rest() -> None:
     assert errors.listed(names[:7]) == "/t0, /t1, /t2, /t3, /t4 and 2 more"
     assert errors.listed([]) == "" and errors.listed(["a"]) == "a"
     assert errors.listed(iter(names), first=2) == "/t0, /t1 and 76 more"
+
+
+def test_listed_keeps_a_line_short_whatever_the_names() -> None:
+    long = [f"/gazebo/link_{k:02d}/diagnostics_with_a_long_name (std_msgs/msg/String)" for k in range(70)]  # 67 chars
+    assert errors.listed(long) == f"{long[0]}, {long[1]} and 68 more"  # 2 x 67 + 2 fit in 140, 3 would not
+    hostile = ["/" + "x" * 5000, "/y"]
+    assert errors.listed(hostile) == "/" + "x" * 98 + "…, /y"  # a name is cut at 100 characters
+    assert errors.listed(["/" + "x" * 5000] * 3) == "/" + "x" * 98 + "… and 2 more"
+
+
+def test_a_stderr_line_is_at_most_300_characters_and_keeps_its_end() -> None:
+    line = "warning: bag: /scan: " + "z" * 1000 + " (further problems on this topic are counted)"
+    short = errors.stderr_line(line)
+    assert len(short) == 300 and short.startswith("warning: bag: /scan: zzz") and "…" in short
+    assert short.endswith(" (further problems on this topic are counted)")
+    assert errors.stderr_line("a\n" + "b" * 400).split("\n")[0] == "a"  # line by line
+    assert errors.stderr_line("short") == "short"

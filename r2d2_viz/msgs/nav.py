@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from r2d2_viz.msgs.colormaps import PALETTES
-from r2d2_viz.msgs.geometry import header_of, one_color, points3, pose_of
+from r2d2_viz.msgs.geometry import FLOAT32_MAX, header_of, one_color, points3, pose_of
 from r2d2_viz.msgs.shapes import Boxes, Decoded, DecodeOptions, GridMap, LineStrips
 from r2d2_viz.msgs.typestore import MsgError, deserialize, typestore
 
@@ -37,6 +37,8 @@ def decode_occupancy_grid(data: bytes | memoryview, options: DecodeOptions) -> D
         raise MsgError(f"{width}x{height} map is too big")
     if not (np.isfinite(resolution) and resolution > 0):
         raise MsgError(f"map resolution {resolution}")
+    if max(width, height) * resolution > FLOAT32_MAX:  # its corners would be infinite where the viewer draws them
+        raise MsgError(f"{width}x{height} map of {resolution:g} m cells is beyond float32")
     index = np.asarray(cells).view(np.uint8).reshape(height, width)
     rgba = PALETTES[options.map_scheme][index]
     return Decoded(frame, stamp, (GridMap(rgba, resolution, pose_of(info.origin)),))

@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from r2d2_viz.arrays import F64, I64
-from r2d2_viz.errors import BagError
+from r2d2_viz.errors import BagError, listed
 from r2d2_viz.msgs.layouts import STAMP, JointStateLayout, joint_state_layout
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.bag import Bag
@@ -67,7 +67,7 @@ class JointStateDecoder:
         """One line per kind of message skipped or joint ignored so far."""
         out = []
         if self.unknown:
-            names = ", ".join(sorted(self.unknown)[:10]) + (", ..." if len(self.unknown) > 10 else "")
+            names = listed(sorted(self.unknown))
             out.append(f"ignored joints that are not actuated joints of the robot: {names}")
         if self.skipped:
             out.append(f"skipped {self.skipped} messages whose name and position lengths differ")

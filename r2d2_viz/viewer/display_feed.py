@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import rerun as rr
 
+from r2d2_viz.errors import short
 from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp, MeshResource
@@ -207,7 +208,8 @@ class DisplayFeed:
         return dataclasses.replace(message, decoded=decoded, prepared=prepared)
 
     def _where(self, topic: str) -> str:
-        return f"{self.source_name}: {topic}" if self.source_name else topic
+        # the topic's problem follows: the name gets less room than in a list of names
+        return f"{self.source_name}: {short(topic, 60)}" if self.source_name else short(topic, 60)
 
     def _placed(self, topic: str, decoded: Decoded | list[MarkerOp]) -> Decoded | list[MarkerOp]:
         """An empty frame id → the fixed frame (said once per topic)."""

@@ -9,6 +9,7 @@ from collections.abc import Callable
 import numpy as np
 import rerun as rr
 
+from r2d2_viz.errors import stderr_line
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.viewer.entities import TIMELINE, WARNINGS
 
@@ -16,7 +17,7 @@ Warn = Callable[[str], None]
 
 
 def to_stderr(message: str) -> None:
-    print(f"warning: {message}", file=sys.stderr, flush=True)
+    print(stderr_line(f"warning: {message}"), file=sys.stderr, flush=True)
 
 
 class Notices:

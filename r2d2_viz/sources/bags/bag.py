@@ -20,7 +20,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from r2d2_viz.errors import BagError, listed
+from r2d2_viz.errors import BagError, listed, stderr_line
 from r2d2_viz.msgs.definitions import Convert
 from r2d2_viz.msgs.typestore import MsgError, deserialize
 from r2d2_viz.sources.bags.mcap_scan import McapScan
@@ -30,7 +30,7 @@ Warn = Callable[[str], None]
 
 
 def to_stderr(message: str) -> None:
-    print(f"warning: {message}", file=sys.stderr, flush=True)
+    print(stderr_line(f"warning: {message}"), file=sys.stderr, flush=True)
 
 
 STORAGES = (".db3", ".mcap", ".bag")

@@ -20,6 +20,7 @@ from pathlib import Path
 import rerun as rr
 import rerun.blueprint as rrb
 
+from r2d2_viz.errors import stderr_line
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, RobotModel, TopicDisplay, ViewSpec
 from r2d2_viz.viewer.entities import (
@@ -288,7 +289,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             spec = load_rviz(args.rviz)
         except R2d2VizError as exc:
-            print(f"error: {exc}", file=sys.stderr)
+            print(stderr_line(f"error: {exc}"), file=sys.stderr)
             return 2
         for note in spec.notes:
             print(f"note: {note}", file=sys.stderr)

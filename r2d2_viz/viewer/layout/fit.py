@@ -24,6 +24,10 @@ MARGIN = 1.15
 AXIS_LENGTH = 0.1
 """RViz draws TF axes 0.1 m long at marker scale 1."""
 MANY_FRAMES = 40
+FIT_LIMIT = 1e9
+"""Points farther than this (m, on any axis) from the origin are left out of a fit, like NaN: no robot's scene is
+that big, and the camera placed from such an extent would be infinite as the viewer's float32 (a map lying about
+its size, a 1e300 transform)."""
 """Above this many TF frames the arrows are hidden and the axes are half as long: they would cover the robot."""
 
 
@@ -68,14 +72,13 @@ def fit_view(tree: KinematicTree, q: F64, *, root: FrameTrack | None = None) -> 
     if root is not None:
         root_pose = (root.translation, root.quat_xyzw)
     at = link_positions(tree, translation, quat, range(len(tree.links)), root_pose=root_pose)
-    points = np.concatenate([p for p in at.values()])
-    points = points[np.isfinite(points).all(axis=1)]
+    points = _usable(np.concatenate([p for p in at.values()]))
     if len(points) == 0:
         points = np.zeros((1, 3))
     lo, hi = points.min(axis=0), points.max(axis=0)
     center = (lo + hi) / 2
     size = max((_shape_size(shape.geometry) for link in tree.robot.links for shape in link.visuals), default=0.0)
-    radius = max(float(np.linalg.norm(hi - lo)) / 2 + size, 0.05)
+    radius = min(max(float(np.linalg.norm(hi - lo)) / 2 + size, 0.05), FIT_LIMIT)
     cx, cy, cz = (float(v) for v in center)
     return ViewFit((cx, cy, cz), radius, len(tree.links) + 1)
 
@@ -86,8 +89,7 @@ def fit_scene(groups: list[F64], *, robot_radius: float, frames: int) -> ViewFit
     so a few far readings of one scan do not shrink the scene; a small group (a marker) counts whole."""
     lows, highs = [], []
     for group in groups:
-        points = np.asarray(group, dtype=np.float64).reshape(-1, 3)
-        points = points[np.isfinite(points).all(axis=1)]
+        points = _usable(np.asarray(group, dtype=np.float64).reshape(-1, 3))
         if len(points) == 0:
             continue
         if len(points) > 100:
@@ -99,8 +101,14 @@ def fit_scene(groups: list[F64], *, robot_radius: float, frames: int) -> ViewFit
     lo = np.min(lows, axis=0) if lows else np.zeros(3)
     hi = np.max(highs, axis=0) if highs else np.zeros(3)
     cx, cy, cz = (float(v) for v in (lo + hi) / 2)
-    radius = max(float(np.linalg.norm(hi - lo)) / 2 + robot_radius, 0.05)
+    radius = min(max(float(np.linalg.norm(hi - lo)) / 2 + robot_radius, 0.05), FIT_LIMIT)
     return ViewFit((cx, cy, cz), radius, frames, robot_radius=robot_radius or None)
+
+
+def _usable(points: F64) -> F64:
+    """The points a fit may use: finite and within :data:`FIT_LIMIT` of the origin on every axis."""
+    with np.errstate(invalid="ignore"):
+        return points[(np.abs(points) <= FIT_LIMIT).all(axis=1)]
 
 
 def _shape_size(geometry: object) -> float:

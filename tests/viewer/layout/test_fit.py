@@ -76,3 +76,20 @@ def test_a_scene_fit_keeps_small_groups_whole_and_trims_a_dense_groups_outliers(
     assert fit.center[0] == pytest.approx(-0.5, abs=0.1) and fit.center[1] == pytest.approx(1.0, abs=0.1)
     assert fit.radius == pytest.approx(np.hypot(5, 2) / 2 + 0.1, abs=0.1)
     assert fit.axis_length() == pytest.approx(AXIS_LENGTH * 0.1)  # TF axes follow the robot, not the scene
+
+
+def test_points_beyond_float32_or_absurdly_far_are_left_out_of_a_fit_like_nan() -> None:
+    # issue 29: a map lying about its size put a 6e38 m corner into the fit; the camera Rerun was given overflowed
+    # float32. Such points count no more than NaN does: the fit is the one of the sane points alone.
+    from r2d2_viz.viewer.layout.fit import FIT_LIMIT, fit_scene
+
+    sane = np.array([[0.0, 0.0, 0.0], [2.0, 1.0, 0.0]])
+    liars = np.array([[6e38, 6e38, 0.0], [1e300, 0.0, 0.0], [-np.inf, 0.0, 0.0], [np.nan, 0.0, 0.0]])
+    with np.errstate(all="raise"):  # nothing may overflow on the way
+        fit = fit_scene([sane, liars, np.array([[2 * FIT_LIMIT, 0.0, 0.0]])], robot_radius=0.1, frames=3)
+    assert fit == fit_scene([sane], robot_radius=0.1, frames=3)
+    assert fit.center == pytest.approx((1.0, 0.5, 0.0)) and fit.radius == pytest.approx(np.hypot(2, 1) / 2 + 0.1)
+    eye = np.array(fit.center) + fit.distance()
+    assert np.isfinite(eye.astype(np.float32)).all()
+    only_liars = fit_scene([liars], robot_radius=0.1, frames=3)  # nothing sane: the robot's own size at the origin
+    assert only_liars.center == (0.0, 0.0, 0.0) and only_liars.radius == pytest.approx(0.1)
