@@ -17,7 +17,7 @@ import rerun as rr
 
 from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp, MeshResource
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp, MeshResource, is_plain
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage
 from r2d2_viz.sources.base import Clock, TfRecords
@@ -25,6 +25,7 @@ from r2d2_viz.viewer.decay import FixedFramePlacer
 from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
+from r2d2_viz.viewer.telemetry import PlainBook
 
 _FOREVER = 2**63 - 1
 GRID = "nav_msgs/msg/OccupancyGrid"
@@ -50,6 +51,7 @@ class _TopicState:
     messages: int = 0
     problems: int = 0
     markers: MarkerBook = field(default_factory=MarkerBook)
+    plain: PlainBook = field(default_factory=PlainBook)
 
 
 class DisplayFeed:
@@ -189,6 +191,7 @@ class DisplayFeed:
                     markers=state.markers,
                     load_mesh=self.load_mesh,
                     prepared=prepared,  # type: ignore[arg-type]  # what self.decode built: displays.Prepared
+                    plain=state.plain,
                 )
 
     def decode(self, message: TopicMessage) -> TopicMessage:
@@ -213,7 +216,7 @@ class DisplayFeed:
         """An empty frame id → the fixed frame (said once per topic)."""
 
         def fix(d: Decoded) -> Decoded:
-            if d.frame_id:
+            if d.frame_id or all(is_plain(item) for item in d.items):  # a log, a plot: in no frame
                 return d
             self.notices.report(
                 f"{self._where(topic)}: messages with an empty frame_id are drawn in the fixed frame "

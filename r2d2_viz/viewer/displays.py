@@ -20,7 +20,8 @@ import numpy as np
 import rerun as rr
 
 from r2d2_viz.msgs import shapes
-from r2d2_viz.msgs.shapes import Decoded, MarkerOp, Pose
+from r2d2_viz.msgs.shapes import Decoded, MarkerOp, Pose, is_plain
+from r2d2_viz.viewer.telemetry import PlainBook, log_plain
 
 Clock = Literal["duration", "timestamp"]
 MeshLoader = Callable[[str], "tuple[bytes, str] | None"]
@@ -184,8 +185,8 @@ def _components(item: shapes.Shape, decoded: Decoded, entity: str, load: MeshLoa
 def prepare(decoded: Decoded, load: MeshLoader | None = None) -> Prepared | None:
     """The archetypes of every item of ``decoded`` (pure: a bag's reader thread builds them beside the logging);
     None when they depend on the entity they go to (a camera's pinhole names its image plane by it)."""
-    if any(isinstance(item, shapes.Pinhole) for item in decoded.items):
-        return None
+    if any(isinstance(item, shapes.Pinhole) or is_plain(item) for item in decoded.items):
+        return None  # (plain items: logged with what their topic was given so far)
     many = len(decoded.items) > 1
     return [(f"/{i}" if many else "", _components(item, decoded, "", load)) for i, item in enumerate(decoded.items)]
 
@@ -196,15 +197,20 @@ def _log_items(
     decoded: Decoded,
     load: MeshLoader | None,
     prepared: Prepared | None = None,
+    plain: PlainBook | None = None,
 ) -> None:
     if prepared is not None:
         for suffix, components in prepared:
             rec.log(entity_path + suffix, *components)
         return
-    many = len(decoded.items) > 1
-    for i, item in enumerate(decoded.items):
+    drawn = [item for item in decoded.items if not is_plain(item)]
+    many = len(drawn) > 1
+    for i, item in enumerate(drawn):
         entity = f"{entity_path}/{i}" if many else entity_path
         rec.log(entity, *_components(item, decoded, entity, load))
+    for item in decoded.items:
+        if isinstance(item, shapes.LogLine | shapes.Statuses | shapes.Series | shapes.GeoPoint):
+            log_plain(rec, entity_path, item, plain if plain is not None else PlainBook())
 
 
 def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, time_ns: int, clock: Clock) -> None:
@@ -277,13 +283,15 @@ def log_decoded(
     markers: MarkerBook | None = None,
     load_mesh: MeshLoader | None = None,
     prepared: Prepared | None = None,
+    plain: PlainBook | None = None,
 ) -> None:
     """Log one decoded message on ``entity_path`` at ``time_ns`` (its archetypes ``prepared`` ahead, if they
     were). Marker messages need the topic's ``markers`` book (for DELETEALL and lifetimes); markers that expired
-    before ``time_ns`` are cleared first."""
+    before ``time_ns`` are cleared first. Logs, states and plots (:mod:`r2d2_viz.viewer.telemetry`) need the
+    topic's ``plain`` book."""
     if isinstance(decoded, Decoded):
         set_time(rec, timeline, time_ns, clock)
-        _log_items(rec, entity_path, decoded, load_mesh, prepared)
+        _log_items(rec, entity_path, decoded, load_mesh, prepared, plain)
         return
     book = markers if markers is not None else MarkerBook()
     expire_markers(rec, book, timeline, time_ns, clock)

@@ -14,7 +14,7 @@ import numpy as np
 from r2d2_viz.errors import listed
 from r2d2_viz.kinematics.transforms import quat_to_matrix
 from r2d2_viz.msgs.extent import extent_points
-from r2d2_viz.msgs.registry import decode
+from r2d2_viz.msgs.registry import VIEWS, decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
@@ -98,6 +98,7 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
         fixed_frame=frame,
         robots=tuple(r.namespace for r in plan.robots) if len(plan.robots) > 1 else (),
         flat_images=_flat_images(plan.displays),
+        **_telemetry(plan.displays),
     )
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
@@ -155,6 +156,17 @@ def _flat_images(displays: dict[str, str]) -> tuple[str, ...]:
     """Image topics no CameraInfo gives a pinhole (:func:`camera_images` pairs them like RViz's Camera display)."""
     with_camera = {t for images in camera_images(displays).values() for t in images}
     return tuple(t for t, m in sorted(displays.items()) if m in IMAGES and t not in with_camera)
+
+
+def _telemetry(displays: dict[str, str]) -> dict[str, tuple[str, ...]]:
+    """The layout's log, state, map and plot topics (:data:`r2d2_viz.msgs.registry.VIEWS`)."""
+    views = {"log": "logs", "state": "states", "map": "maps", "plot": "plots"}
+    out: dict[str, tuple[str, ...]] = {}
+    for view, name in views.items():
+        out[name] = tuple(t for t, m in sorted(displays.items()) if VIEWS.get(m) == view)
+    out["plots"] += tuple(t for t, m in sorted(displays.items()) if m == "sensor_msgs/msg/NavSatFix")  # altitude
+    out["plots"] = tuple(sorted(out["plots"]))
+    return out
 
 
 MAP_SCHEMES = ("map", "costmap", "raw")
