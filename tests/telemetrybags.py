@@ -32,8 +32,8 @@ DIAG = [  # (receive time, [(name, level, message, key/values)])
     (T0 + 2 * S, [("motor: left", 1, "hot", [("current", "4.25"), ("mode", "auto")]), ("/Robot/Power", 3, "", [])]),
     (T0 + 3 * S, [("motor: left", 2, "stalled", [("current", "n/a"), ("mode", "off")])]),
 ]
-DIAG_ENTITIES = {"motor: left": "/diagnostics/motor:\\ left", "/Robot/Power": "/diagnostics/Robot/Power"}
-"""Each status's entity: its name split at '/', each part escaped as Rerun escapes a path part (the space)."""
+DIAG_ENTITIES = {"motor: left": "/diagnostics/motor\\:\\ left", "/Robot/Power": "/diagnostics/Robot/Power"}
+"""Each status's entity: its name split at '/', each part escaped as Rerun escapes one (colon, space)."""
 DIAG_STATES = {
     "motor: left": ["OK: running", "WARN: hot", "ERROR: stalled"],
     "/Robot/Power": ["OK", "STALE"],
@@ -52,31 +52,38 @@ FLAG = [(T0 + S // 4, True), (T0 + S // 2, False)]  # /flag (Bool) → 1, 0
 STRING_TIME, STRING = T0 + 18 * S // 10, "docked"
 
 
+def _time(store: Any, t_ns: int) -> Any:
+    return store.types["builtin_interfaces/msg/Time"](*divmod(t_ns, S))
+
+
+def _diagnostics(store: Any, header: Any, statuses: list) -> Any:
+    T = store.types
+    kv, status = T["diagnostic_msgs/msg/KeyValue"], T["diagnostic_msgs/msg/DiagnosticStatus"]
+    items = [status(lv, n, m, "hw0", [kv(k, v) for k, v in vs]) for n, lv, m, vs in statuses]
+    return T["diagnostic_msgs/msg/DiagnosticArray"](header, items)
+
+
+def _tf(store: Any, header: Any) -> Any:
+    """odom → imu_link, 1 m ahead: the replay's fixed frame is odom."""
+    T = store.types
+    v, q = T["geometry_msgs/msg/Vector3"](1.0, 0.0, 0.0), T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0)
+    tr = T["geometry_msgs/msg/Transform"](v, q)
+    return T["tf2_msgs/msg/TFMessage"]([T["geometry_msgs/msg/TransformStamped"](header, "imu_link", tr)])
+
+
 def _ros2(store: Any) -> dict[str, list[tuple[int, Any]]]:
     T = store.types
 
     def header(t_ns: int, frame: str = "") -> Any:
-        return T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](*divmod(t_ns, S)), frame)
+        return T["std_msgs/msg/Header"](_time(store, t_ns), frame)
 
+    log = T["rcl_interfaces/msg/Log"]
     out: dict[str, list[tuple[int, Any]]] = {}
+    out["/tf_static"] = [(T0, _tf(store, header(T0, "odom")))]
     out["/rosout"] = [
-        (t, T["rcl_interfaces/msg/Log"](T["builtin_interfaces/msg/Time"](*divmod(t, S)), lv, node, text, f, fn, ln))
-        for t, lv, _, node, text, f, fn, ln, _ in LOG
+        (t, log(_time(store, t), lv, node, text, f, fn, ln)) for t, lv, _, node, text, f, fn, ln, _ in LOG
     ]
-    kv = T["diagnostic_msgs/msg/KeyValue"]
-    out["/diagnostics"] = [
-        (
-            t,
-            T["diagnostic_msgs/msg/DiagnosticArray"](
-                header(t),
-                [
-                    T["diagnostic_msgs/msg/DiagnosticStatus"](lv, n, m, "hw0", [kv(k, v) for k, v in vs])
-                    for n, lv, m, vs in s
-                ],
-            ),
-        )
-        for t, s in DIAG
-    ]
+    out["/diagnostics"] = [(t, _diagnostics(store, header(t), s)) for t, s in DIAG]
     out["/imu"] = [(IMU_TIME, _imu(T, header(IMU_TIME, "imu_link")))]
     status = T["sensor_msgs/msg/NavSatStatus"](0, 1)
     out["/fix"] = [(FIX_TIME, T["sensor_msgs/msg/NavSatFix"](header(FIX_TIME, "gps"), status, *FIX, np.zeros(9), 0))]
@@ -94,14 +101,13 @@ def _imu(T: Any, header: Any) -> Any:
 
 
 def _battery(T: Any, header: Any) -> Any:
-    b = BATTERY
-    return T["sensor_msgs/msg/BatteryState"](
-        header, b["voltage"], b["temperature"], b["current"], b["charge"], 20.0, 20.0, b["percentage"],
-        2, 1, 2, True, np.zeros(0, np.float32), np.zeros(0, np.float32), "base", "SN1",
-    )  # fmt: skip
+    b, cells = BATTERY, np.zeros(0, np.float32)
+    values = (b["voltage"], b["temperature"], b["current"], b["charge"], 20.0, 20.0, b["percentage"])
+    return T["sensor_msgs/msg/BatteryState"](header, *values, 2, 1, 2, True, cells, cells, "base", "SN1")
 
 
 TYPES = {
+    "/tf_static": "tf2_msgs/msg/TFMessage",
     "/rosout": "rcl_interfaces/msg/Log",
     "/diagnostics": "diagnostic_msgs/msg/DiagnosticArray",
     "/imu": "sensor_msgs/msg/Imu",
@@ -113,23 +119,10 @@ TYPES = {
 }
 
 
-def _tf(T: Any) -> Any:
-    """odom → imu_link, 1 m ahead: the replay's fixed frame is odom."""
-    tr = T["geometry_msgs/msg/Transform"](
-        T["geometry_msgs/msg/Vector3"](1.0, 0.0, 0.0), T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0)
-    )
-    stamp = T["builtin_interfaces/msg/Time"](*divmod(T0, S))
-    header = T["std_msgs/msg/Header"](stamp, "odom")
-    return T["tf2_msgs/msg/TFMessage"]([T["geometry_msgs/msg/TransformStamped"](header, "imu_link", tr)])  # fmt: skip
-
-
 def write_telemetry_bag(path: Path) -> Path:
-    """A ROS 2 MCAP bag (a folder) of every topic of :data:`TYPES` and /tf_static."""
-    messages = _ros2(HUMBLE)
+    """A ROS 2 MCAP bag (a folder) of every topic of :data:`TYPES`."""
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        tf = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=HUMBLE)
-        writer.write(tf, T0, bytes(HUMBLE.serialize_cdr(_tf(HUMBLE.types), "tf2_msgs/msg/TFMessage")))
-        for topic, rows in messages.items():
+        for topic, rows in _ros2(HUMBLE).items():
             c = writer.add_connection(topic, TYPES[topic], typestore=HUMBLE)
             for t, msg in rows:
                 writer.write(c, t, bytes(HUMBLE.serialize_cdr(msg, TYPES[topic])))
@@ -137,34 +130,27 @@ def write_telemetry_bag(path: Path) -> Path:
 
 
 def write_ros1_telemetry_bag(path: Path) -> Path:
-    """The same as a ROS 1 bag: ``rosgraph_msgs/Log`` with ROS 1's levels (1, 2, 4, 8, 16), the rest the same."""
+    """The same as a ROS 1 bag (Noetic's types): ``rosgraph_msgs/Log`` with ROS 1's levels (1, 2, 4, 8, 16), its
+    header with a ``seq``; /tf_static, /diagnostics, /imu and /speed."""
     T = NOETIC.types
 
     def header(t_ns: int, frame: str = "") -> Any:
-        return T["std_msgs/msg/Header"](0, T["builtin_interfaces/msg/Time"](*divmod(t_ns, S)), frame)
+        return T["std_msgs/msg/Header"](0, _time(NOETIC, t_ns), frame)
 
-    log = "rosgraph_msgs/msg/Log"
+    log = T["rosgraph_msgs/msg/Log"]
     rows: dict[str, tuple[str, list[tuple[int, Any]]]] = {
-        "/rosout": (log, [(t, T[log](header(t), lv, node, text, f, fn, ln, [])) for t, _, lv, node, text, f, fn, ln, _ in LOG]),
-    }  # fmt: skip
-    kv = T["diagnostic_msgs/msg/KeyValue"]
-    rows["/diagnostics"] = (
-        TYPES["/diagnostics"],
-        [
-            (t, T[TYPES["/diagnostics"]](header(t), [T["diagnostic_msgs/msg/DiagnosticStatus"](lv, n, m, "hw0", [kv(k, v) for k, v in vs]) for n, lv, m, vs in s]))
-            for t, s in DIAG
-        ],
-    )  # fmt: skip
-    rows["/imu"] = (TYPES["/imu"], [(IMU_TIME, _imu(T, header(IMU_TIME, "imu_link")))])
-    rows["/speed"] = (TYPES["/speed"], [(t, T["std_msgs/msg/Float64"](v)) for t, v in NUMBERS])
-    tf_type = "tf2_msgs/msg/TFMessage"
-    tr = T["geometry_msgs/msg/Transform"](T["geometry_msgs/msg/Vector3"](1.0, 0.0, 0.0), T["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0))  # fmt: skip
-    tf = T[tf_type]([T["geometry_msgs/msg/TransformStamped"](header(T0, "odom"), "imu_link", tr)])
+        "/tf_static": (TYPES["/tf_static"], [(T0, _tf(NOETIC, header(T0, "odom")))]),
+        "/rosout": (
+            "rosgraph_msgs/msg/Log",
+            [(t, log(header(t), lv, node, text, f, fn, ln, [])) for t, _, lv, node, text, f, fn, ln, _ in LOG],
+        ),
+        "/diagnostics": (TYPES["/diagnostics"], [(t, _diagnostics(NOETIC, header(t), s)) for t, s in DIAG]),
+        "/imu": (TYPES["/imu"], [(IMU_TIME, _imu(T, header(IMU_TIME, "imu_link")))]),
+        "/speed": (TYPES["/speed"], [(t, T["std_msgs/msg/Float64"](v)) for t, v in NUMBERS]),
+    }
     with Ros1Writer(path) as writer:
-        c = writer.add_connection("/tf_static", tf_type, typestore=NOETIC, latching=1)
-        writer.write(c, T0, NOETIC.serialize_ros1(tf, tf_type))
         for topic, (msgtype, msgs) in rows.items():
-            c = writer.add_connection(topic, msgtype, typestore=NOETIC)
+            c = writer.add_connection(topic, msgtype, typestore=NOETIC, latching=int(topic == "/tf_static"))
             for t, msg in msgs:
                 writer.write(c, t, NOETIC.serialize_ros1(msg, msgtype))
     return path

@@ -122,16 +122,19 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
         "`GeoPoints` on a map view (none without a fix); altitude plotted",
     ),
     "sensor_msgs/msg/BatteryState": ("(rqt_plot)", "voltage, current, charge, percentage, temperature `Scalars`"),
-    **{t: ("(rqt_plot)", f"`Scalars` of its {f}") for t, f in telemetry.SCALAR_SENSORS.items()},
-    **{t: ("(rqt_plot)", "`Scalars` of its data (a Bool as 0/1)") for t in telemetry.NUMBERS},
+    **dict.fromkeys(telemetry.SCALAR_SENSORS, ("(rqt_plot)", "`Scalars` of its value (not its variance)")),
+    **dict.fromkeys(telemetry.NUMBERS, ("(rqt_plot)", "`Scalars` of its data (a Bool as 0/1)")),
 }
 """What each decoded type becomes: the RViz display that draws it, and the Rerun archetypes r2d2-viz logs."""
 
 
 def displays_markdown() -> str:
     """The README's "From RViz's displays to r2d2-viz" table."""
+    rows: dict[tuple[str, str], list[str]] = {}  # types shown alike share a row
+    for msgtype, how in SHOWN_AS.items():
+        rows.setdefault(how, []).append(msgtype)
     lines = ["| message type | RViz display | in Rerun |", "|---|---|---|"]
-    lines += [f"| `{msgtype}` | {display} | {shown} |" for msgtype, (display, shown) in SHOWN_AS.items()]
+    lines += [f"| {', '.join(f'`{t}`' for t in types)} | {d} | {shown} |" for (d, shown), types in rows.items()]
     return "\n".join(lines)
 
 

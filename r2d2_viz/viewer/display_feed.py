@@ -22,10 +22,9 @@ from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.decay import FixedFramePlacer
-from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
+from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, PlainBook, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
-from r2d2_viz.viewer.telemetry import PlainBook
 
 _FOREVER = 2**63 - 1
 GRID = "nav_msgs/msg/OccupancyGrid"
