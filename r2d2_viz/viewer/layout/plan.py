@@ -5,6 +5,7 @@ once, before anything is logged."""
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -98,7 +99,7 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
         fixed_frame=frame,
         robots=tuple(r.namespace for r in plan.robots) if len(plan.robots) > 1 else (),
         flat_images=_flat_images(plan.displays),
-        **_telemetry(plan.displays),
+        **telemetry_views(plan.displays),
     )
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
@@ -158,8 +159,9 @@ def _flat_images(displays: dict[str, str]) -> tuple[str, ...]:
     return tuple(t for t, m in sorted(displays.items()) if m in IMAGES and t not in with_camera)
 
 
-def _telemetry(displays: dict[str, str]) -> dict[str, tuple[str, ...]]:
-    """The layout's log, state, map and plot topics (:data:`r2d2_viz.msgs.registry.VIEWS`)."""
+def telemetry_views(displays: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
+    """The layout's log, state, map and plot topics (:data:`r2d2_viz.msgs.registry.VIEWS`) among ``displays``
+    (topic → type: a bag's display topics, or those a live graph offered when its view was planned)."""
     views = {"log": "logs", "state": "states", "map": "maps", "plot": "plots"}
     out: dict[str, tuple[str, ...]] = {}
     for view, name in views.items():
