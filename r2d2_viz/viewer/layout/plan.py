@@ -99,8 +99,8 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
         fixed_frame=frame,
         robots=tuple(r.namespace for r in plan.robots) if len(plan.robots) > 1 else (),
         flat_images=_flat_images(plan.displays),
-        **telemetry_views(plan.displays),
     )
+    layout = with_telemetry(layout, plan.displays)
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
     return ViewPlan(spec, layout, axis_length, show_names, tuple(notes), styles)
@@ -159,16 +159,18 @@ def _flat_images(displays: dict[str, str]) -> tuple[str, ...]:
     return tuple(t for t, m in sorted(displays.items()) if m in IMAGES and t not in with_camera)
 
 
-def telemetry_views(displays: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
-    """The layout's log, state, map and plot topics (:data:`r2d2_viz.msgs.registry.VIEWS`) among ``displays``
-    (topic → type: a bag's display topics, or those a live graph offered when its view was planned)."""
-    views = {"log": "logs", "state": "states", "map": "maps", "plot": "plots"}
-    out: dict[str, tuple[str, ...]] = {}
-    for view, name in views.items():
-        out[name] = tuple(t for t, m in sorted(displays.items()) if VIEWS.get(m) == view)
-    out["plots"] += tuple(t for t, m in sorted(displays.items()) if m == "sensor_msgs/msg/NavSatFix")  # altitude
-    out["plots"] = tuple(sorted(out["plots"]))
-    return out
+def with_telemetry(layout: Layout, displays: Mapping[str, str]) -> Layout:
+    """``layout`` with the log, state, map and plot topics (:data:`r2d2_viz.msgs.registry.VIEWS`) among
+    ``displays`` (topic → type: a bag's display topics, or those a live graph offered when its view was planned);
+    a NavSatFix's altitude is plotted too."""
+
+    def of(view: str) -> tuple[str, ...]:
+        return tuple(t for t, m in sorted(displays.items()) if VIEWS.get(m) == view or (view, m) == ("plot", NAVSAT))
+
+    return dataclasses.replace(layout, logs=of("log"), states=of("state"), maps=of("map"), plots=of("plot"))
+
+
+NAVSAT = "sensor_msgs/msg/NavSatFix"
 
 
 MAP_SCHEMES = ("map", "costmap", "raw")
