@@ -32,8 +32,8 @@ DIAG = [  # (receive time, [(name, level, message, key/values)])
     (T0 + 2 * S, [("motor: left", 1, "hot", [("current", "4.25"), ("mode", "auto")]), ("/Robot/Power", 3, "", [])]),
     (T0 + 3 * S, [("motor: left", 2, "stalled", [("current", "n/a"), ("mode", "off")])]),
 ]
-DIAG_ENTITIES = {"motor: left": "/diagnostics/motor\\:\\ left", "/Robot/Power": "/diagnostics/Robot/Power"}
-"""Each status's entity: its name split at '/', each part escaped as Rerun escapes one (colon, space)."""
+DIAG_ENTITIES = {"motor: left": "/diagnostics/motor_left", "/Robot/Power": "/diagnostics/Robot/Power"}
+"""Each status's entity: its name split at '/', a part's other characters than letters, digits, _ - . as one _."""
 DIAG_STATES = {
     "motor: left": ["OK: running", "WARN: hot", "ERROR: stalled"],
     "/Robot/Power": ["OK", "STALE"],

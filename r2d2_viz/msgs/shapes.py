@@ -172,14 +172,15 @@ class LogLine:
 
 @dataclass(frozen=True)
 class Status:
-    """One diagnostic status: its ``name`` split into entity path parts (``/Robot/Motors`` → Robot, Motors), its
-    level (OK, WARN, ERROR, STALE), message, hardware id and key/values as the message gives them (text)."""
+    """One diagnostic status: its name as entity path parts (``/Robot/Motors`` → Robot, Motors), its level (OK,
+    WARN, ERROR, STALE), message, hardware id, key/values as the message gives them (text), and its ``name``."""
 
     parts: tuple[str, ...]
     level: str
     message: str
     hardware_id: str
     values: tuple[tuple[str, str], ...]
+    name: str = ""
 
 
 @dataclass(frozen=True)

@@ -6,6 +6,7 @@ rest is :data:`~r2d2_viz.msgs.shapes.Plain`, in a ``Decoded`` without a frame.""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from typing import Any
 
@@ -67,10 +68,14 @@ def decode_string(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
 
 
 def status_parts(name: str) -> tuple[str, ...]:
-    """A status name as entity path parts: split at '/' (``/diagnostics_agg``'s ``/Robot/Motors`` nests), empty
-    parts dropped; a name with none is ``_``."""
-    parts = tuple(p for p in name.split("/") if p.strip())
-    return parts or ("_",)
+    """A status name as entity path parts: split at '/' (``/diagnostics_agg``'s ``/Robot/Motors`` nests), each
+    part's runs of other characters than letters, digits, ``_``, ``-`` and ``.`` as one ``_`` (``motor: left`` →
+    ``motor_left``: no escapes in the viewer's lane names), empty parts dropped; a name with none is ``_``."""
+    parts = (_UNSAFE.sub("_", p).strip("_") for p in name.split("/"))
+    return tuple(p for p in parts if p) or ("_",)
+
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9_.-]+")
 
 
 def decode_diagnostics(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
@@ -84,6 +89,7 @@ def decode_diagnostics(data: bytes | memoryview, options: DecodeOptions) -> Deco
             str(s.message),
             str(s.hardware_id),
             tuple((str(kv.key), str(kv.value)) for kv in s.values),
+            str(s.name),
         )
         for s in msg.status
     )

@@ -184,7 +184,7 @@ class PlainBook:
 
 
 def status_entity(entity_path: str, status: shapes.Status) -> str:
-    """``<topic>/<part>/…``, each part of the status name escaped."""
+    """``<topic>/<part>/…`` (the parts are safe already; escaped all the same)."""
     return "/".join([entity_path, *(rr.escape_entity_path_part(p) for p in status.parts)])
 
 
@@ -203,7 +203,8 @@ def _number(text: str) -> float | None:
 def _fields(entity: str, status: shapes.Status, book: PlainBook) -> dict[str, object]:
     """The status's level, message, hardware id and key/values; a key first seen with a number stays a number
     (NaN when a later value is not one), one first seen with text stays text."""
-    out: dict[str, object] = {"level": status.level, "message": status.message, "hardware_id": status.hardware_id}
+    out: dict[str, object] = {"name": status.name, "level": status.level, "message": status.message}
+    out["hardware_id"] = status.hardware_id
     for key, text in status.values:
         if key in out:
             key = f"{key} (value)"

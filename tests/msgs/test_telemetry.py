@@ -31,7 +31,8 @@ def test_levels_between_and_outside_read_as_the_one_below() -> None:
 
 def test_status_names_as_entity_parts() -> None:
     assert status_parts("/Robot/Motors/Left") == ("Robot", "Motors", "Left")
-    assert status_parts("motor: left") == ("motor: left",)
+    assert status_parts("motor: left") == ("motor_left",)
+    assert status_parts("gps (rtk)/fix #2") == ("gps_rtk", "fix_2")
     assert status_parts("") == ("_",) and status_parts("//") == ("_",)
 
 

@@ -71,6 +71,7 @@ def _check_log_and_diagnostics(recording: dict) -> None:
     assert current[:2] == [1.5, 4.25] and math.isnan(current[2])  # a number field stays one ("n/a": a gap)
     assert [v for _, v in _rows(motor, "DiagnosticStatus:mode")] == [["auto"], ["auto"], ["off"]]
     assert [v for _, v in _rows(motor, "DiagnosticStatus:message")] == [["running"], ["hot"], ["stalled"]]
+    assert [v for _, v in _rows(motor, "DiagnosticStatus:name")] == [["motor: left"]] * 3
 
 
 def _check_imu_and_numbers(recording: dict) -> None:
@@ -144,8 +145,8 @@ def test_the_layout_gains_a_log_a_state_timeline_a_map_and_plots(tmp_path: Path)
     assert views["Log: /rosout · /status"] == ("TextLog", ["+ /rosout/**", "+ /status/**"])
     assert views["Diagnostics: /diagnostics"] == ("StateTimeline", ["+ /diagnostics/**"])
     assert views["Map: /fix"] == ("Map", ["+ /fix/**"])
-    plotted = ["+ /battery/**", "+ /fix/**", "+ /flag/**", "+ /imu/**", "+ /speed/**"]
-    assert views["Sensors"] == ("TimeSeries", plotted)
+    for topic in ("/battery", "/fix", "/flag", "/imu", "/speed"):  # a plot each
+        assert views[topic] == ("TimeSeries", ["$origin/**"])
 
 
 def test_bad_strings_and_non_finite_values_are_said_once_per_topic(tmp_path: Path) -> None:

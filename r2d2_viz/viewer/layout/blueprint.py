@@ -68,7 +68,7 @@ class Layout:
     maps: tuple[str, ...] = ()
     """NavSatFix topics: a map of their fixes."""
     plots: tuple[str, ...] = ()
-    """Topics plotted (IMUs, batteries, scalar sensors, std_msgs numbers): one time-series view of them all."""
+    """Topics plotted (IMUs, batteries, scalar sensors, std_msgs numbers): a time-series view each, as tabs."""
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
@@ -163,13 +163,14 @@ BELOW_SHARES = {"robot log": 3.0, "diagnostics": 2.0, "map": 1.0, "sensors": 2.0
 """The widths of the views below the 3D one: the log's lines are long."""
 
 
-def _telemetry_views(layout: Layout) -> dict[str, rrb.View]:
-    """The views of what a 3D view does not show: the log, diagnostics' states, fixes on a map, sensor plots."""
+def _telemetry_views(layout: Layout) -> dict[str, rrb.View | rrb.Container]:
+    """The views of what a 3D view does not show: the log, diagnostics' states, fixes on a map, and sensor plots
+    (a tab per topic)."""
 
     def contents(topics: tuple[str, ...]) -> list[str]:
         return [f"+ {t}/**" for t in topics]
 
-    views: dict[str, rrb.View] = {}
+    views: dict[str, rrb.View | rrb.Container] = {}
     if layout.logs:
         columns = [rrb.encodings.TextLogColumn(kind) for kind in ("LogLevel", "Body", "EntityPath")]  # text first
         views["robot log"] = rrb.TextLogView(
@@ -183,8 +184,13 @@ def _telemetry_views(layout: Layout) -> dict[str, rrb.View]:
         )
     if layout.maps:
         views["map"] = rrb.MapView(name="Map: " + " · ".join(layout.maps), contents=contents(layout.maps))
-    if layout.plots:
-        views["sensors"] = rrb.TimeSeriesView(name="Sensors", contents=contents(layout.plots))
+    plots = {f"plot {t}": rrb.TimeSeriesView(name=t, origin=t) for t in layout.plots}  # units differ: one each
+    for key, plot in plots.items():
+        _stable_id(plot, key)
+    if len(plots) == 1:
+        views["sensors"] = next(iter(plots.values()))
+    elif plots:
+        views["sensors"] = rrb.Tabs(*plots.values(), name="Sensors")
     return views
 
 

@@ -212,7 +212,9 @@ def test_a_log_diagnostics_a_map_and_plots_each_get_a_view_below_only_when_there
     plain = {c["ViewBlueprint:class_identifier"][0] for c in fresh.values() if "ViewBlueprint:class_identifier" in c}
     assert plain & kinds == {"TextLog", "TimeSeries"}  # the tutorial's: its warnings and joint plots, nothing new
     path = tmp_path / "telemetry.rbl"
-    layout = Layout(logs=("/rosout",), states=("/diagnostics", "/diagnostics_agg"), maps=("/fix",), plots=("/imu",))
+    layout = Layout(
+        logs=("/rosout",), states=("/diagnostics", "/diagnostics_agg"), maps=("/fix",), plots=("/imu", "/b")
+    )
     generate_blueprint(layout=layout).save("r2d2_viz", path)
     components = blueprint_components(path)
     states = ["+ /diagnostics/**", "+ /diagnostics_agg/**"]
@@ -220,11 +222,14 @@ def test_a_log_diagnostics_a_map_and_plots_each_get_a_view_below_only_when_there
         ("TextLog", "Log: /rosout", ["+ /rosout/**"]),
         ("StateTimeline", "Diagnostics: /diagnostics · /diagnostics_agg", states),
         ("Map", "Map: /fix", ["+ /fix/**"]),
-        ("TimeSeries", "Sensors", ["+ /imu/**"]),
+        ("TimeSeries", "/imu", ["$origin/**"]),  # a plot per topic (their units differ), as tabs
+        ("TimeSeries", "/b", ["$origin/**"]),
     ]:
         view = _view(components, kind, name)
         assert components[f"{view}/ViewContents"]["ViewContents:query"] == query
     # the log's level and text come first (a node's lines are long)
+    [tabs] = [c for c in components.values() if c.get("ContainerBlueprint:display_name") == ["Sensors"]]
+    assert tabs["ContainerBlueprint:container_kind"] == [1] and len(tabs["ContainerBlueprint:contents"]) == 2  # Tabs
     log = _view(components, "TextLog", "Log: /rosout")
     columns = components[f"{log}/TextLogColumns"]["TextLogColumns:text_log_columns"]
     assert [c["kind"] for c in columns] == [2, 3, 1]  # LogLevel, Body, EntityPath (TextLogColumnKind)
