@@ -41,6 +41,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     chunk_data,
     chunk_index,
     holds,
+    index_counts,
     indexed,
     merge_blocks,
     message_times,
@@ -51,6 +52,9 @@ from r2d2_viz.sources.bags.mcap_records import (
     walk_records,
 )
 from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, topic_tuple
+
+READ_ERRORS = (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError)
+"""What reading a damaged chunk raises (the codecs raise ``RuntimeError`` / ``ValueError``)."""
 
 
 class McapScan:
@@ -99,6 +103,7 @@ class McapScan:
             self.note = "its summary points outside the file"
             return False
         chunks: list[ChunkIndex] = []
+        counted = False
         try:
             for op, at, stop in walk_records(buf, summary_start, end):
                 if op == OP_SCHEMA:
@@ -109,17 +114,71 @@ class McapScan:
                     chunks.append(chunk_index(buf, at, stop, size))
                 elif op == OP_STATISTICS:
                     span, self._counts = statistics(buf, at, stop)
-                    self._span = span or self._span
+                    self._span, counted = span or self._span, True
         except (BrokenError, struct.error, IndexError) as exc:
             self.note = f"its summary is damaged ({exc or type(exc).__name__})"
             self.channels, self.schemas, self._counts = {}, {}, {}
             return False
-        if not chunks and self._counts and sum(self._counts.values()):
-            return False  # messages outside chunks: only a scan finds them
+        if not chunks and (not counted or self._span is not None):
+            return False  # no chunk index (or messages outside chunks): one walk through the data section finds them
         self.chunks = sorted(chunks, key=lambda c: (c.start_ns, c.offset))
-        if chunks and self._span is None:
+        if not counted:  # no Statistics record
+            self._counts, self._span = self._count(self.chunks)
+        elif chunks and self._span is None:
             self._span = (min(c.start_ns for c in chunks), max(c.end_ns for c in chunks))
+        self._find_definitions(summary_start)
         return True
+
+    def _count(self, chunks: list[ChunkIndex]) -> tuple[dict[int, int], tuple[int, int] | None]:
+        """Messages per channel and span of a file without Statistics: from the chunks' message indexes, a chunk
+        without them walked record by record (its channels and schemas noted on the way)."""
+        counts: dict[int, int] = {}
+        first, last = 2**64, -1
+        for c in chunks:
+            try:
+                found = index_counts(self._map, c) if c.index_offsets else None
+                if found is None:
+                    data = chunk_data(self._map, c.offset, c.offset + c.length)
+                    self._note_definitions(data, 0, len(data))
+                    found = {}
+                    for channel_id, _ in message_times(data, 0, len(data)):
+                        found[channel_id] = found.get(channel_id, 0) + 1
+            except READ_ERRORS as exc:
+                self._skip(c, exc)
+                continue
+            for channel_id, n in found.items():
+                counts[channel_id] = counts.get(channel_id, 0) + n
+            if any(found.values()):
+                first, last = min(first, c.start_ns), max(last, c.end_ns)
+        return counts, ((first, last) if last >= 0 else None)
+
+    def _find_definitions(self, data_end: int) -> None:
+        """Channels (and their schemas) that hold messages but are not in the summary: looked for in the data
+        section, from its start, until every one is found (records outside chunks, then each chunk's records)."""
+        needed = {channel_id for channel_id, n in self._counts.items() if n}
+
+        def missing() -> bool:
+            known = [self.channels.get(channel_id) for channel_id in needed]
+            return any(c is None or (c.schema_id and c.schema_id not in self.schemas) for c in known)
+
+        if not missing():
+            return
+        buf = self._map
+        try:
+            for op, at, stop in walk_records(buf, len(MAGIC), data_end):
+                if op == OP_DATA_END:
+                    return
+                if op in (OP_SCHEMA, OP_CHANNEL):
+                    self._note_definitions(memoryview(buf), at - 9, stop)
+                elif op == OP_CHUNK:
+                    data = chunk_data(buf, at - 9, stop)
+                    self._note_definitions(data, 0, len(data))
+                else:
+                    continue
+                if not missing():
+                    return
+        except READ_ERRORS as exc:
+            self.note = f"its data section is damaged ({exc or type(exc).__name__})"
 
     # --- reading ------------------------------------------------------------------------------------------------
 
@@ -130,7 +189,7 @@ class McapScan:
     def _wanted(self, topics: Collection[str]) -> dict[int, int]:
         """channel id → its topic's index in :func:`topic_tuple` order."""
         order = topic_tuple(topics)
-        return {c.id: order.index(c.topic) for c in self.channels.values() if c.topic in order}
+        return {c.id: order.index(c.topic) for c in self.channels.values() if c.topic in order and c.schema_id}
 
     def blocks(
         self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
@@ -145,7 +204,8 @@ class McapScan:
             return
         chosen = [c for c in self.chunks if c.end_ns >= lo and c.start_ns < hi and holds(c, wanted)]
         for cluster in overlapping(chosen):
-            parts = [b for c in cluster if (b := self._chunk_block(c, order, wanted, lo, hi)) is not None]
+            in_file_order = sorted(cluster, key=lambda c: c.offset)  # messages at one time: the file's order
+            parts = [b for c in in_file_order if (b := self._chunk_block(c, order, wanted, lo, hi)) is not None]
             if len(parts) == 1:
                 yield parts[0]
             elif parts:
@@ -161,14 +221,20 @@ class McapScan:
             data = chunk_data(self._map, c.offset, c.offset + c.length)
             found = indexed(self._map, c, order, wanted, data)
             block = found if found is not None else walk_messages(data, order, wanted)
-        except (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError) as exc:
-            kind = str(exc) if isinstance(exc, BrokenError) else f"cannot read ({type(exc).__name__})"
-            self.problems[kind] = self.problems.get(kind, 0) + 1
-            self._damaged.add(c.offset)
+        except READ_ERRORS as exc:
+            self._skip(c, exc)
             return None
         keep = (block.times_ns >= lo) & (block.times_ns < hi)
         block = block if keep.all() else block.take(np.flatnonzero(keep))
         return in_time_order(block) if len(block) else None
+
+    def _skip(self, c: ChunkIndex, exc: BaseException) -> None:
+        """A damaged chunk: counted in :attr:`problems` (once) and not read again."""
+        if c.offset in self._damaged:
+            return
+        kind = str(exc) if isinstance(exc, BrokenError) else f"cannot read ({type(exc).__name__})"
+        self.problems[kind] = self.problems.get(kind, 0) + 1
+        self._damaged.add(c.offset)
 
     # --- files without a summary ----------------------------------------------------------------------------------
 
@@ -197,7 +263,7 @@ class McapScan:
                     self._note_definitions(view, at - 9, stop)
                 elif op == OP_MESSAGE:
                     yield OP_CHUNK, at - 9, view, at - 9, stop
-        except (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError) as exc:
+        except READ_ERRORS as exc:
             if not self.note:
                 self.note = f"the file is damaged ({exc or type(exc).__name__})"
 
@@ -245,6 +311,8 @@ class McapScan:
 def _topics(channels: dict[int, Channel], schemas: dict[int, Schema], counts: dict[int, int]) -> dict[str, TopicInfo]:
     topics: dict[str, TopicInfo] = {}
     for channel in channels.values():
+        if not channel.schema_id:
+            continue  # no schema (MCAP's schema id 0): nothing a ROS message could be decoded by
         schema = schemas.get(channel.schema_id, Schema("", "", ""))
         old = topics.get(channel.topic)
         count = (old.count if old else 0) + counts.get(channel.id, 0)
