@@ -40,6 +40,10 @@ class BrokenError(Exception):
     """The file ends or is damaged here."""
 
 
+READ_ERRORS = (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError)
+"""What reading a damaged record or chunk raises (the codecs raise ``RuntimeError`` / ``ValueError``)."""
+
+
 def string_at(buf: bytes | mmap.mmap | memoryview, at: int) -> tuple[str, int]:
     (n,) = U32.unpack_from(buf, at)
     end = at + 4 + n

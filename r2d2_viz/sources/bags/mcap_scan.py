@@ -3,7 +3,9 @@
 none of the wanted topics, or lie outside the time asked for, are never read, and a chunk's wanted messages are
 found from its message indexes as numpy arrays, not record by record. A file without a summary (a recorder that was
 killed leaves none) is walked once when opened, record by record, up to the first damage, and the places, times
-and channels of its chunks noted: later reads go through that index as through the file's own. The file is mmapped:
+and channels of its chunks noted: later reads go through that index as through the file's own. What a valid summary
+lacks (every summary record is optional) is found in the data section by :mod:`.mcap_summary`, reading only what
+that needs; no chunk index: the data section is walked once as for a file without a summary. The file is mmapped:
 uncompressed chunks are handed on as views of the file's pages, not copies. MCAP: https://mcap.dev/spec; lz4 and zstd
 come with ``rosbags``.
 
@@ -32,6 +34,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     OP_MESSAGE,
     OP_SCHEMA,
     OP_STATISTICS,
+    READ_ERRORS,
     U64,
     BrokenError,
     Channel,
@@ -41,7 +44,6 @@ from r2d2_viz.sources.bags.mcap_records import (
     chunk_data,
     chunk_index,
     holds,
-    index_counts,
     indexed,
     merge_blocks,
     message_times,
@@ -51,10 +53,8 @@ from r2d2_viz.sources.bags.mcap_records import (
     walk_messages,
     walk_records,
 )
+from r2d2_viz.sources.bags.mcap_summary import Definitions, count_messages, find_definitions
 from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, topic_tuple
-
-READ_ERRORS = (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError)
-"""What reading a damaged chunk raises (the codecs raise ``RuntimeError`` / ``ValueError``)."""
 
 
 class McapScan:
@@ -67,8 +67,9 @@ class McapScan:
         """Damage met while reading (kind → chunks skipped); the bag says it and clears it."""
         self._damaged: set[int] = set()
         """File offsets of the chunks found damaged (not read again)."""
-        self.channels: dict[int, Channel] = {}
-        self.schemas: dict[int, Schema] = {}
+        self._found = Definitions()
+        self.channels: dict[int, Channel] = self._found.channels
+        self.schemas: dict[int, Schema] = self._found.schemas
         self.chunks: list[ChunkIndex] | None = None
         """The chunk index: the summary's, or the one noted by the walk of a file without one (None: messages lie
         outside chunks, and every read walks the file from the start)."""
@@ -117,68 +118,24 @@ class McapScan:
                     self._span, counted = span or self._span, True
         except (BrokenError, struct.error, IndexError) as exc:
             self.note = f"its summary is damaged ({exc or type(exc).__name__})"
-            self.channels, self.schemas, self._counts = {}, {}, {}
+            self.channels.clear()
+            self.schemas.clear()
+            self._counts = {}
             return False
         if not chunks and (not counted or self._span is not None):
             return False  # no chunk index (or messages outside chunks): one walk through the data section finds them
         self.chunks = sorted(chunks, key=lambda c: (c.start_ns, c.offset))
-        if not counted:  # no Statistics record
-            self._counts, self._span = self._count(self.chunks)
+        if not counted:  # no Statistics record: counted from the chunks (damaged ones skipped)
+            self._counts, self._span, damaged = count_messages(buf, self.chunks, self._found)
+            for c in (c for c in self.chunks if c.offset in damaged):
+                self._skip(c, damaged[c.offset])
         elif chunks and self._span is None:
             self._span = (min(c.start_ns for c in chunks), max(c.end_ns for c in chunks))
-        self._find_definitions(summary_start)
-        return True
-
-    def _count(self, chunks: list[ChunkIndex]) -> tuple[dict[int, int], tuple[int, int] | None]:
-        """Messages per channel and span of a file without Statistics: from the chunks' message indexes, a chunk
-        without them walked record by record (its channels and schemas noted on the way)."""
-        counts: dict[int, int] = {}
-        first, last = 2**64, -1
-        for c in chunks:
-            try:
-                found = index_counts(self._map, c) if c.index_offsets else None
-                if found is None:
-                    data = chunk_data(self._map, c.offset, c.offset + c.length)
-                    self._note_definitions(data, 0, len(data))
-                    found = {}
-                    for channel_id, _ in message_times(data, 0, len(data)):
-                        found[channel_id] = found.get(channel_id, 0) + 1
-            except READ_ERRORS as exc:
-                self._skip(c, exc)
-                continue
-            for channel_id, n in found.items():
-                counts[channel_id] = counts.get(channel_id, 0) + n
-            if any(found.values()):
-                first, last = min(first, c.start_ns), max(last, c.end_ns)
-        return counts, ((first, last) if last >= 0 else None)
-
-    def _find_definitions(self, data_end: int) -> None:
-        """Channels (and their schemas) that hold messages but are not in the summary: looked for in the data
-        section, from its start, until every one is found (records outside chunks, then each chunk's records)."""
-        needed = {channel_id for channel_id, n in self._counts.items() if n}
-
-        def missing() -> bool:
-            known = [self.channels.get(channel_id) for channel_id in needed]
-            return any(c is None or (c.schema_id and c.schema_id not in self.schemas) for c in known)
-
-        if not missing():
-            return
-        buf = self._map
-        try:
-            for op, at, stop in walk_records(buf, len(MAGIC), data_end):
-                if op == OP_DATA_END:
-                    return
-                if op in (OP_SCHEMA, OP_CHANNEL):
-                    self._note_definitions(memoryview(buf), at - 9, stop)
-                elif op == OP_CHUNK:
-                    data = chunk_data(buf, at - 9, stop)
-                    self._note_definitions(data, 0, len(data))
-                else:
-                    continue
-                if not missing():
-                    return
+        try:  # channels (and their schemas) with messages but no copy in the summary
+            find_definitions(buf, summary_start, {c for c, n in self._counts.items() if n}, self._found)
         except READ_ERRORS as exc:
             self.note = f"its data section is damaged ({exc or type(exc).__name__})"
+        return True
 
     # --- reading ------------------------------------------------------------------------------------------------
 
@@ -257,22 +214,15 @@ class McapScan:
                     return
                 if op == OP_CHUNK:
                     data = chunk_data(self._map, at - 9, stop)
-                    self._note_definitions(data, 0, len(data))
+                    self._found.note(data, 0, len(data))
                     yield op, at - 9, data, 0, len(data)
                 elif op in (OP_SCHEMA, OP_CHANNEL):
-                    self._note_definitions(view, at - 9, stop)
+                    self._found.note(view, at - 9, stop)
                 elif op == OP_MESSAGE:
                     yield OP_CHUNK, at - 9, view, at - 9, stop
         except READ_ERRORS as exc:
             if not self.note:
                 self.note = f"the file is damaged ({exc or type(exc).__name__})"
-
-    def _note_definitions(self, data: memoryview, start: int, end: int) -> None:
-        for op, at, _ in walk_records(data, start, end):
-            if op == OP_SCHEMA:
-                self.schemas.update([schema_at(data, at)])
-            elif op == OP_CHANNEL:
-                self.channels.update([channel_at(data, at)])
 
     def _scan_blocks(self, order: tuple[str, ...], wanted: dict[int, int], lo: int, hi: int) -> Iterator[Block]:
         for _, _, data, start, end in self._walk_file():

@@ -62,7 +62,9 @@ class Builder:
         return self.record("Channel", body + _string(r["topic"]) + _string(r["message_encoding"]) + meta)
 
     def message(self, r: dict[str, Any]) -> int:
-        head = struct.pack("<HIQQ", int(r["channel_id"]), int(r["sequence"]), int(r["log_time"]), int(r["publish_time"]))
+        head = struct.pack(
+            "<HIQQ", int(r["channel_id"]), int(r["sequence"]), int(r["log_time"]), int(r["publish_time"])
+        )
         return self.record("Message", head + _bytes(r["data"]), paddable=False)
 
 
@@ -170,7 +172,9 @@ def generate(variant: dict[str, Any]) -> bytes:
     stats: list[bytes] = []
     if "st" in features:
         c = counts
-        body = struct.pack("<QHIIII", c["message"], c["schema"], c["channel"], c["attachment"], c["metadata"], 1 if chunk else 0)
+        body = struct.pack(
+            "<QHIIII", c["message"], c["schema"], c["channel"], c["attachment"], c["metadata"], 1 if chunk else 0
+        )
         body += struct.pack("<QQ", start or 0, end or 0)
         stats.append(body + _map([(struct.pack("<H", k), struct.pack("<Q", v)) for k, v in channel_counts.items()]))
     group("Statistics", stats)
