@@ -129,7 +129,7 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
 
 
 def displays_markdown() -> str:
-    """The README's "From RViz's displays to r2d2-viz" table."""
+    """The README's table of display types (in its "Bags" section)."""
     rows: dict[tuple[str, str], list[str]] = {}  # types shown alike share a row
     for msgtype, how in SHOWN_AS.items():
         rows.setdefault(how, []).append(msgtype)
