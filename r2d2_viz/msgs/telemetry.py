@@ -25,7 +25,7 @@ from r2d2_viz.msgs.shapes import (
     Status,
     Statuses,
 )
-from r2d2_viz.msgs.typestore import deserialize
+from r2d2_viz.msgs.typestore import MsgError, deserialize
 
 ROS2_LEVELS = ((50, "CRITICAL"), (40, "ERROR"), (30, "WARN"), (20, "INFO"))
 """rcl_interfaces/msg/Log's levels (10 DEBUG, 20 INFO, 30 WARN, 40 ERROR, 50 FATAL) to Rerun's ``TextLogLevel``
@@ -78,10 +78,18 @@ def status_parts(name: str) -> tuple[str, ...]:
 _UNSAFE = re.compile(r"[^A-Za-z0-9_.-]+")
 
 
+MAX_STATUSES = 1000
+"""More statuses in one DiagnosticArray (an entity each), or more key/values in one status, and the message is
+refused (said once per topic, counted): a robot has tens."""
+
+
 def decode_diagnostics(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
     """A DiagnosticArray: each status's level, message and key/values."""
     msg = deserialize(data, "diagnostic_msgs/msg/DiagnosticArray")
     _, stamp = header_of(msg)
+    most = max((len(s.values) for s in msg.status), default=0)
+    if len(msg.status) > MAX_STATUSES or most > MAX_STATUSES:
+        raise MsgError(f"{len(msg.status)} statuses, up to {most} key/values each: more than {MAX_STATUSES}")
     statuses = tuple(
         Status(
             status_parts(str(s.name)),

@@ -76,3 +76,15 @@ def test_a_string_that_is_not_utf8_is_a_msg_error() -> None:
     data[8:12] = b"\xff\xfe\xfd\xfc"
     with pytest.raises(MsgError, match="utf-8"):
         decode("std_msgs/msg/String", bytes(data))
+
+
+def test_a_diagnostic_array_of_thousands_of_statuses_is_refused() -> None:
+    status = T("diagnostic_msgs/msg/DiagnosticStatus")
+    many = [status(level=0, name=f"s{k}", message="", hardware_id="", values=[]) for k in range(1001)]
+    data = cdr(T("diagnostic_msgs/msg/DiagnosticArray")(header=header(), status=many))
+    with pytest.raises(MsgError, match="1001 statuses"):
+        decode("diagnostic_msgs/msg/DiagnosticArray", data)
+    out = decode(
+        "diagnostic_msgs/msg/DiagnosticArray", cdr(T("diagnostic_msgs/msg/DiagnosticArray")(header(), many[:3]))
+    )
+    assert isinstance(out, shapes.Decoded) and len(out.items[0].items) == 3  # type: ignore[union-attr]
