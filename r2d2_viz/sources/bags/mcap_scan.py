@@ -50,7 +50,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     walk_messages,
     walk_records,
 )
-from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, topic_tuple
+from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, other_types_note, topic_tuple
 
 
 class McapScan:
@@ -71,6 +71,8 @@ class McapScan:
         self._counts: dict[int, int] = {}
         self._span: tuple[int, int] | None = None
         self._loose: np.ndarray | None = None
+        self._other_types: set[int] = set()
+        """Channels left out: their type is not their topic's (a topic recorded with two types)."""
         with path.open("rb") as f:
             size = f.seek(0, 2)
             if size < len(MAGIC):
@@ -80,7 +82,8 @@ class McapScan:
             raise ValueError("not an MCAP file (no magic)")
         if not self._read_summary():
             self._scan_everything()
-        self.topics = _topics(self.channels, self.schemas, self._counts)
+        self.topics, self._other_types, other_types = _topics(self.channels, self.schemas, self._counts)
+        self.note = "; ".join(filter(None, [self.note, other_types]))
 
     # --- the summary --------------------------------------------------------------------------------------------
 
@@ -130,7 +133,11 @@ class McapScan:
     def _wanted(self, topics: Collection[str]) -> dict[int, int]:
         """channel id → its topic's index in :func:`topic_tuple` order."""
         order = topic_tuple(topics)
-        return {c.id: order.index(c.topic) for c in self.channels.values() if c.topic in order}
+        return {
+            c.id: order.index(c.topic)
+            for c in self.channels.values()
+            if c.topic in order and c.id not in self._other_types
+        }
 
     def blocks(
         self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
@@ -242,14 +249,25 @@ class McapScan:
             pass
 
 
-def _topics(channels: dict[int, Channel], schemas: dict[int, Schema], counts: dict[int, int]) -> dict[str, TopicInfo]:
+def _topics(
+    channels: dict[int, Channel], schemas: dict[int, Schema], counts: dict[int, int]
+) -> tuple[dict[str, TopicInfo], set[int], str]:
+    """The topics of the channels, the channels left out and a note on them: those whose type is not their topic's
+    first channel's (a topic recorded with two types keeps the first, as a ROS 1 bag's reader does)."""
     topics: dict[str, TopicInfo] = {}
-    for channel in channels.values():
+    left: dict[tuple[str, str, str], int] = {}
+    other_types: set[int] = set()
+    for channel in sorted(channels.values(), key=lambda c: c.id):
         schema = schemas.get(channel.schema_id, Schema("", "", ""))
         old = topics.get(channel.topic)
+        if old is not None and old.msgtype != schema.name:
+            other_types.add(channel.id)
+            key = channel.topic, old.msgtype, schema.name
+            left[key] = left.get(key, 0) + counts.get(channel.id, 0)
+            continue
         count = (old.count if old else 0) + counts.get(channel.id, 0)
         topics[channel.topic] = TopicInfo(channel.topic, schema.name, count, schema.data, schema.encoding)
-    return topics
+    return topics, other_types, other_types_note(left)
 
 
 def _scan_index(
