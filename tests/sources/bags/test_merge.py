@@ -107,3 +107,23 @@ def test_a_folder_without_metadata_is_read_in_time_order_whatever_the_names(tmp_
     assert swivel == pytest.approx([t / S for t in morning + afternoon])
     entities = set(read_recording(out))
     assert "/robot/visual/lunchbox/0" in entities and "/robot/visual/box/0" not in entities  # the latest model
+
+
+def test_a_topic_of_another_type_in_a_later_file_is_left_out_there_and_said_once(tmp_path: Path) -> None:
+    """Finding 7 across files: a folder whose first file has /chatter as String, the second as JointState."""
+    folder = tmp_path / "chatter"
+    folder.mkdir()
+    first = BagSpec(types={"/chatter": "std_msgs/msg/String"})
+    second = BagSpec(types={"/chatter": "sensor_msgs/msg/JointState"})
+    for k in range(3):
+        first.add("/chatter", T0 + k, string(f"hello {k}"))
+        second.add("/chatter", T0 + S + k, joint_state(T0, ["swivel"], [float(k)]))
+    for name, spec in (("a", first), ("b", second)):
+        storage_file(write_bag(tmp_path / name, spec)).rename(folder / f"{name}.mcap")
+    listed = cli("--bag", str(folder), "--list")
+    assert listed.returncode == 0, listed.stderr
+    assert listed.stdout.splitlines() == ["/chatter [std_msgs/msg/String] 3 messages"]
+    assert len(listed.stderr.splitlines()) == 1
+    assert "/chatter (sensor_msgs/msg/JointState in b.mcap, left out)" in listed.stderr
+    with open_bag(folder, warn=lambda _: None) as bag:
+        assert [bytes(d) for _, d in bag.raw("/chatter")] == [string(f"hello {k}") for k in range(3)]
