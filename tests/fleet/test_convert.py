@@ -185,19 +185,25 @@ EXE = str(Path(sys.executable).parent / "r2d2-viz")
 PARTIAL = re.compile(r"^\.+(?P<name>.+?)\.rrd\.fleet-(?P<pid>\d+)\.partial")
 
 
-def _converting(out: Path) -> dict[str, int]:
-    """Bag name → pid of the worker converting it, from the hidden partial files in ``out`` (what a user sees)."""
+def _converting(out: Path, written: int = 0) -> dict[str, int]:
+    """Bag name → pid of the worker converting it, from the hidden partial files in ``out`` (what a user sees)
+    holding more than ``written`` bytes (samples are being written)."""
     found = {}
     for p in out.iterdir() if out.is_dir() else ():
-        if m := PARTIAL.match(p.name):
-            found[m["name"]] = int(m["pid"])
+        try:
+            if (m := PARTIAL.match(p.name)) and p.stat().st_size > written:
+                found[m["name"]] = int(m["pid"])
+        except FileNotFoundError:  # renamed into place meanwhile
+            continue
     return found
 
 
-def _wait_converting(proc: subprocess.Popen[str], out: Path, n: int, timeout_s: float = 180) -> dict[str, int]:
+def _wait_converting(
+    proc: subprocess.Popen[str], out: Path, n: int, written: int = 0, timeout_s: float = 180
+) -> dict[str, int]:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline and proc.poll() is None:
-        if len(found := _converting(out)) >= n:
+        if len(found := _converting(out, written)) >= n:
             return found
         time.sleep(0.02)
     raise AssertionError(f"never {n} conversions at once (exit {proc.poll()})")
@@ -206,7 +212,7 @@ def _wait_converting(proc: subprocess.Popen[str], out: Path, n: int, timeout_s: 
 def test_ctrl_c_while_two_convert_starts_no_other_and_counts_what_finished(tmp_path: Path) -> None:
     """Issue 33, finding 3: one SIGINT to the app while two bags convert; the two not started never are, the
     report counts what finished, nothing hidden is left, and the next run converts the rest."""
-    bags = [still_bag(tmp_path / "big0", samples=50000)]
+    bags = [still_bag(tmp_path / "big0", samples=200_000)]  # a few seconds of writing samples per bag
     bags += [Path(shutil.copytree(bags[0], tmp_path / f"big{k}")) for k in (1, 2, 3)]  # the same recording, 4 names
     out = tmp_path / "out"
     proc = subprocess.Popen(
@@ -217,7 +223,7 @@ def test_ctrl_c_while_two_convert_starts_no_other_and_counts_what_finished(tmp_p
         start_new_session=True,
     )
     try:
-        converting = set(_wait_converting(proc, out, 2))
+        converting = set(_wait_converting(proc, out, 2, written=1 << 20))  # both writing their samples
         proc.send_signal(signal.SIGINT)  # to the app alone, as in the finding
         _, err = proc.communicate(timeout=180)
     finally:
