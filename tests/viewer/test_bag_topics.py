@@ -153,5 +153,5 @@ def test_a_file_rerun_cannot_read_is_one_warning(tmp_path: Path) -> None:
     run = cli("--bag", str(mcap), "--save", str(tmp_path / "out.rrd"))
     assert run.returncode == 0, run.stderr
     (line,) = [line for line in _warnings(run.stderr) if "example" in line]
-    assert line.startswith(f"warning: {mcap}: 1 topic with no display, not shown: example (Example)")
+    assert line.startswith(f"warning: {mcap}: 1 topic with no display, not shown: /example (Example)")
     assert "Rerun's MCAP reader cannot read TenMessages.mcap" in line
