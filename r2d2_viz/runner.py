@@ -197,8 +197,7 @@ def _plan(config: RunConfig, inputs: ExitStack) -> RunPlan:
 def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | None) -> RunResult:
     save = config.sink.save
     tmp = _temp_path(save) if save is not None else None
-    samples, interrupted = 0, False
-    other: tuple[str, ...] = ()
+    samples, interrupted, other = 0, False, tuple[str, ...]()
     tree = plan.tree
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
@@ -346,11 +345,14 @@ def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> tuple[s
         result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=exclude)
         for topic in (logged := result.logged):
             skipped.pop(topic, None)
+        failed = "".join(f"; Rerun's MCAP reader cannot read {f.name} ({why})" for f, why in result.failed[:1])
+    else:
+        failed = ""
     if skipped:
         names = listed(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
         n = len(skipped)
         every = " (--list shows every topic)" if n > SHOWN + 1 else ""
-        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}")
+        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}{failed}")
     return logged
 
 
@@ -391,8 +393,7 @@ def print_summary(result: RunResult, config: RunConfig) -> None:
     origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
     origin = "from the ROS 2 graph" if config.ros else origin
     what = "joint states" if config.ros else result.what
-    counted = f"{result.samples} {what}"
-    n = len(result.other_topics)
+    counted, n = f"{result.samples} {what}", len(result.other_topics)
     if n:  # what Rerun's MCAP decoders wrote is in the file too: say so, not "0 transforms and display messages"
         other = f"{n} topic{'s' * (n != 1)} decoded by Rerun ({listed(result.other_topics)})"
         counted = other if result.samples == 0 else f"{counted} and {other}"

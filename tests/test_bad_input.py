@@ -129,15 +129,16 @@ def test_no_stderr_line_is_longer_than_300_characters(tmp_path: Path, tutorial_u
     """Names are input too (issue 29: a Gazebo bag's undrawn topics made a 486-character line): 400-character topic
     names, a scan on such a topic that cannot be decoded, 40 unknown 80-character joint names, 70 undrawn topics —
     every line the run prints stays within 300 characters, and still names what it is about."""
-    from bagmaker import T0, BagSpec, joint_state, string, write_bag
+    from bagmaker import T0, BagSpec, joint_state, write_bag
+    from msgs_build import T, cdr
 
     undrawn = [f"/{'u' * 390}_{k:02d}" for k in range(70)]
     scan = f"/{'s' * 400}/scan"
     unknown = [f"{'j' * 76}_{k:02d}" for k in range(40)]
-    types = {**{t: "std_msgs/msg/String" for t in undrawn}, scan: "sensor_msgs/msg/LaserScan"}
+    types = {**{t: "std_msgs/msg/ColorRGBA" for t in undrawn}, scan: "sensor_msgs/msg/LaserScan"}
     spec = BagSpec(types={**types, "/joint_states": "sensor_msgs/msg/JointState"})
     for k, topic in enumerate(undrawn):
-        spec.add(topic, T0 + k, string("x"))
+        spec.add(topic, T0 + k, cdr(T("std_msgs/msg/ColorRGBA")(r=1.0, g=0.0, b=0.0, a=1.0)))
     spec.add(scan, T0 + 100, b"\x00\x01\x00\x00" + b"\x07" * 3)  # a CDR header and 3 bytes: truncated
     spec.add("/joint_states", T0 + 200, joint_state(T0 + 200, ["swivel", *unknown], [0.1] * 41))
     bag = write_bag(tmp_path / "names", spec, storage="sqlite3")  # .db3: Rerun's MCAP decoders take nothing
