@@ -13,7 +13,7 @@ import itertools
 import queue
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -104,19 +104,21 @@ class BagPass:
         self._moved = 0
 
     def windows(self, max_samples: int, max_bytes: int = WINDOW_BYTES) -> Iterator[Window]:
-        """Every window, each with at most ``max_samples`` joint states and about ``max_bytes`` of messages (the
-        storages' blocks gathered or cut to that size)."""
+        """Every window, each with at most ``max_samples`` joint states and about ``max_bytes`` read from the bag
+        (the storages' blocks gathered or cut to that size). What is read, not what is kept: a few small topics of
+        a bag of compressed chunks would otherwise gather most of the file's chunks in one window (each one read
+        whole), and a live replay's first window would wait for all of them."""
         pending: list[Block] = []
         size = samples = 0
         for segment in self.segments:
             for block in self.bag.blocks(segment.topics, start_ns=segment.start_ns, stop_ns=segment.stop_ns):
                 for piece in self._pieces(block, max_samples, max_bytes):
                     n = len(piece.rows(self.joints_topic)) if self.joints is not None else 0
-                    if pending and (size + piece.nbytes > max_bytes or samples + n > max_samples):
+                    if pending and (size + piece.cost > max_bytes or samples + n > max_samples):
                         yield self._window(pending)
                         pending, size, samples = [], 0, 0
                     pending.append(piece)
-                    size, samples = size + piece.nbytes, samples + n
+                    size, samples = size + piece.cost, samples + n
         if pending:
             yield self._window(pending)
         self._finish()
@@ -131,9 +133,14 @@ class BagPass:
             sizes = np.cumsum(block.lengths)
             cuts |= {int(r) for r in np.searchsorted(sizes, np.arange(max_bytes, sizes[-1], max_bytes))}
         edges = sorted(cuts)
+        if len(edges) == 2:
+            yield block
+            return
+        share = block.read_nbytes / max(block.nbytes, 1)  # what was read for the block, shared by bytes
         for lo, hi in itertools.pairwise(edges):
             if hi > lo:
-                yield block.take(np.arange(lo, hi)) if (lo, hi) != (0, len(block)) else block
+                piece = block.take(np.arange(lo, hi))
+                yield replace(piece, read_nbytes=int(share * piece.nbytes))
 
     def _window(self, pieces: list[Block]) -> Window:
         chunks: list[SampleChunk] = []

@@ -17,6 +17,7 @@ from __future__ import annotations
 import mmap
 import struct
 from collections.abc import Collection, Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -168,7 +169,7 @@ class McapScan:
             return None
         keep = (block.times_ns >= lo) & (block.times_ns < hi)
         block = block if keep.all() else block.take(np.flatnonzero(keep))
-        return in_time_order(block) if len(block) else None
+        return in_time_order(_read_for(block, data, self._map)) if len(block) else None
 
     # --- files without a summary ----------------------------------------------------------------------------------
 
@@ -296,3 +297,14 @@ def _loose_block(
     return Block(
         rows[:, 0].copy(), index[keep], order, memoryview(buf), rows[:, 2] + HEAD, rows[:, 3] - rows[:, 2] - HEAD
     )
+
+
+def _read_for(block: Block, data: memoryview, buf: mmap.mmap) -> Block:
+    """``block`` of a chunk's ``data``, counted as what its reading took: a compressed chunk was decompressed whole
+    (:attr:`Block.read_nbytes`), and when only a few of its messages were wanted they are copied out, so the
+    decompressed chunk does not stay alive with them (a window of a few small topics would keep most of the file's
+    chunks otherwise). An uncompressed chunk's messages are views of the file's pages: nothing more was read."""
+    if data.obj is buf:
+        return block
+    counted = replace(block, read_nbytes=len(data))
+    return counted.compacted() if 4 * block.nbytes < len(data) else counted
