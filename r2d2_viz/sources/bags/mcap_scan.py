@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from r2d2_viz.sources.bags.mcap_prefix import wanted_part
 from r2d2_viz.sources.bags.mcap_records import (
     HEAD,
     MAGIC,
@@ -159,8 +160,12 @@ class McapScan:
         if c.offset in self._damaged:
             return None
         try:
-            data = chunk_data(self._map, c.offset, c.offset + c.length)
+            part = wanted_part(self._map, c, wanted, lo, hi)  # a compressed chunk: up to its last wanted message
+            data = part if part is not None else chunk_data(self._map, c.offset, c.offset + c.length)
             found = indexed(self._map, c, order, wanted, data)
+            if found is None and part is not None:  # its index does not fit that part: the whole chunk
+                data = chunk_data(self._map, c.offset, c.offset + c.length)
+                found = indexed(self._map, c, order, wanted, data)
             block = found if found is not None else walk_messages(data, order, wanted)
         except (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError) as exc:
             kind = str(exc) if isinstance(exc, BrokenError) else f"cannot read ({type(exc).__name__})"
