@@ -6,7 +6,8 @@
 2. :meth:`RobotStream.prepare` a chunk of samples — joint state carried forward (:class:`JointState`),
    kinematics, every entity's Arrow columns built once for the whole chunk;
 3. :meth:`RobotStream.send` any run of a prepared chunk's samples (all of it in batch runs, sample by
-   sample when live): ``/tf`` every time, plots a few times a second, out-of-limit warnings when due;
+   sample when live): ``/tf`` every time (with the plots in a paced save without a live viewer), plots a few
+   times a second, out-of-limit warnings when due;
 4. :meth:`RobotStream.finish` — pending plots and the limit lines up to the last sample.
 
 Named frames are the URDF link names plus the fixed frame (``odom``). Quaternions enter Rerun as ``xyzw``.
