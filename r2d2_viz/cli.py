@@ -12,13 +12,17 @@ import os
 import sys
 import traceback
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, stderr_line
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, listed, stderr_line
 from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 CONNECT_DEFAULT = "rerun+http://127.0.0.1:9876/proxy"
 SAVE_SUFFIXES = (".rrd", ".mcap")
+
+if TYPE_CHECKING:  # the runner (and rerun with it) is imported when a run starts, not for --help
+    from r2d2_viz.runner import RunConfig, RunResult
 
 
 class _Parser(argparse.ArgumentParser):
@@ -231,7 +235,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         )
     _quiet_rerun()
     from r2d2_viz.progress import wanted
-    from r2d2_viz.runner import RunConfig, print_summary, run
+    from r2d2_viz.runner import RunConfig, run
     from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
     if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
@@ -326,7 +330,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if fallback:  # the user typed no --serve: say why it was tried
             raise SinkError(f"no display for a viewer window, and the web viewer instead failed: {exc}") from None
         raise
-    print_summary(result, config)
+    _print_summary(result, config)
     return EXIT_OK
 
 
@@ -375,3 +379,17 @@ def _list_topics() -> int:
         print(f"r2d2-viz: {searched}", file=sys.stderr)  # what was searched, then how to check: two short lines
         print(f"r2d2-viz: {EMPTY_GRAPH_HINT}; {EMPTY_LIST_NEXT}", file=sys.stderr, flush=True)
     return EXIT_OK
+
+
+def _print_summary(result: RunResult, config: RunConfig) -> None:
+    """The run's last line: what it wrote or showed, from where, to where."""
+    where = f" to {result.saved}" if result.saved else ""
+    how = " (stopped by signal)" if result.interrupted else ""
+    origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
+    origin = "from the ROS 2 graph" if config.ros else origin
+    what = "joint states" if config.ros else result.what
+    counted, n = f"{result.samples} {what}", len(result.other_topics)
+    if n:  # what Rerun's MCAP decoders wrote is in the file too: say so, not "0 transforms and display messages"
+        other = f"{n} topic{'s' * (n != 1)} decoded by Rerun ({listed(result.other_topics)})"
+        counted = other if result.samples == 0 else f"{counted} and {other}"
+    print(f"r2d2-viz: {counted} {origin}{where}{how}", file=sys.stderr)

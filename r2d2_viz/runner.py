@@ -390,16 +390,3 @@ def _temp_path(save: Path) -> Path:
 def batch_chunk_samples(n_moving: int) -> int:
     """Samples per chunk of a batch run for a robot with ``n_moving`` moving joints."""
     return max(1, min(BATCH_CHUNK_SAMPLES, BATCH_CHUNK_CELLS // max(1, n_moving)))
-
-
-def print_summary(result: RunResult, config: RunConfig) -> None:
-    where = f" to {result.saved}" if result.saved else ""
-    how = " (stopped by signal)" if result.interrupted else ""
-    origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
-    origin = "from the ROS 2 graph" if config.ros else origin
-    what = "joint states" if config.ros else result.what
-    counted, n = f"{result.samples} {what}", len(result.other_topics)
-    if n:  # what Rerun's MCAP decoders wrote is in the file too: say so, not "0 transforms and display messages"
-        other = f"{n} topic{'s' * (n != 1)} decoded by Rerun ({listed(result.other_topics)})"
-        counted = other if result.samples == 0 else f"{counted} and {other}"
-    print(f"r2d2-viz: {counted} {origin}{where}{how}", file=sys.stderr)
