@@ -8,7 +8,8 @@ built from rosbags' definitions because Cyclone validates incoming CDR against i
 QoS per topic, from what its writers offer (the built-in DCPSPublication topic): when a writer is reliable and
 transient-local (``/tf_static``, ``/robot_description``, ``/map``) the reader is reliable + transient-local with a
 deep history, so the latched samples of several publishers all arrive; otherwise it is best-effort + volatile,
-which matches every writer, sensor-data ones included. Subscribe only: nothing is ever written.
+which matches every writer, sensor-data ones included. Written: only what :meth:`LiveGraph.publish` is given (the
+web page's tools: reliable, volatile, depth 1, as RViz's tools publish).
 
 A drain thread moves samples from the readers into a bounded queue per topic (oldest dropped and counted);
 :meth:`LiveGraph.poll` never blocks.
@@ -57,7 +58,7 @@ class Publication:
 
 def cyclonedds_modules() -> dict[str, ModuleType]:
     """cyclonedds' modules, imported on first use; LiveError naming ``pip install cyclonedds`` if missing."""
-    names = ("core", "domain", "topic", "sub", "builtin", "idl", "idl.types", "util")
+    names = ("core", "domain", "topic", "sub", "pub", "builtin", "idl", "idl.types", "util")
     try:
         return {name: importlib.import_module(f"cyclonedds.{name}") for name in names}
     except ImportError as exc:
@@ -116,6 +117,7 @@ class LiveGraph:
         self._queue = queue
         self._latched_depth = latched_depth
         self._readers: dict[str, tuple[str, Any]] = {}
+        self._writers: dict[str, tuple[str, Any, Any]] = {}
         self._queues: dict[str, deque[Sample]] = {}
         self.dropped: dict[str, int] = {}
         """Samples dropped per topic because the queue was full (oldest first)."""
@@ -185,6 +187,38 @@ class LiveGraph:
         self._waitset.attach(condition)
         self._wake.set(True)
         return Publication(topic, ros_type, durable, durable)
+
+    def publish(self, topic: str, ros_type: str, data: bytes) -> None:
+        """Write one message on ``topic``: ``data`` is its CDR (with the 4-byte encapsulation header, as rosbags'
+        ``serialize_cdr`` makes it). The writer, made on first use, is reliable, volatile, depth 1."""
+        with self._lock:
+            found = self._writers.get(topic)
+        if found is None:
+            policy = self._dds["core"].Policy
+            qos = self._dds["core"].Qos(
+                policy.Reliability.Reliable(max_blocking_time=100_000_000),
+                policy.Durability.Volatile,
+                policy.History.KeepLast(1),
+            )
+            try:
+                raw_type = self._types.raw_struct(ros_type)
+                entity = self._dds["topic"].Topic(self._participant, dds_topic(topic), raw_type)
+                writer = self._dds["pub"].DataWriter(self._participant, entity, qos=qos)
+            except LiveError:
+                raise
+            except Exception as exc:
+                raise LiveError(f"cannot publish on {topic} ({ros_type}): {exc}") from None
+            with self._lock:
+                found = self._writers.setdefault(topic, (ros_type, raw_type, writer))
+        known, raw_type, writer = found
+        if known != ros_type:
+            raise LiveError(f"{topic} is published as {known}, not {ros_type}")
+        sample = object.__new__(raw_type)  # the raw type's sample is its bytes: serialize() hands them over
+        sample.serialize = lambda use_version_2=None: data
+        try:
+            writer.write(sample)
+        except Exception as exc:
+            raise LiveError(f"cannot publish on {topic}: {exc}") from None
 
     def wait(self, timeout: float) -> bool:
         """Block until samples have arrived since the last poll (True), or ``timeout`` seconds (False)."""
