@@ -27,7 +27,6 @@ from r2d2_viz.rviz.spec import (
     orbit_view,
     short_class,
 )
-from r2d2_viz.rviz.tools import config_tool_topics
 
 
 class Reader:
@@ -139,10 +138,7 @@ class Reader:
         current = views.get("Current") if isinstance(views, dict) else None
         camera = read_camera(self, current, fixed) if isinstance(current, dict) else None
         shown, notes = tuple(topics), tuple(self.notes)
-        tools = tuple(sorted(config_tool_topics(manager.get("Tools")).items()))
-        return ViewSpec(
-            self.source, fixed, background, grid, tf, robot, camera, shown, notes, tuple(more_robots), tools
-        )
+        return ViewSpec(self.source, fixed, background, grid, tf, robot, camera, shown, notes, tuple(more_robots))
 
     def tools_and_panels(self, tools: Any, panels: Any) -> None:
         """One note naming every tool and panel (none has a counterpart: Rerun's viewer has its own camera,

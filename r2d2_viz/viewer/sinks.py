@@ -120,7 +120,7 @@ def open_recording(
         _probe(config.connect)
         sinks.append(rr.GrpcSink(config.connect))
     if config.serve:
-        server, uri, page = _serve(config)
+        server, uri, page = serve(config)
         sinks.append(rr.GrpcSink(uri))
     if save_to is not None:
         sinks.append(rr.FileSink(save_to, write_footer=True))
@@ -131,6 +131,13 @@ def open_recording(
         url = page.url() if page is not None else f"http://{host}:{config.web_port}/?url={quote(public, safe='')}"
         on_ready(f"serving: open {url} in a browser, or run: rerun {public}")
     return Recording(rec, server, live=config.live, page=page)
+
+
+def serve_recording(rec: rr.RecordingStream, config: SinkConfig) -> Recording:
+    """``rec`` streamed to a served viewer (:func:`serve`) instead of its other sinks (the Python API's page)."""
+    server, uri, page = serve(config)
+    rec.set_sinks(rr.GrpcSink(uri))
+    return Recording(rec, server, live=True, page=page)
 
 
 def _spawn_viewer(port: int) -> str:
@@ -190,7 +197,7 @@ def _listening(host: str, port: int) -> bool:
         return probe.connect_ex((host, port)) == 0
 
 
-def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str, PageServer | None]:
+def serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str, PageServer | None]:
     """Rerun's gRPC proxy (``rerun --serve-grpc``) and r2d2-viz's page (the web viewer with RViz's tools, see
     :mod:`r2d2_viz.viewer.web`), both on ``--bind``. Without rerun-notebook, Rerun's own page (``--serve-web``).
 

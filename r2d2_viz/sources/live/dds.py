@@ -30,6 +30,7 @@ from typing import Any, NamedTuple
 from r2d2_viz.msgs.typestore import MsgError, typestore
 from r2d2_viz.sources.live.idl_types import IdlTypes, RawSample
 from r2d2_viz.sources.live.names import LiveError, RosDiscovery, dds_topic, ros_topic, ros_type
+from r2d2_viz.sources.live.writers import Writers
 
 LATCHED_BY_NAME = frozenset({"/tf_static", "/robot_description", "/map", "/map_metadata", "/semantic_description"})
 """Topics taken as transient-local when no writer has been seen yet to tell."""
@@ -114,10 +115,10 @@ class LiveGraph:
             self._types = IdlTypes(typestore(distro), self._dds["idl"])
         except MsgError as exc:
             raise LiveError(str(exc)) from None
+        self._writers = Writers(self._dds, self._participant, self._types)
         self._queue = queue
         self._latched_depth = latched_depth
         self._readers: dict[str, tuple[str, Any]] = {}
-        self._writers: dict[str, tuple[str, Any, Any]] = {}
         self._queues: dict[str, deque[Sample]] = {}
         self.dropped: dict[str, int] = {}
         """Samples dropped per topic because the queue was full (oldest first)."""
@@ -189,36 +190,8 @@ class LiveGraph:
         return Publication(topic, ros_type, durable, durable)
 
     def publish(self, topic: str, ros_type: str, data: bytes) -> None:
-        """Write one message on ``topic``: ``data`` is its CDR (with the 4-byte encapsulation header, as rosbags'
-        ``serialize_cdr`` makes it). The writer, made on first use, is reliable, volatile, depth 1."""
-        with self._lock:
-            found = self._writers.get(topic)
-        if found is None:
-            policy = self._dds["core"].Policy
-            qos = self._dds["core"].Qos(
-                policy.Reliability.Reliable(max_blocking_time=100_000_000),
-                policy.Durability.Volatile,
-                policy.History.KeepLast(1),
-            )
-            try:
-                raw_type = self._types.raw_struct(ros_type)
-                entity = self._dds["topic"].Topic(self._participant, dds_topic(topic), raw_type)
-                writer = self._dds["pub"].DataWriter(self._participant, entity, qos=qos)
-            except LiveError:
-                raise
-            except Exception as exc:
-                raise LiveError(f"cannot publish on {topic} ({ros_type}): {exc}") from None
-            with self._lock:
-                found = self._writers.setdefault(topic, (ros_type, raw_type, writer))
-        known, raw_type, writer = found
-        if known != ros_type:
-            raise LiveError(f"{topic} is published as {known}, not {ros_type}")
-        sample = object.__new__(raw_type)  # the raw type's sample is its bytes: serialize() hands them over
-        sample.serialize = lambda use_version_2=None: data
-        try:
-            writer.write(sample)
-        except Exception as exc:
-            raise LiveError(f"cannot publish on {topic}: {exc}") from None
+        """Write one message (CDR with its header) on ``topic``, as RViz's tools do (:class:`.writers.Writers`)."""
+        self._writers.publish(topic, ros_type, data)
 
     def wait(self, timeout: float) -> bool:
         """Block until samples have arrived since the last poll (True), or ``timeout`` seconds (False)."""

@@ -33,7 +33,9 @@ def page() -> Iterator[tuple[PageServer, list[dict[str, Any]]]]:
         server.close()
 
 
-def _request(server: PageServer, method: str, path: str, body: bytes | None = None) -> tuple[int, dict[str, str], bytes]:
+def _request(
+    server: PageServer, method: str, path: str, body: bytes | None = None
+) -> tuple[int, dict[str, str], bytes]:
     conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=60)
     try:
         conn.request(method, path, body=body, headers={"Content-Type": "application/json"} if body else {})
