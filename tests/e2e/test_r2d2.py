@@ -234,7 +234,7 @@ def serve_in_browser(chromium_browser, artifacts_dir: Path, args: list[str], nam
         context.set_default_timeout(150_000)  # bounded like the wait below, not by playwright's 30 s
         context.route("**/*", lambda route: route.continue_() if "127.0.0.1" in route.request.url else route.abort())
         page = context.new_page()
-        url = _served_url(log, app)  # the page the app printed, with its token
+        url = _served_url(log, app).replace("//localhost:", "//127.0.0.1:")  # the page printed, with its token
         page.goto(url)
 
         def shows_the_robot(img: np.ndarray) -> bool:
