@@ -240,8 +240,15 @@ def serve_in_browser(chromium_browser, artifacts_dir: Path, args: list[str], nam
         def shows_the_robot(img: np.ndarray) -> bool:
             return not layout_problems(img) and not any("white" in p for p in robot_problems(img))
 
-        # live: the robot moves, so the page never stands still; readiness is the predicate
-        png = viewers.wait_until_viewer_ready(page, timeout=150, max_changed=0.2, ready=shows_the_robot)
+        # our page: ready once the viewer said so (window.r2d2.ready); live, the robot moves, so the page never
+        # stands still: then the predicate on screenshots, bounded like the wait above
+        page.wait_for_function("window.r2d2 && window.r2d2.ready", timeout=150_000)
+        deadline = time.monotonic() + 150
+        while not shows_the_robot(img := viewers._decode_png(png := page.screenshot())):
+            if time.monotonic() > deadline:
+                (artifacts_dir / f"{name}.png").write_bytes(png)
+                raise AssertionError(f"{artifacts_dir / name}.png: {layout_problems(img) + robot_problems(img)}")
+            time.sleep(1.0)
         (artifacts_dir / f"{name}.png").write_bytes(png)
         context.close()
     finally:
