@@ -125,6 +125,7 @@ def run_on(
             config_topics=dict(view.spec.tool_topics),
             overrides=dict(config.tool_topics),
             publisher=graph,
+            background=view.spec.background,
         )
         scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
         latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)

@@ -206,9 +206,9 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
-        frame = view.layout.fixed_frame or view.spec.fixed_frame
+        frame, spec, overrides = view.layout.fixed_frame or view.spec.fixed_frame, view.spec, dict(config.tool_topics)
         tools = attach_tools(
-            recording, frame, config_topics=dict(view.spec.tool_topics), overrides=dict(config.tool_topics)
+            recording, frame, config_topics=dict(spec.tool_topics), overrides=overrides, background=spec.background
         )
         try:
             rec = recording.rec

@@ -205,14 +205,16 @@ def attach_tools(
     overrides: Mapping[str, str] | None = None,
     publisher: Publisher | None = None,
     say: Callable[[str], None] = say_line,
+    background: tuple[int, int, int] = (48, 48, 48),
 ) -> ToolOutput | None:
     """Connect ``--serve``'s page (if the recording has one) to a :class:`ToolOutput`: the ground drawn, the page
-    told the fixed frame and topics, its events handled. None when there is no page."""
+    told the fixed frame and topics, its events handled; ``background``: the 3D view's (the ground's colour). None
+    when there is no page."""
     page = recording.page
     if page is None:
         return None
     drawing = ToolDrawing(recording.rec, fixed_frame)
-    drawing.ground()
+    drawing.ground(background=background)
     output = ToolOutput(
         fixed_frame, topics=tool_topics(config_topics, overrides), publisher=publisher, drawing=drawing, say=say
     )

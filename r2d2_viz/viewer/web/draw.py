@@ -14,8 +14,9 @@ from r2d2_viz.viewer.entities import path
 GROUND = "/tools/ground"
 GROUND_HALF_SIZE = 50.0
 """Metres around the fixed frame's origin (or around the map, when its extent is known)."""
-GROUND_RGBA = (128, 128, 128, 6)
-"""Nearly invisible, but a logged entity: the viewer reports a click on it with its position."""
+GROUND_ALPHA = 8
+"""The view's background colour, nearly transparent: invisible, but a logged entity, so the viewer reports a click
+on it with its position (a grey one tinted the view's background by 4 levels of 255)."""
 ARROW_LENGTH = 1.0
 POINT_RADIUS = 0.08
 COLORS = {
@@ -33,8 +34,11 @@ class ToolDrawing:
     def __init__(self, rec: rr.RecordingStream, fixed_frame: str) -> None:
         self.rec, self.fixed_frame = rec, fixed_frame
 
-    def ground(self, extent: tuple[float, float, float, float] | None = None) -> None:
-        """A z = 0 square: ``extent`` (x0, y0, x1, y1) grown to at least 50 m around the origin."""
+    def ground(
+        self, extent: tuple[float, float, float, float] | None = None, background: tuple[int, int, int] = (48, 48, 48)
+    ) -> None:
+        """A z = 0 square: ``extent`` (x0, y0, x1, y1) grown to at least 50 m around the origin, in the view's
+        ``background`` colour."""
         x0, y0, x1, y1 = extent or (0.0, 0.0, 0.0, 0.0)
         h = GROUND_HALF_SIZE
         x0, y0, x1, y1 = min(x0, -h), min(y0, -h), max(x1, h), max(y1, h)
@@ -42,7 +46,11 @@ class ToolDrawing:
         self.rec.log(
             GROUND,
             rr.CoordinateFrame(self.fixed_frame),
-            rr.Mesh3D(vertex_positions=corners, triangle_indices=[[0, 1, 2], [0, 2, 3]], albedo_factor=GROUND_RGBA),
+            rr.Mesh3D(
+                vertex_positions=corners,
+                triangle_indices=[[0, 1, 2], [0, 2, 3]],
+                albedo_factor=(*background, GROUND_ALPHA),
+            ),
             static=True,
         )
 

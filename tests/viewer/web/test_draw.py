@@ -18,7 +18,7 @@ def test_ground_pose_point_and_measure(tmp_path: Path) -> None:
     rec = rr.RecordingStream("test_draw")
     rec.save(out)
     draw = ToolDrawing(rec, "map")
-    draw.ground((-80.0, -10.0, 5.0, 10.0))
+    draw.ground((-80.0, -10.0, 5.0, 10.0), background=(48, 48, 48))
     draw.pose("/goal_pose", (1.0, 2.0, 0.0), math.pi / 2)
     draw.point("/clicked_point", (1.5, -2.0, 0.3))
     draw.measure((0.0, 0.0, 0.0), (3.0, 4.0, 0.0), 5.0)
@@ -31,6 +31,8 @@ def test_ground_pose_point_and_measure(tmp_path: Path) -> None:
     ground = next(v for k, v in rows[GROUND].static.items() if "vertex_positions" in k)[0]
     corners = np.array(ground)
     assert np.array_equal(corners[:, 2], np.zeros(4)) and corners[:, 0].min() == -80 and corners[:, 1].max() == 50
+    albedo = next(v for k, v in rows[GROUND].static.items() if "albedo_factor" in k)[0]
+    assert albedo[0] >> 8 == 0x303030 and 0 < albedo[0] & 0xFF < 16  # RViz's background, nearly transparent
     vector = next(v for k, v in rows["/tools/goal_pose"].static.items() if "vectors" in k)[0][0]
     assert np.allclose(vector, [0, 1, 0], atol=1e-6)  # heading 90°: along +y
     center = next(v for k, v in rows["/tools/clicked_point"].static.items() if "centers" in k)[0][0]
