@@ -29,7 +29,7 @@ from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import load_robot
 from r2d2_viz.ros_out.live_record import LiveBagRecorder
-from r2d2_viz.ros_out.tools_out import attach_tools, detach_tools
+from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
 from r2d2_viz.rviz.config import load_rviz
 from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.bag_joints import TimeSource
@@ -121,14 +121,7 @@ def run_on(
     tools = None
     try:
         recording = output.open(view, on_ready)
-        tools = attach_tools(
-            recording,
-            view.layout.fixed_frame or view.spec.fixed_frame,
-            config_topics=dict(view.spec.tool_topics),
-            overrides=dict(config.tool_topics),
-            publisher=graph,
-            background=view.spec.background,
-        )
+        tools = attach_view_tools(recording, view, dict(config.tool_topics), publisher=graph)
         scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
         latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
         for k, batch in enumerate(batches):

@@ -22,7 +22,7 @@ from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
-from r2d2_viz.ros_out.tools_out import attach_tools, detach_tools
+from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.bags.bag import open_bag
@@ -206,10 +206,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
-        frame, spec, overrides = view.layout.fixed_frame or view.spec.fixed_frame, view.spec, dict(config.tool_topics)
-        tools = attach_tools(
-            recording, frame, config_topics=dict(spec.tool_topics), overrides=overrides, background=spec.background
-        )
+        tools = attach_view_tools(recording, view, dict(config.tool_topics))
         try:
             rec = recording.rec
             streamers = _robot_streams(recording, plan, view, clock) if tree is not None else []

@@ -20,6 +20,7 @@ from typing import Any, Protocol
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.msgs.typestore import typestore
 from r2d2_viz.rviz.tools import GOAL_POSE, MEASURE, MESSAGE_TYPES, POSE_ESTIMATE, PUBLISH_POINT, TELEOP, tool_topics
+from r2d2_viz.viewer.layout.plan import ViewPlan
 from r2d2_viz.viewer.sinks import Recording
 from r2d2_viz.viewer.web.draw import ToolDrawing
 from r2d2_viz.viewer.web.events import Drive, Pick, parse_event
@@ -221,6 +222,19 @@ def attach_tools(
     page.config.update(fixed_frame=fixed_frame, topics=output.topics, publishing=publisher is not None)
     page.set_handler(output.handle)
     return output
+
+
+def attach_view_tools(
+    recording: Recording, view: ViewPlan, overrides: Mapping[str, str], *, publisher: Publisher | None = None
+) -> ToolOutput | None:
+    """:func:`attach_tools` for a run laid out as ``view``: its fixed frame, its config's tool topics under
+    ``overrides`` (``--tool-topic``), its background."""
+    spec = view.spec
+    frame = view.layout.fixed_frame or spec.fixed_frame
+    topics = dict(spec.tool_topics)
+    return attach_tools(
+        recording, frame, config_topics=topics, overrides=overrides, publisher=publisher, background=spec.background
+    )
 
 
 def detach_tools(recording: Recording, output: ToolOutput | None) -> None:
