@@ -177,6 +177,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--port", type=int, default=None, help="gRPC port for --spawn / --serve (default 9876; --dataset: 51234)"
     )
     sinks.add_argument("--web-port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
+    sinks.add_argument(
+        "--tool-topic",
+        action="append",
+        default=[],
+        metavar="TOOL=TOPIC",
+        help="--serve's toolbar: publish a tool (goal, pose_estimate, point, teleop) on TOPIC instead",
+    )
     return parser
 
 
@@ -309,6 +316,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         start_offset=args.start_offset,
         topics=tuple(args.topics) if args.topics is not None else None,
         progress=wanted(),
+        tool_topics=_tool_topics(args.tool_topic),
     )
 
     def on_ready(message: str) -> None:
@@ -336,6 +344,26 @@ def _frames(text: str | None) -> tuple[str, ...] | None:
     if not frames:
         raise UsageError(f"--shared-frames {text!r}: expected frame names separated by commas, such as map,world")
     return frames
+
+
+def _tool_topics(items: list[str]) -> tuple[tuple[str, str], ...]:
+    """``--tool-topic goal=/move_base_simple/goal`` → ``(("2D Goal Pose", "/move_base_simple/goal"),)``."""
+    from r2d2_viz.errors import UsageError
+    from r2d2_viz.rviz.tools import tool_name
+
+    found: dict[str, str] = {}
+    for item in items:
+        name, sep, topic = item.partition("=")
+        tool = tool_name(name)
+        if not sep or tool is None:
+            raise UsageError(
+                f"--tool-topic {item!r}: expected TOOL=TOPIC, TOOL one of goal, pose_estimate, point, teleop"
+            )
+        topic = topic.strip()
+        if not topic.startswith("/") or not all(part.isidentifier() for part in topic[1:].split("/")):
+            raise UsageError(f"--tool-topic {item!r}: {topic!r} is not a ROS topic name (such as /goal_pose)")
+        found[tool] = topic
+    return tuple(found.items())
 
 
 def _no_display(serving: str, port: int, web_port: int) -> str:

@@ -29,6 +29,7 @@ from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import load_robot
 from r2d2_viz.ros_out.live_record import LiveBagRecorder
+from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
 from r2d2_viz.rviz.config import load_rviz
 from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.bag_joints import TimeSource
@@ -78,6 +79,8 @@ class LiveConfig(Protocol):
     def fixed_frame(self) -> str | None: ...
     @property
     def rviz(self) -> Path | None: ...
+    @property
+    def tool_topics(self) -> tuple[tuple[str, str], ...]: ...
 
 
 def run_live(
@@ -115,8 +118,10 @@ def run_on(
     view = dataclasses.replace(view, layout=with_telemetry(view.layout, source.display_topics))
     output = _Output(config.sink)
     lateness = LatenessLog.from_env()
+    tools = None
     try:
         recording = output.open(view, on_ready)
+        tools = attach_view_tools(recording, view, dict(config.tool_topics), publisher=graph)
         scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
         latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
         for k, batch in enumerate(batches):
@@ -134,8 +139,11 @@ def run_on(
                 time.sleep(GATHER_SECONDS)
         scene.finish()
         _say_received(source, time.monotonic() - started)
+        detach_tools(recording, tools)
         output.close()
     except BaseException:
+        if output.recording is not None:
+            detach_tools(output.recording, tools)
         output.abort()
         raise
     finally:

@@ -22,6 +22,7 @@ from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
+from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.bags.bag import open_bag
@@ -87,6 +88,8 @@ class RunConfig:
     """Only these topics of the bag (``ros2 bag play --topics``); None: all."""
     progress: bool = False
     """Show a progress bar on stderr (the CLI sets it on a terminal)."""
+    tool_topics: tuple[tuple[str, str], ...] = ()
+    """``--tool-topic``: the page's tools' topics (``2D Goal Pose`` → ``/goal``), over the ``--rviz`` config's."""
 
     @property
     def live(self) -> bool:
@@ -203,6 +206,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
+        tools = attach_view_tools(recording, view, dict(config.tool_topics))
         try:
             rec = recording.rec
             gather = config.realtime and not config.sink.live  # saved only: no viewer waits for each sample
@@ -247,6 +251,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             for robot in streamers:
                 robot.finish()
         finally:
+            detach_tools(recording, tools)
             close_recording(recording)
         if tmp is not None and save is not None:
             os.replace(tmp, save)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import socket
 from pathlib import Path
 
@@ -92,6 +93,9 @@ def test_headless_computes_and_writes_nothing(tmp_path: Path) -> None:
         (["--bogus"], "unrecognized arguments: --bogus"),
         (["--save", "out.txt"], "--save out.txt: unknown extension '.txt'; write a recording (.rrd) or a ROS 2 bag"),
         (["--save", "recording"], "--save recording: unknown extension"),
+        (["--tool-topic", "select=/x"], "--tool-topic 'select=/x': expected TOOL=TOPIC, TOOL one of goal"),
+        (["--tool-topic", "goal"], "--tool-topic 'goal': expected TOOL=TOPIC"),
+        (["--tool-topic", "goal=move base"], "'move base' is not a ROS topic name"),
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path: Path, args: list[str], fragment: str) -> None:
@@ -173,7 +177,8 @@ def test_without_a_display_the_default_viewer_is_the_web_viewer_on_loopback(tmp_
     result = cli("--duration", "1", "--port", str(grpc), "--web-port", str(web), env=env, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     [line] = [line for line in result.stderr.splitlines() if "no display" in line]
-    assert f"open http://localhost:{web}/?url=rerun%2Bhttp%3A%2F%2Flocalhost%3A{grpc}%2Fproxy" in line, line
+    assert re.search(rf"open http://localhost:{web}/[A-Za-z0-9_-]{{32}}/ in a browser", line), line  # with its token
+    assert f"or run: rerun rerun+http://localhost:{grpc}/proxy" in line, line
     assert f"ssh -L {web}:localhost:{web} -L {grpc}:localhost:{grpc} " in line, line
     assert "error" not in result.stderr and "30 samples" in result.stderr
     assert not list(tmp_path.iterdir())
