@@ -102,6 +102,15 @@ def build_parser() -> argparse.ArgumentParser:
         help="replay only these topics of the bag, like ros2 bag play --topics",
     )
     bags.add_argument(
+        "--plot",
+        nargs="+",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="plot these fields in one view, Foxglove's message paths: /odom.twist.twist.linear.x, "
+        "/joint_states.effort[2] (repeat the flag for more views)",
+    )
+    bags.add_argument(
         "--fixed-frame",
         default=None,
         metavar="FRAME",
@@ -269,6 +278,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         args.topics = [t for t in args.topics if ":=" not in t] or None
     if args.bag is None and (args.start_offset or args.topics is not None):
         raise UsageError("--start-offset and --topics choose what of a bag to replay: use them with --bag")
+    if args.plot and (args.bag is None or (args.save is not None and args.save.suffix == ".mcap")):
+        raise UsageError("--plot plots a bag's fields in the viewer: use it with --bag (and not --save X.mcap)")
     if not (math.isfinite(args.start_offset) and args.start_offset >= 0):
         raise UsageError(f"--start-offset must be a number of seconds >= 0, got {args.start_offset:g}")
     implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
@@ -308,6 +319,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         start_offset=args.start_offset,
         topics=tuple(args.topics) if args.topics is not None else None,
         progress=wanted(),
+        plots=tuple(tuple(p) for p in args.plot),
     )
 
     def on_ready(message: str) -> None:

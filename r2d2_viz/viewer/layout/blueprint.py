@@ -61,6 +61,8 @@ class Layout:
     them (RViz's 3D view draws none either; each has its 2D view)."""
     robots: tuple[str, ...] = ()
     """Several robots: their namespaces (shapes under ``/robots/<namespace>``, plots under ``/joints/<namespace>``)."""
+    plots: tuple[tuple[str, ...], ...] = ()
+    """``--plot`` paths: a time-series view per flag, of its paths (``/plot/<n>``)."""
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
@@ -125,6 +127,11 @@ def generate_blueprint(
         if topic.kind in ("Image", "Camera") and topic.enabled and topic.topic:
             side.append(rrb.Spatial2DView(name=f"{topic.kind}: {topic.topic}", origin=topic.topic))
             shares.append(2)
+    for n, texts in enumerate(layout.plots):
+        plot = rrb.TimeSeriesView(name=f"Plot: {', '.join(texts)}"[:120], origin=f"/plot/{n}")
+        parts[f"plot {n}"] = plot
+        side.append(plot)
+        shares.append(2)
     log = rrb.TextLogView(name="Warnings", origin=WARNINGS)
     parts["log"] = log
     side.append(log)

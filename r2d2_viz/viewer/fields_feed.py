@@ -1,0 +1,170 @@
+"""Other topics' fields into the recording, in time order as far as a replay has got (as :class:`TfFeed` does).
+
+Every field of a topic no display draws goes to ``/topics/<topic>`` (``/topics/panda_arm_controller/state``), one
+component per field named as ``ros2 topic echo`` names it (``error.positions[0]``), archetype the message type:
+numbers as numbers (drag one into a time-series view to plot it), text as text; the selection panel shows the
+latest message at the time cursor. Each ``--plot`` path is a ``Scalars`` series under ``/plot/<n>/`` (``n``: the
+``--plot`` flag it came with, one time-series view each), named as the path.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import rerun as rr
+
+from r2d2_viz.errors import SHOWN, listed
+from r2d2_viz.msgs.fields import Columns
+from r2d2_viz.msgs.message_path import MessagePath
+from r2d2_viz.sources.base import Clock
+from r2d2_viz.sources.fields_pass import FieldsPass, TopicColumns, plot_paths
+from r2d2_viz.sources.plan import RunPlan
+from r2d2_viz.viewer.entities import TIMELINE, path
+
+TOPICS = "/topics"
+PLOT = "/plot"
+
+
+def topic_entity(topic: str) -> str:
+    """Where a topic's fields go: ``/topics/<topic>``."""
+    return path("topics", *topic.strip("/").split("/"))
+
+
+def plot_view(view: int) -> str:
+    return f"{PLOT}/{view}"
+
+
+def plot_entity(view: int, text: str) -> str:
+    """Where the series of the ``--plot`` path ``text`` goes (of the ``view``-th ``--plot`` flag)."""
+    return path("plot", str(view), text)
+
+
+class FieldsFeed:
+    """``shown``: topic → type of the topics whose fields are logged; ``plots``: per ``--plot`` flag, its paths;
+    ``header_time``: rows at their ``header.stamp`` where the message has one."""
+
+    def __init__(
+        self,
+        rec: rr.RecordingStream,
+        *,
+        clock: Clock,
+        shown: dict[str, str],
+        plots: Sequence[Sequence[MessagePath]] = (),
+        header_time: bool = False,
+    ) -> None:
+        self.rec, self.clock, self.shown, self.header_time = rec, clock, shown, header_time
+        self.plots: dict[str, list[tuple[str, str]]] = {}
+        """topic → (field, entity) of each series."""
+        for view, paths in enumerate(plots):
+            for p in paths:
+                entity = plot_entity(view, p.text)
+                self.plots.setdefault(p.topic, []).append((p.field, entity))
+                rec.log(entity, rr.SeriesLines(names=p.text), static=True)
+        self._pending: deque[TopicColumns] = deque()
+        self.messages = 0
+        self.plotted: dict[str, int] = {}
+
+    def push(self, fields: Sequence[TopicColumns]) -> None:
+        for topic, columns in fields:
+            if self.header_time and "header.stamp.sec" in columns.numbers:
+                stamps = columns.numbers["header.stamp.sec"].astype(np.int64) * 1_000_000_000
+                columns.times_ns = stamps + columns.numbers["header.stamp.nanosec"].astype(np.int64)
+                order = np.argsort(columns.times_ns, kind="stable")
+                columns = columns.rows(order)
+            self._pending.append((topic, columns))
+
+    @property
+    def next_time_ns(self) -> int | None:
+        return min((int(c.times_ns[0]) for _, c in self._pending), default=None)
+
+    def until(self, time_ns: int | None = None) -> None:
+        """Log what is due up to ``time_ns`` (all when None)."""
+        keep: deque[TopicColumns] = deque()
+        for topic, columns in self._pending:
+            stop = len(columns) if time_ns is None else int(np.searchsorted(columns.times_ns, time_ns, side="right"))
+            if stop:
+                self._log(topic, columns if stop == len(columns) else columns.rows(slice(0, stop)))
+            if stop < len(columns):
+                keep.append((topic, columns.rows(slice(stop, None))))
+        self._pending = keep
+
+    def _times(self, times_ns: np.ndarray) -> rr.TimeColumn:
+        if self.clock == "duration":
+            return rr.TimeColumn(TIMELINE, duration=times_ns.astype("timedelta64[ns]"))
+        return rr.TimeColumn(TIMELINE, timestamp=times_ns.astype("datetime64[ns]"))
+
+    def _log(self, topic: str, columns: Columns) -> None:
+        times = self._times(columns.times_ns)
+        if topic in self.shown:
+            components: dict[str, object] = {k: np.ascontiguousarray(v) for k, v in columns.numbers.items()}
+            components.update({k: [str(x) for x in v] for k, v in columns.texts.items()})
+            self.rec.send_columns(
+                topic_entity(topic),
+                indexes=[times],
+                columns=rr.DynamicArchetype.columns(archetype=self.shown[topic], components=components),
+            )
+            self.messages += len(columns)
+        for field, entity in self.plots.get(topic, ()):
+            values = columns.numbers.get(field)
+            if values is None:
+                continue
+            self.rec.send_columns(
+                entity, indexes=[times], columns=rr.Scalars.columns(scalars=values.astype(np.float64))
+            )
+            self.plotted[entity] = self.plotted.get(entity, 0) + len(values)
+
+    def finish(self, report: Callable[[str], None]) -> None:
+        """Log what is left; say which ``--plot`` paths matched no message (an index past every array's end)."""
+        self.until(None)
+        for topic, series in self.plots.items():
+            for field, entity in series:
+                if not self.plotted.get(entity):
+                    report(f"--plot {topic}.{field}: no message of {topic} has it (an index past the array's end?)")
+
+
+@dataclass(frozen=True)
+class FieldsRun:
+    """A bag's other topics' fields: what decodes them in the pass, what logs them."""
+
+    decoding: FieldsPass
+    shown: dict[str, str]
+    plots: tuple[tuple[MessagePath, ...], ...]
+    clock: Clock
+    header_time: bool
+
+    def feed(self, rec: rr.RecordingStream) -> FieldsFeed:
+        return FieldsFeed(rec, clock=self.clock, shown=self.shown, plots=self.plots, header_time=self.header_time)
+
+
+def fields_run(
+    plan: RunPlan, plots: Sequence[Sequence[str]], clock: Clock, *, header_time: bool = False
+) -> FieldsRun | None:
+    """The fields a bag's pass decodes: every undisplayed topic's, and the ``--plot`` paths' (checked here, before
+    anything is written: a ``BagError`` naming the topic's fields). None: not a bag, or nothing to decode."""
+    if plan.replay is None:
+        return None
+    bag = plan.replay.bag
+    checked = tuple(plot_paths(bag, texts) for texts in plots)
+    decoding = FieldsPass(bag, plan.undisplayed, [p for group in checked for p in group])
+    if not decoding.decoders:
+        return None
+    shown = {t: m for t, m in plan.undisplayed.items() if t in decoding.decoders}
+    return FieldsRun(decoding, shown, checked, clock, header_time)
+
+
+def undecoded_line(undisplayed: Mapping[str, str], fields: FieldsRun | None) -> str:
+    """The topics no display draws and whose fields cannot be decoded, in one line ("": none)."""
+    skipped = {t: f"{t} ({m})" for t, m in undisplayed.items()}
+    if fields is not None:
+        for topic in fields.decoding.topics:
+            skipped.pop(topic, None)
+        skipped.update({t: f"{t} ({why})" for t, why in fields.decoding.unusable.items() if t in skipped})
+    if not skipped:
+        return ""
+    n = len(skipped)
+    every = " (--list shows every topic)" if n > SHOWN + 1 else ""
+    names = listed(v for _, v in sorted(skipped.items()))
+    return f"{n} topic{'s' * (n != 1)} that cannot be decoded, not shown: {names}{every}"
