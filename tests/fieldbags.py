@@ -6,10 +6,13 @@ types registered from .msg text), so that rosbags' deserializer is the golden so
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from r2d2_viz.msgs.fields import MAX_ITEMS, MAX_NESTED
 
 BATTERY = "my_msgs/msg/Battery"
 BATTERY_MSG = """std_msgs/Header header
@@ -112,3 +115,35 @@ def write(path: Path, msgs: list[tuple[str, int, bytes]], *, storage: str = "mca
                 connections[topic] = writer.add_connection(topic, TYPES[topic], typestore=ts)
             writer.write(connections[topic], t, data)
     return path
+
+
+def expected_fields(ts: Any, msg: Any, msgtype: str, prefix: str = "") -> dict[str, Any]:
+    """``ros2 topic echo``'s names and values of a rosbags message, summarised as the README says (independent of
+    the walk under test: rosbags' dataclasses and field definitions)."""
+    out: dict[str, Any] = {}
+    for name, desc in ts.fielddefs[msgtype][1]:
+        value, path = getattr(msg, name), prefix + name
+        kind, rest = desc
+        if kind == 2:
+            out |= expected_fields(ts, value, rest, path + ".")
+        elif kind == 1:
+            out[path] = value
+        else:
+            sub = rest[0]
+            if sub[0] == 1 and sub[1][0] != "string":
+                array = np.asarray(value)
+                if len(array) > MAX_ITEMS or (kind == 4 and array.dtype.itemsize == 1):
+                    out[f"{path}.len"] = len(array)
+                    if len(array):
+                        out[f"{path}.min"], out[f"{path}.max"] = array.min(), array.max()
+                    continue
+                out |= {f"{path}[{i}]": v for i, v in enumerate(array)}
+            elif len(value) > MAX_NESTED:
+                out[f"{path}.len"] = len(value)
+            else:
+                for i, item in enumerate(value):
+                    if sub[0] == 1:
+                        out[f"{path}[{i}]"] = item
+                    else:
+                        out |= expected_fields(ts, item, sub[1], f"{path}[{i}].")
+    return out

@@ -33,7 +33,7 @@ def topic_store(msgtype: str, definition: str, encoding: str, *, humble: bool = 
         return own_store(msgtype, definition, encoding)
     store = typestore()
     if msgtype not in store.fielddefs:
-        raise MsgError(f"{msgtype}: the bag carries no definition of it and it is not a Humble type")
+        raise MsgError(f"{msgtype}: no definition in the bag, not a Humble type")
     return store
 
 

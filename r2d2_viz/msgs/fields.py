@@ -113,14 +113,15 @@ class _Walk:
         else:
             count = self.u32()
             if count > len(self.data) - self.pos:
-                raise ValueError(f"an array length of {count}")
+                raise ValueError(f"shorter than its definition (a length field of {count})")
             self.items(name, rest[0], count, fixed=False)
 
     def base(self, name: str, typ: str) -> None:
         if typ in ("string", "wstring"):
             length = self.u32()
             width = 2 if typ == "wstring" else 1
-            self.need(length * width)
+            if length * width > len(self.data) - self.pos:
+                raise ValueError(f"shorter than its definition (a length field of {length})")
             if typ == "string" and (length == 0 or self.data[self.pos + length - 1] != 0):
                 raise ValueError("a string without its terminating NUL")
             if not self.quiet and typ == "string":
@@ -225,7 +226,11 @@ class Problems:
         self.unfit[why] = self.unfit.get(why, 0) + 1
 
     def lines(self) -> list[str]:
-        out = [f"{n} message{'s' * (n != 1)} skipped: {why}" for why, n in sorted(self.unfit.items())]
+        kinds = sorted(self.unfit.items(), key=lambda kv: -kv[1])
+        out = [f"{n} message{'s' * (n != 1)} skipped: {why}" for why, n in kinds[:3]]
+        if len(kinds) > 3:
+            n = sum(n for _, n in kinds[3:])
+            out.append(f"{n} more skipped for {len(kinds) - 3} other reasons")
         if self.nonfinite:
             out.append(f"{self.nonfinite} message{'s' * (self.nonfinite != 1)} with NaN or infinity in a field")
         if self.not_utf8:

@@ -149,22 +149,25 @@ def fields_run(
     bag = plan.replay.bag
     checked = tuple(plot_paths(bag, texts) for texts in plots)
     decoding = FieldsPass(bag, plan.undisplayed, [p for group in checked for p in group])
-    if not decoding.decoders:
+    if not decoding.decoders and not decoding.unusable:
         return None
     shown = {t: m for t, m in plan.undisplayed.items() if t in decoding.decoders}
     return FieldsRun(decoding, shown, checked, clock, header_time)
 
 
 def undecoded_line(undisplayed: Mapping[str, str], fields: FieldsRun | None) -> str:
-    """The topics no display draws and whose fields cannot be decoded, in one line ("": none)."""
-    skipped = {t: f"{t} ({m})" for t, m in undisplayed.items()}
+    """The topics no display draws and whose fields cannot be decoded, in one line ("": none), with why (each
+    reason once)."""
+    skipped = dict(undisplayed)
+    why: set[str] = set()
     if fields is not None:
         for topic in fields.decoding.topics:
             skipped.pop(topic, None)
-        skipped.update({t: f"{t} ({why})" for t, why in fields.decoding.unusable.items() if t in skipped})
+        why = {w[:120] for t, w in fields.decoding.unusable.items() if t in skipped}
     if not skipped:
         return ""
     n = len(skipped)
     every = " (--list shows every topic)" if n > SHOWN + 1 else ""
-    names = listed(v for _, v in sorted(skipped.items()))
-    return f"{n} topic{'s' * (n != 1)} that cannot be decoded, not shown: {names}{every}"
+    names = listed((t if why else f"{t} ({m})" for t, m in sorted(skipped.items())), first=3)  # reasons name types
+    reasons = f": {listed(sorted(why), first=2)}" if why else ""
+    return f"{n} topic{'s' * (n != 1)} that cannot be decoded, not shown: {names}{every}{reasons}"
