@@ -87,7 +87,8 @@ def test_a_plot_path_that_names_nothing_is_one_line_naming_the_fields(tmp_path: 
     assert result.returncode == 2 and not out.exists()
     [line] = result.stderr.splitlines()
     assert line.startswith(
-        "error: --plot /battery.voltag: my_msgs/msg/Battery has no field voltag there; /battery's fields: header.stamp.sec, "
+        "error: --plot /battery.voltag: my_msgs/msg/Battery has no field voltag there; "
+        "/battery's fields: header.stamp.sec, "
     ), line
     assert "voltage" in line and len(line) <= 300 and "Traceback" not in result.stderr
 
