@@ -132,7 +132,7 @@ def expected_fields(ts: Any, msg: Any, msgtype: str, prefix: str = "") -> dict[s
             sub = rest[0]
             if sub[0] == 1 and sub[1][0] != "string":
                 array = np.asarray(value)
-                if len(array) > MAX_ITEMS or (kind == 4 and array.dtype.itemsize == 1):
+                if len(array) > MAX_ITEMS or (kind == 4 and array.dtype.itemsize == 1 and array.dtype != bool):
                     out[f"{path}.len"] = len(array)
                     if len(array):
                         out[f"{path}.min"], out[f"{path}.max"] = array.min(), array.max()

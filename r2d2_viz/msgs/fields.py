@@ -225,13 +225,13 @@ class Problems:
     def add(self, why: str) -> None:
         self.unfit[why] = self.unfit.get(why, 0) + 1
 
-    def lines(self) -> list[str]:
+    def lines(self, *, nonfinite: bool = True) -> list[str]:
         kinds = sorted(self.unfit.items(), key=lambda kv: -kv[1])
         out = [f"{n} message{'s' * (n != 1)} skipped: {why}" for why, n in kinds[:3]]
         if len(kinds) > 3:
             n = sum(n for _, n in kinds[3:])
             out.append(f"{n} more skipped for {len(kinds) - 3} other reasons")
-        if self.nonfinite:
+        if self.nonfinite and nonfinite:
             out.append(f"{self.nonfinite} message{'s' * (self.nonfinite != 1)} with NaN or infinity in a field")
         if self.not_utf8:
             out.append(f"{self.not_utf8} string{'s' * (self.not_utf8 != 1)} not UTF-8 (shown with U+FFFD)")

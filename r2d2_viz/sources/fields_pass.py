@@ -61,10 +61,14 @@ class FieldsPass:
         return out
 
     def finish(self) -> None:
-        """Say each topic's problems, once."""
+        """Say each topic's problems, once; NaN and infinities (kept: gaps in a plot) in one line for all topics."""
         for topic, decoder in self.decoders.items():
-            if lines := decoder.problems.lines():
+            if lines := decoder.problems.lines(nonfinite=False):
                 self.bag.warn(f"{self.bag.path}: {topic}: {'; '.join(lines)}")
+        nan = {t: d.problems.nonfinite for t, d in self.decoders.items() if d.problems.nonfinite}
+        if nan:
+            said = listed(f"{t} ({n})" for t, n in nan.items())
+            self.bag.warn(f"{self.bag.path}: messages with NaN or infinity in a field (shown as they are): {said}")
 
 
 def store_of(bag: Bag, topic: str):  # type: ignore[no-untyped-def]  # rosbags' Typestore, imported lazily

@@ -159,15 +159,20 @@ def undecoded_line(undisplayed: Mapping[str, str], fields: FieldsRun | None) -> 
     """The topics no display draws and whose fields cannot be decoded, in one line ("": none), with why (each
     reason once)."""
     skipped = dict(undisplayed)
-    why: set[str] = set()
+    why: dict[str, list[str]] = {}
     if fields is not None:
         for topic in fields.decoding.topics:
             skipped.pop(topic, None)
-        why = {w[:120] for t, w in fields.decoding.unusable.items() if t in skipped}
+        for topic, reason in sorted(fields.decoding.unusable.items()):
+            msgtype, _, text = reason.partition(": ")
+            if topic in skipped and msgtype not in why.setdefault(text[:100], []):
+                why[text[:100]].append(msgtype)
     if not skipped:
         return ""
     n = len(skipped)
     every = " (--list shows every topic)" if n > SHOWN + 1 else ""
     names = listed((t if why else f"{t} ({m})" for t, m in sorted(skipped.items())), first=3)  # reasons name types
-    reasons = f": {listed(sorted(why), first=2)}" if why else ""
-    return f"{n} topic{'s' * (n != 1)} that cannot be decoded, not shown: {names}{every}{reasons}"
+    reasons = "; ".join(f"{listed(types, first=2)}: {text}" for text, types in why.items())
+    return f"{n} topic{'s' * (n != 1)} that cannot be decoded, not shown: {names}{every}" + (
+        f"; {reasons}" if why else ""
+    )

@@ -105,7 +105,7 @@ def test_a_definition_that_does_not_parse_is_one_line_and_the_rest_is_shown(tmp_
     [line] = [x for x in result.stderr.splitlines() if "/battery" in x]
     assert len(line) - len(str(tmp_path)) <= 300, line
     assert (
-        "1 topic that cannot be decoded, not shown: /battery: my_msgs/msg/Battery: its message "
+        "1 topic that cannot be decoded, not shown: /battery; my_msgs/msg/Battery: its message "
         "definition cannot be used" in line
     )
     recording = read_recording(out)
