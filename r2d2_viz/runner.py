@@ -90,7 +90,7 @@ class RunConfig:
     progress: bool = False
     """Show a progress bar on stderr (the CLI sets it on a terminal)."""
     plots: tuple[tuple[str, ...], ...] = ()
-    """``--plot`` paths of a bag's fields, one time-series view per flag (:mod:`r2d2_viz.msgs.message_path`)."""
+    """``--plot`` paths of a bag's fields, one time-series view per flag (:mod:`r2d2_viz.msgs.generic.message_path`)."""
 
     @property
     def live(self) -> bool:

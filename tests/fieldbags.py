@@ -1,4 +1,4 @@
-"""Bags of topics no display draws, for the generic field decoding (:mod:`r2d2_viz.msgs.fields`): a lab's own
+"""Bags of topics no display draws, for the generic field decoding (:mod:`r2d2_viz.msgs.generic.fields`): a lab's own
 ``my_msgs/msg/Battery`` (its definition only in the bag), a controller's state shaped like ROS 2's
 ``control_msgs/msg/JointTrajectoryControllerState``, and odometry — written by rosbags (its serializer, its writer,
 types registered from .msg text), so that rosbags' deserializer is the golden source of every field."""
@@ -12,7 +12,7 @@ import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from r2d2_viz.msgs.fields import MAX_ITEMS, MAX_NESTED
+from r2d2_viz.msgs.generic.fields import MAX_ITEMS, MAX_NESTED
 
 BATTERY = "my_msgs/msg/Battery"
 BATTERY_MSG = """std_msgs/Header header

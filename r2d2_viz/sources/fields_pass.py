@@ -1,5 +1,5 @@
 """Every other topic of a bag decoded in its one pass: the topics no display draws, all their fields, with the
-definitions the bag carries (:mod:`r2d2_viz.msgs.field_decoder`); and the topics ``--plot`` paths name, just those
+definitions the bag carries (:mod:`r2d2_viz.msgs.generic.decoder`); and the topics ``--plot`` paths name, just those
 fields. A topic that cannot be decoded (no usable definition) is known before the pass and named once; bad
 messages are counted per topic and said once, at the end. Pure: no rerun import.
 """
@@ -11,9 +11,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from r2d2_viz.errors import BagError, listed
-from r2d2_viz.msgs.field_decoder import FieldDecoder, topic_store
-from r2d2_viz.msgs.fields import Columns
-from r2d2_viz.msgs.message_path import MessagePath, check_field, field_names, parse_path
+from r2d2_viz.msgs.generic.decoder import FieldDecoder, topic_store
+from r2d2_viz.msgs.generic.fields import Columns
+from r2d2_viz.msgs.generic.message_path import MessagePath, check_field, field_names, parse_path
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bags.storage import Block

@@ -17,8 +17,8 @@ import numpy as np
 import rerun as rr
 
 from r2d2_viz.errors import SHOWN, listed
-from r2d2_viz.msgs.fields import Columns
-from r2d2_viz.msgs.message_path import MessagePath
+from r2d2_viz.msgs.generic.fields import Columns
+from r2d2_viz.msgs.generic.message_path import MessagePath
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.sources.fields_pass import FieldsPass, TopicColumns, plot_paths
 from r2d2_viz.sources.plan import RunPlan

@@ -1,6 +1,6 @@
 """Foxglove's message paths, the common cases: ``/odom.twist.twist.linear.x``, ``/joint_states.effort[2]``,
 ``/panda_arm_controller/state.error.positions[0]`` — a topic, then fields by name and array items by index (from
-0). The field part is the column name :mod:`r2d2_viz.msgs.fields` gives the value. Checked against the topic's
+0). The field part is the column name :mod:`r2d2_viz.msgs.generic.fields` gives the value. Checked against the topic's
 definition before anything is read (:func:`check_field`). Pure: no rerun, rosbags' typestore passed in.
 """
 

@@ -1,4 +1,4 @@
-"""Any message's fields decoded as numpy columns (r2d2_viz.msgs.fields, field_decoder) against rosbags' own
+"""Any message's fields decoded as numpy columns (r2d2_viz.msgs.generic.fields, field_decoder) against rosbags' own
 deserializer, message by message: every field name, every value (the golden source is rosbags' dataclasses, read
 by attribute here)."""
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from fieldbags import BATTERY, STATE, expected_fields, messages, store
 
-from r2d2_viz.msgs.field_decoder import FieldDecoder
+from r2d2_viz.msgs.generic.decoder import FieldDecoder
 
 TS = store()
 
@@ -56,7 +56,7 @@ def test_layouts_are_matched_not_walked_message_by_message() -> None:
     data = [d for t, _, d in messages(400) if t == "/odom"]
     decoder = FieldDecoder(TS, "nav_msgs/msg/Odometry")
     walks = 0
-    import r2d2_viz.msgs.field_decoder as fd
+    import r2d2_viz.msgs.generic.decoder as fd
 
     real = fd.walk
 

@@ -26,7 +26,7 @@ def _same(a: Any, b: Any) -> bool:
     return bool(x == y or (np.isnan(x) and np.isnan(y)))
 
 
-ROS1 = Path(__file__).resolve().parents[1] / "data" / "bags" / "ros1" / "example-lz4.bag"
+ROS1 = Path(__file__).resolve().parents[2] / "data" / "bags" / "ros1" / "example-lz4.bag"
 
 
 @pytest.mark.parametrize("name", [*sorted(BAGS), "ros1"])

@@ -1,4 +1,4 @@
-"""One topic's messages, many at a time, as :class:`~r2d2_viz.msgs.fields.Columns`: the layouts met before are
+"""One topic's messages, many at a time, as :class:`~r2d2_viz.msgs.generic.fields.Columns`: the layouts met before are
 tried first (numpy comparisons over all the messages), a message no layout fits is walked and its layout tried on
 the rest; when layouts stop paying (each fits only a few messages: strings of every length, as in a log) the rest
 are walked one by one and gathered per field. Problems are counted, never raised (:class:`Problems`).
@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from r2d2_viz.msgs.fields import Columns, Layout, Problems, matching, read_columns, walk
+from r2d2_viz.msgs.generic.fields import Columns, Layout, Problems, matching, read_columns, walk
 from r2d2_viz.msgs.typestore import MsgError, typestore
 
 if TYPE_CHECKING:
