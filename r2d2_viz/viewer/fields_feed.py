@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pyarrow as pa
 import rerun as rr
 
 from r2d2_viz.errors import SHOWN, listed
@@ -22,6 +23,7 @@ from r2d2_viz.msgs.generic.message_path import MessagePath
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.sources.fields_pass import FieldsPass, TopicColumns, plot_paths
 from r2d2_viz.sources.plan import RunPlan
+from r2d2_viz.viewer.columns import Encoded, send, time_array
 from r2d2_viz.viewer.entities import TIMELINE, path
 
 TOPICS = "/topics"
@@ -91,6 +93,18 @@ class FieldsFeed:
                 keep.append((topic, columns.rows(slice(stop, None))))
         self._pending = keep
 
+    def _arrow(self, topic: str, columns: Columns) -> Encoded:
+        """Each field as an Arrow list array of one value a row, built from the numpy column (Rerun's
+        ``DynamicArchetype.columns`` would inspect and partition every column in Python: 3x slower here)."""
+        archetype = self.shown[topic]
+        offsets = pa.array(np.arange(len(columns) + 1, dtype=np.int32))
+        out: Encoded = []
+        for name, values in (*columns.numbers.items(), *columns.texts.items()):
+            descriptor = rr.ComponentDescriptor(name).with_builtin_archetype(archetype)
+            array = pa.array(values, type=pa.utf8()) if values.dtype == object else pa.array(values)
+            out.append((descriptor, pa.ListArray.from_arrays(offsets, array)))
+        return out
+
     def _times(self, times_ns: np.ndarray) -> rr.TimeColumn:
         if self.clock == "duration":
             return rr.TimeColumn(TIMELINE, duration=times_ns.astype("timedelta64[ns]"))
@@ -99,12 +113,12 @@ class FieldsFeed:
     def _log(self, topic: str, columns: Columns) -> None:
         times = self._times(columns.times_ns)
         if topic in self.shown:
-            components: dict[str, object] = {k: np.ascontiguousarray(v) for k, v in columns.numbers.items()}
-            components.update({k: [str(x) for x in v] for k, v in columns.texts.items()})
-            self.rec.send_columns(
+            send(
+                self.rec,
                 topic_entity(topic),
-                indexes=[times],
-                columns=rr.DynamicArchetype.columns(archetype=self.shown[topic], components=components),
+                TIMELINE,
+                time_array(columns.times_ns, self.clock),
+                self._arrow(topic, columns),
             )
             self.messages += len(columns)
         for field, entity in self.plots.get(topic, ()):
