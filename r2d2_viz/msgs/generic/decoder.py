@@ -51,27 +51,35 @@ class FieldDecoder:
         """The fields of the messages ``buf[starts[i] : starts[i] + lengths[i]]`` received at ``times_ns`` (in
         order), as columns: one per group of messages sharing their field names, rows in time order."""
         left = np.ones(len(starts), dtype=bool)
+        order = np.argsort(lengths, kind="stable")  # a layout has one size: its candidates are one run of these
+        sorted_lengths = lengths[order]
         groups: list[tuple[np.ndarray, list[Layout]]] = []
+
+        def fit(layout: Layout) -> np.ndarray:
+            """The rows not taken yet that have ``layout``."""
+            lo, hi = np.searchsorted(sorted_lengths, [layout.size, layout.size + 1])
+            rows = order[lo:hi]
+            rows = rows[left[rows]]
+            found: np.ndarray = rows[matching(layout, buf, starts[rows], lengths[rows])]
+            return found
+
         for layout in list(self.layouts):
             if not left.any():
                 break
-            fit = matching(layout, buf, starts, lengths) & left
-            if fit.any():
-                groups.append((np.flatnonzero(fit), [layout]))
-                left &= ~fit
+            if len(rows := fit(layout)):
+                groups.append((np.sort(rows), [layout]))
+                left[rows] = False
         while left.any():
-            i = int(np.flatnonzero(left)[0])
+            i = int(np.argmax(left))
             found = self._walk(buf, int(starts[i]), int(lengths[i]))
             if found is None:
                 left[i] = False
                 continue
-            layout = found
-            fit = matching(layout, buf, starts, lengths) & left
-            fit[i] = True
-            left &= ~fit
-            groups.append((np.flatnonzero(fit), [layout]))
-            self.layouts = [layout, *self.layouts[: KEPT_LAYOUTS - 1]]
-            if fit.sum() < MIN_MATCHED:
+            rows = np.union1d(fit(found), [i])
+            left[rows] = False
+            groups.append((rows, [found]))
+            self.layouts = [found, *self.layouts[: KEPT_LAYOUTS - 1]]
+            if len(rows) < MIN_MATCHED:
                 break
         groups += self._one_by_one(buf, starts, lengths, np.flatnonzero(left))
         return self._columns(buf, starts, times_ns, groups)

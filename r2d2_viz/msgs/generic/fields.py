@@ -317,14 +317,31 @@ def _texts(buf: np.ndarray, starts: np.ndarray, spans: list[tuple[int, int]], pr
         if width == 0:
             return np.full(len(starts), "", dtype=object)
         raw = np.ascontiguousarray(buf[(starts + offsets)[:, None] + np.arange(width)]).view(f"S{width}")[:, 0]
-    else:
-        raw = np.array([bytes(buf[s + o : s + o + n]) for s, o, n in zip(starts, offsets, sizes, strict=True)])
+    else:  # strings of several lengths: one by one, each distinct value decoded once
+        memo: dict[bytes, str] = {}
+        out = np.empty(len(starts), dtype=object)
+        for i, (s, o, n) in enumerate(zip(starts, offsets, sizes, strict=True)):
+            raw_bytes = buf[s + o : s + o + n].tobytes()
+            text = memo.get(raw_bytes)
+            if text is None:
+                text = memo[raw_bytes] = _decoded(raw_bytes, problems)
+            elif "\ufffd" in text and raw_bytes.find(b"\xef\xbf\xbd") < 0:
+                problems.not_utf8 += 1
+            out[i] = text
+        return out
     distinct, index = np.unique(raw, return_inverse=True)
     decoded = np.empty(len(distinct), dtype=object)
     for k, value in enumerate(distinct):
-        try:
-            decoded[k] = bytes(value).decode("utf-8")
-        except UnicodeDecodeError:
-            decoded[k] = bytes(value).decode("utf-8", errors="replace")
-            problems.not_utf8 += int((index == k).sum())
+        before = problems.not_utf8
+        decoded[k] = _decoded(bytes(value), problems)
+        if problems.not_utf8 > before:
+            problems.not_utf8 += int((index == k).sum()) - 1
     return np.asarray(decoded[index], dtype=object)
+
+
+def _decoded(raw: bytes, problems: Problems) -> str:
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        problems.not_utf8 += 1
+        return raw.decode("utf-8", errors="replace")
