@@ -12,14 +12,17 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 import rerun as rr
 
 from r2d2_viz.errors import SHOWN, listed
+from r2d2_viz.msgs.generic.decoder import FieldDecoder
 from r2d2_viz.msgs.generic.fields import Columns
 from r2d2_viz.msgs.generic.message_path import MessagePath
+from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.sources.fields_pass import FieldsPass, TopicColumns, plot_paths
 from r2d2_viz.sources.plan import RunPlan
@@ -137,6 +140,37 @@ class FieldsFeed:
             for field, entity in series:
                 if not self.plotted.get(entity):
                     report(f"--plot {topic}.{field}: no message of {topic} has it (an index past the array's end?)")
+
+
+class LiveFields:
+    """A live graph's topics no display draws, every field, logged as they arrive (``store``: the graph's types)."""
+
+    def __init__(self, rec: rr.RecordingStream, store: Any, header_time: bool = False) -> None:
+        self.feed = FieldsFeed(rec, clock="timestamp", shown={}, header_time=header_time)
+        self.store = store
+        self.decoders: dict[str, FieldDecoder] = {}
+
+    def log(self, messages: Sequence[TopicMessage]) -> None:
+        by_topic: dict[str, list[TopicMessage]] = {}
+        for m in messages:
+            by_topic.setdefault(m.topic, []).append(m)
+        for topic, got in by_topic.items():
+            decoder = self.decoders.get(topic)
+            if decoder is None or decoder.msgtype != got[0].msgtype:
+                decoder = self.decoders[topic] = FieldDecoder(self.store, got[0].msgtype)
+                self.feed.shown[topic] = got[0].msgtype
+            data = [bytes(m.data) for m in got if m.msgtype == decoder.msgtype]
+            lengths = np.array([len(d) for d in data], dtype=np.int64)
+            starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+            times = np.array([m.time_ns for m in got if m.msgtype == decoder.msgtype], dtype=np.int64)
+            buf = np.frombuffer(b"".join(data), dtype=np.uint8)
+            self.feed.push([(topic, c) for c in decoder.decode(buf, starts, lengths, times) if len(c)])
+        self.feed.until(None)
+
+    def finish(self, report: Callable[[str], None]) -> None:
+        for topic, decoder in self.decoders.items():
+            if lines := decoder.problems.lines():
+                report(f"{topic}: {'; '.join(lines)}")
 
 
 @dataclass(frozen=True)

@@ -110,3 +110,43 @@ def test_a_definition_that_does_not_parse_is_one_line_and_the_rest_is_shown(tmp_
     )
     recording = read_recording(out)
     assert "/topics/battery" not in recording and len(recording["/topics/arm_controller/state"].times) == 5
+
+
+def test_a_live_graphs_fields_are_logged_as_they_arrive(tmp_path: Path) -> None:
+    """LiveFields (what --ros does with a topic no display draws): sensor_msgs/Joy samples, read back against
+    rosbags' deserializer (Jazzy's types, as the graph's)."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.typestore import typestore
+    from r2d2_viz.sources.bag_displays import TopicMessage
+    from r2d2_viz.viewer.fields_feed import LiveFields
+
+    ts = typestore("jazzy")
+    T = ts.types
+    joy = "sensor_msgs/msg/Joy"
+    out = tmp_path / "live.rrd"
+    rec = rr.RecordingStream("test_live_fields")
+    rec.save(str(out))
+    fields = LiveFields(rec, ts)
+    sent = []
+    for batch in range(3):  # three polls of two samples each
+        messages = []
+        for i in range(2):
+            k = 2 * batch + i
+            header = T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](k, 0), "joy")
+            raw = bytes(
+                ts.serialize_cdr(T[joy](header, np.array([0.1 * k, -1.0], np.float32), np.array([k], np.int32)), joy)
+            )
+            messages.append(TopicMessage(1_000_000_000 * (k + 1), "/joy", joy, raw))
+            sent.append(raw)
+        fields.log(messages)
+    rec.flush()
+    rec.disconnect()
+    rows = read_recording(out)["/topics/joy"]
+    assert rows.times == [1_000_000_000 * (k + 1) for k in range(6)]
+    for k, raw in enumerate(sent):
+        want = expected_fields(ts, ts.deserialize_cdr(raw, joy), joy)
+        got = {n.split(":", 1)[1]: v[k][0] for n, v in rows.temporal.items() if v[k] is not None}
+        assert set(got) == set(want) and all(
+            got[n] == pytest.approx(float(want[n]) if not isinstance(want[n], str) else want[n]) for n in want
+        )
