@@ -153,3 +153,31 @@ def test_a_live_graphs_fields_are_logged_as_they_arrive(tmp_path: Path) -> None:
         assert set(got) == set(want) and all(
             got[n] == pytest.approx(float(want[n]) if not isinstance(want[n], str) else want[n]) for n in want
         )
+
+
+def test_with_header_time_rows_go_to_their_header_stamps_in_order(tmp_path: Path) -> None:
+    """``--time header``: two messages received in one order, stamped in the other (values by hand)."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.generic.fields import Columns
+    from r2d2_viz.viewer.fields_feed import FieldsFeed
+
+    out = tmp_path / "header.rrd"
+    rec = rr.RecordingStream("test_header_time")
+    rec.save(str(out))
+    feed = FieldsFeed(rec, clock="timestamp", shown={"/x": "my_msgs/msg/X"}, header_time=True)
+    numbers = {
+        "header.stamp.sec": np.array([5, 3], dtype=np.int32),
+        "header.stamp.nanosec": np.array([7, 0], dtype=np.uint32),
+        "value": np.array([1.0, 2.0]),
+    }
+    feed.push([("/x", Columns(np.array([10, 20], dtype=np.int64), numbers))])
+    assert feed.next_time_ns == 3_000_000_000
+    feed.until(4_000_000_000)  # the earlier stamp only
+    assert feed.next_time_ns == 5_000_000_007
+    feed.until(None)
+    rec.flush()
+    rec.disconnect()
+    rows = read_recording(out)["/topics/x"]
+    assert rows.times == [3_000_000_000, 5_000_000_007]
+    assert rows.temporal["my_msgs/msg/X:value"] == [[2.0], [1.0]]
