@@ -206,7 +206,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
     fields = fields_run(plan, config.plots, clock, header_time=config.time == "header")
     if config.plots:
-        view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, plots=config.plots))
+        view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, field_plots=config.plots))
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)

@@ -257,18 +257,19 @@ def test_a_bag_with_78_undrawn_topics_says_so_in_one_short_line(tmp_path: Path) 
     bag defines)."""
     import sqlite3
 
-    from bagmaker import T0, BagSpec, storage_file, string, write_bag
+    from bagmaker import T0, BagSpec, storage_file, write_bag
+    from msgs_build import cdr, color
 
     topics = [f"/gazebo/link_{k:02d}/diagnostics_with_a_long_name" for k in range(78)]
-    spec = BagSpec(types={t: "std_msgs/msg/String" for t in topics})
+    spec = BagSpec(types={t: "std_msgs/msg/ColorRGBA" for t in topics})
     for k, topic in enumerate(topics):
-        spec.add(topic, T0 + k, string("x"))
+        spec.add(topic, T0 + k, cdr(color(1.0, 0.0, 0.0)))
     bag = write_bag(tmp_path / "gz", spec, storage="sqlite3")
     with sqlite3.connect(storage_file(bag)) as db:
         db.execute("UPDATE topics SET type = 'gz_msgs/msg/Link'")
         db.execute("DELETE FROM message_definitions")
     (bag / "metadata.yaml").write_text(
-        (bag / "metadata.yaml").read_text().replace("std_msgs/msg/String", "gz_msgs/msg/Link")
+        (bag / "metadata.yaml").read_text().replace("std_msgs/msg/ColorRGBA", "gz_msgs/msg/Link")
     )
     result = cli("--bag", str(bag), "--save", str(tmp_path / "gz.rrd"), cwd=tmp_path)
     assert result.returncode == 0, result.stderr

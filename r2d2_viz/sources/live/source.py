@@ -111,8 +111,7 @@ class LiveSource:
         known_types: Container[str] = (),
     ) -> None:
         self.graph, self.time, self.refresh_period = graph, time, refresh
-        self.known_types = known_types
-        """Types read for their fields though no display draws them (the graph's typestore's)."""
+        self.known_types = known_types  # read for their fields though no display draws them
         self.wanted = None if topics is None else {*topics, *OURS}
         self.subscribed: dict[str, str] = {}
         self.received: dict[str, int] = {}
@@ -160,6 +159,11 @@ class LiveSource:
                 self._note(f"subscribe {topic}", f"{topic}: not read: {exc}")
                 continue
             self.subscribed[topic] = rtype
+
+    @property
+    def display_topics(self) -> dict[str, str]:
+        """The display topics subscribed to so far (topic → type): the robot pipeline's own left out."""
+        return {topic: rtype for topic, rtype in self.subscribed.items() if robot_topic(topic) is None}
 
     def set_joints(self, actuated: Sequence[str] | None, namespace: str = "") -> None:
         """The robot's actuated joints (a new description), or None: no robot, joint states are kept for later;
