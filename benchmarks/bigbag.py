@@ -4,6 +4,7 @@
     python benchmarks/bigbag.py                      # 150 s sensor bag (~3 GB) and a 30 s one; ~10 min
     python benchmarks/bigbag.py --data /work/bigdata # keep the bags there (reused when present)
     python benchmarks/bigbag.py --smoke              # 3 s and 1 s of bag, every row once: CI, no thresholds
+    python benchmarks/bigbag.py --zstd               # the same bags with zstd-compressed chunks (2.85 GB)
 
 The bag is written inside the benchmark by ``rosbags`` (its writer, MCAP storage, uncompressed 1 MB chunks as
 rosbags writes them; ``--db3`` also writes it as .db3), like the issue's: a camera (``Image`` rgb8 640×480 at
@@ -29,7 +30,8 @@ Every figure is a whole command in a subprocess, side by side in the same run, a
   begins); the run is stopped with SIGINT after ``--live-seconds``, and its peak RssAnon over that window is
   reported;
 * ``--start-offset`` (10 s before the end) and ``--topics /scan /tf /tf_static`` walls as fractions of the full
-  conversion's (rows skipped, with a note, when the CLI does not know the flag);
+  conversion's, and their peak RssAnon beside the full run's (rows skipped, with a note, when the CLI does not know
+  the flag);
 * the 1 h × 100 Hz JointState bag of ``benchmarks/bags.py`` (its writer, reused): the work beyond the import
   floor (``python -c "import rerun, numpy"``) over ``rerun mcap convert``'s wall (goal ≤ 2×).
 
@@ -339,9 +341,11 @@ def schedule(seconds: float) -> list[tuple[int, str, int]]:
     return sorted(events, key=lambda e: e[0])
 
 
-def write_sensor_bag(path: Path, seconds: float, storage: str = "mcap") -> Path:
-    """A rosbag2 directory at ``path`` (written in a scratch folder beside it, moved into place when complete)."""
+def write_sensor_bag(path: Path, seconds: float, storage: str = "mcap", zstd: bool = False) -> Path:
+    """A rosbag2 directory at ``path`` (written in a scratch folder beside it, moved into place when complete);
+    ``zstd``: its MCAP chunks compressed (rosbags' storage compression)."""
     from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.rosbag2.enums import CompressionFormat, CompressionMode
 
     scratch = path.with_name(path.name + ".partial")
     shutil.rmtree(scratch, ignore_errors=True)
@@ -349,7 +353,10 @@ def write_sensor_bag(path: Path, seconds: float, storage: str = "mcap") -> Path:
     partial = scratch / path.name
     messages = _Messages(seconds)
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
-    with Writer(partial, version=9, storage_plugin=plugin) as writer:
+    writer = Writer(partial, version=9, storage_plugin=plugin)
+    if zstd:
+        writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+    with writer:
         connections = {
             topic: writer.add_connection(topic, msgtype, typestore=messages.ts) for topic, msgtype in TYPES.items()
         }
@@ -360,12 +367,12 @@ def write_sensor_bag(path: Path, seconds: float, storage: str = "mcap") -> Path:
     return path
 
 
-def sensor_bag(data: Path, seconds: float, storage: str = "mcap") -> Path:
+def sensor_bag(data: Path, seconds: float, storage: str = "mcap", zstd: bool = False) -> Path:
     """The bag file (``.mcap`` or ``.db3``) of ``seconds`` in ``data``: reused if there, else written."""
-    folder = data / f"sensors_{seconds:g}s_{storage}"
+    folder = data / f"sensors_{seconds:g}s_{storage}{'_zstd' if zstd else ''}"
     if not folder.exists():
         t = time.perf_counter()
-        write_sensor_bag(folder, seconds, storage)
+        write_sensor_bag(folder, seconds, storage, zstd)
         print(f"wrote {folder} in {time.perf_counter() - t:.0f} s", file=sys.stderr)
     return next(p for p in folder.iterdir() if p.suffix == f".{storage}")
 
@@ -511,6 +518,7 @@ def main() -> None:
     parser.add_argument("--live-seconds", type=float, default=20.0, help="how long the live replay runs")
     parser.add_argument("--data", type=Path, help="where the bags are kept and reused (default: a temporary dir)")
     parser.add_argument("--db3", action="store_true", help="also write the big bag as .db3 and replay it")
+    parser.add_argument("--zstd", action="store_true", help="the sensor bags' chunks zstd-compressed (2.85 GB)")
     parser.add_argument("--arm-minutes", type=float, default=60.0, help="the 100 Hz JointState bag's length")
     parser.add_argument("--json", type=Path, help="also write the figures here")
     parser.add_argument("--smoke", action="store_true", help="3 s and 1 s bags, every row once, no thresholds")
@@ -522,14 +530,15 @@ def main() -> None:
         scratch = Path(tmp)
         data = args.data or scratch
         data.mkdir(parents=True, exist_ok=True)
-        big = sensor_bag(data, args.seconds)
-        small = sensor_bag(data, args.small_seconds)
+        big = sensor_bag(data, args.seconds, zstd=args.zstd)
+        small = sensor_bag(data, args.small_seconds, zstd=args.zstd)
         size_gb = big.stat().st_size / 1e9
         table = Table()
         smoke = args.smoke
         table.notes.append(
             f"Bags: {args.seconds:g} s ({size_gb:.2f} GB) and {args.small_seconds:g} s "
-            f"({small.stat().st_size / 1e9:.2f} GB), MCAP, written by rosbags; medians of {args.rounds} rounds, "
+            f"({small.stat().st_size / 1e9:.2f} GB), MCAP{' (zstd chunks)' if args.zstd else ''}, written by rosbags; "
+            f"medians of {args.rounds} rounds, "
             "alternating; memory = peak RssAnon of the process tree, polled every 20 ms."
         )
 
@@ -627,12 +636,13 @@ def main() -> None:
             ("`--topics /scan /tf /tf_static`", ["--topics", "/scan", "/tf", "/tf_static"], 0.25),
         ):
             command = [APP, "--bag", str(big), "--save", str(scratch / "part.rrd"), *flags]
-            walls = []
+            walls, mems = [], []
             for _ in range(args.rounds):
                 run = run_watched(command)
                 if _unknown_flag(run):
                     break
                 walls.append(_checked(run, command).wall)
+                mems.append(run.peak_anon_mb)
             if not walls:
                 table.notes.append(f"{label}: skipped, this r2d2-viz does not know the flag yet.")
                 continue
@@ -644,6 +654,14 @@ def main() -> None:
                 "",
                 f"{100 * fraction:.0f} %",
                 f"≤ {100 * goal:.0f} %" + _verdict(fraction <= goal, smoke),
+            )
+            table.figures[f"anon_mb {flags[0]}"] = _med(mems)
+            table.add(
+                f"{label}: peak RssAnon (full `--save`: {ours_mem:,.0f} MB)",
+                f"{_med(mems):,.0f} MB",
+                "",
+                "",
+                "≤ 500 MB" + _verdict(_med(mems) <= 500, smoke),
             )
 
         if rerun is not None:

@@ -212,7 +212,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         try:
             rec = recording.rec
-            streamers = _robot_streams(recording, plan, view, clock) if tree is not None else []
+            gather = config.realtime and not config.sink.live  # saved only: no viewer waits for each sample
+            streamers = _robot_streams(recording, plan, view, clock, gather) if tree is not None else []
             streamer = streamers[0] if streamers else None
             notices = streamer.notices if streamer is not None else Notices(rec)
             for note in (*plan.notes, *view.notes):
@@ -267,7 +268,9 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
 
 
-def _robot_streams(recording: Recording, plan: RunPlan, view: ViewPlan, clock: Clock) -> list[RobotStream]:
+def _robot_streams(
+    recording: Recording, plan: RunPlan, view: ViewPlan, clock: Clock, gather: bool = False
+) -> list[RobotStream]:
     """A stream per robot: the plan's one, or each of several (:mod:`r2d2_viz.sources.robots`), its shapes and
     plots under ``/robots/<namespace>/`` when there are several."""
     rec = recording.rec
@@ -284,6 +287,7 @@ def _robot_streams(recording: Recording, plan: RunPlan, view: ViewPlan, clock: C
                 root_placed=plan.root_placed,
                 axis_length=view.axis_length,
                 show_names=view.show_names,
+                gather=gather,
             )
         ]
     several = len(plan.robots) > 1
@@ -298,6 +302,7 @@ def _robot_streams(recording: Recording, plan: RunPlan, view: ViewPlan, clock: C
             show_names=view.show_names,
             robot_name=robot.namespace if several else "",
             frame_prefix=robot.prefix,
+            gather=gather,
         )
         for robot in plan.robots
     ]

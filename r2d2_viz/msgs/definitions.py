@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from r2d2_viz.errors import one_line
+from r2d2_viz.msgs.known_layouts import known_humble
 from r2d2_viz.msgs.typestore import MAX_MESSAGE_BYTES, MsgError, typestore
 
 if TYPE_CHECKING:
@@ -215,6 +216,8 @@ def to_humble(msgtype: str, definition: str, encoding: str) -> Convert | None:
 
 @functools.cache
 def _to_humble(msgtype: str, definition: str, encoding: str) -> tuple[Convert | None, MsgError | None]:
+    if known_humble(msgtype, encoding, definition):  # rosbags' own definitions: no typestore needed
+        return None, None
     humble = typestore()
     if not definition or msgtype not in humble.fielddefs:
         return None, None

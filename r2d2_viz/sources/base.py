@@ -116,6 +116,24 @@ def _carry_forward(rows: F64, missing: npt.NDArray[np.bool_], last: F64) -> F64:
     return filled
 
 
+def last_per_time(chunk: SampleChunk) -> SampleChunk:
+    """Samples that share a time (``times_ns`` non-decreasing) as one: the last, with the joints it leaves out
+    (NaN) taken from the samples before it at that time — what applying each in file order leaves. So the robot,
+    its transforms and its plots at that time all come from one sample (Rerun would otherwise hold several rows
+    at one time, each consumer free to pick its own). Vectorised."""
+    t = chunk.times_ns
+    if len(t) < 2 or bool(np.all(t[1:] != t[:-1])):
+        return chunk
+    last = np.flatnonzero(np.append(t[1:] != t[:-1], True))  # the last sample at each time
+    first = np.concatenate([[0], last[:-1] + 1])
+    given = np.where(np.isnan(chunk.positions), -1, np.arange(len(t))[:, None])
+    np.maximum.accumulate(given, axis=0, out=given)
+    at = given[last]  # (times, joints): the last sample up to there that gives the joint
+    positions = np.where(at >= first[:, None], np.take_along_axis(chunk.positions, np.maximum(at, 0), axis=0), np.nan)
+    frames = tuple(FrameTrack(f.parent, f.child, f.translation[last], f.quat_xyzw[last]) for f in chunk.frames)
+    return SampleChunk(t[last], chunk.joints, positions, frames)
+
+
 class ArraySource:
     """Samples already in memory (``times_ns (T,)``, ``positions (T, J)`` of ``joints``, full-length frame
     tracks) as a source, handed out in chunks."""

@@ -13,7 +13,7 @@ import itertools
 import queue
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -22,7 +22,7 @@ from r2d2_viz.sources.bag_joints import JOINT_STATE, JointStateDecoder, TimeSour
 from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bags.storage import Block
-from r2d2_viz.sources.base import SampleChunk, Source, TfRecords
+from r2d2_viz.sources.base import SampleChunk, Source, TfRecords, last_per_time
 from r2d2_viz.sources.fields_pass import FieldsPass, TopicColumns
 from r2d2_viz.sources.robots import renamed
 
@@ -114,19 +114,22 @@ class BagPass:
         self._moved = 0
 
     def windows(self, max_samples: int, max_bytes: int = WINDOW_BYTES) -> Iterator[Window]:
-        """Every window, each with at most ``max_samples`` joint states and about ``max_bytes`` of messages (the
-        storages' blocks gathered or cut to that size)."""
+        """Every window, each with at most ``max_samples`` joint states and about ``max_bytes`` read from the bag
+        (the storages' blocks gathered or cut to that size). What is read, not what is kept: a few small topics of
+        a bag of compressed chunks would otherwise gather most of the file's chunks in one window (each one read
+        whole), and a live replay's first window would wait for all of them."""
         pending: list[Block] = []
         size = samples = 0
         for segment in self.segments:
             for block in self.bag.blocks(segment.topics, start_ns=segment.start_ns, stop_ns=segment.stop_ns):
                 for piece in self._pieces(block, max_samples, max_bytes):
                     n = len(piece.rows(self.joints_topic)) if self.joints is not None else 0
-                    if pending and (size + piece.nbytes > max_bytes or samples + n > max_samples):
+                    full = size + piece.cost > max_bytes or samples + n > max_samples
+                    if pending and full and not _tied(pending[-1], piece, samples, max_samples):
                         yield self._window(pending)
                         pending, size, samples = [], 0, 0
                     pending.append(piece)
-                    size, samples = size + piece.nbytes, samples + n
+                    size, samples = size + piece.cost, samples + n
         if pending:
             yield self._window(pending)
         self._finish()
@@ -140,10 +143,18 @@ class BagPass:
         if block.nbytes > max_bytes:
             sizes = np.cumsum(block.lengths)
             cuts |= {int(r) for r in np.searchsorted(sizes, np.arange(max_bytes, sizes[-1], max_bytes))}
-        edges = sorted(cuts)
+        # a cut never falls between messages received at one time (one sample of them: :func:`last_per_time`)
+        edges = sorted(
+            {int(e) for e in np.searchsorted(block.times_ns, block.times_ns[sorted(cuts)[:-1]])} | {len(block)}
+        )
+        if len(edges) == 2:
+            yield block
+            return
+        share = block.read_nbytes / max(block.nbytes, 1)  # what was read for the block, shared by bytes
         for lo, hi in itertools.pairwise(edges):
             if hi > lo:
-                yield block.take(np.arange(lo, hi)) if (lo, hi) != (0, len(block)) else block
+                piece = block.take(np.arange(lo, hi))
+                yield replace(piece, read_nbytes=int(share * piece.nbytes))
 
     def _window(self, pieces: list[Block]) -> Window:
         chunks: list[SampleChunk] = []
@@ -158,14 +169,14 @@ class BagPass:
                 chunk = self.joints.decode_block(block.take(rows))
                 if chunk is not None:
                     chunk, self._last_ns, self._moved = monotonic(chunk, self._last_ns, self._moved)
-                    chunks.append(chunk)
+                    chunks.append(last_per_time(chunk))
             for i, (topic, decoder) in enumerate(self.others):
                 if decoder is not None and len(rows := block.rows(topic)):
                     chunk = decoder.decode_block(block.take(rows))
                     if chunk is not None:
                         chunk, last_ns, moved = monotonic(chunk, *self._others_last[i])
                         self._others_last[i] = (last_ns, moved)
-                        others[i].append(chunk)
+                        others[i].append(last_per_time(chunk))
             for topic, prefix in self.tf_topics.items():
                 if len(rows := block.rows(topic)):
                     decoded = self.tf.decode(block.take(rows).pairs())
@@ -199,6 +210,12 @@ class BagPass:
         if self.tf.bad:
             tf = TF if len(self.tf_topics) == 1 else "TF topics"
             warn(f"{path}: {tf}: skipped {self.tf.bad} messages that cannot be decoded")
+
+
+def _tied(before: Block, after: Block, samples: int, max_samples: int) -> bool:
+    """Whether ``after`` starts at the time ``before`` ends (a window is not cut there, unless it already holds twice
+    its samples: a bag whose messages all share one time still comes in bounded windows)."""
+    return int(after.times_ns[0]) == int(before.times_ns[-1]) and samples < 2 * max_samples
 
 
 def bag_topics_read(bag: Bag, actuated: Sequence[str] | None, displays: Mapping[str, str]) -> tuple[str, ...]:

@@ -6,7 +6,8 @@
 2. :meth:`RobotStream.prepare` a chunk of samples — joint state carried forward (:class:`JointState`),
    kinematics, every entity's Arrow columns built once for the whole chunk;
 3. :meth:`RobotStream.send` any run of a prepared chunk's samples (all of it in batch runs, sample by
-   sample when live): ``/tf`` every time, plots a few times a second, out-of-limit warnings when due;
+   sample when live): ``/tf`` every time (with the plots in a paced save without a live viewer), plots a few
+   times a second, out-of-limit warnings when due;
 4. :meth:`RobotStream.finish` — pending plots and the limit lines up to the last sample.
 
 Named frames are the URDF link names plus the fixed frame (``odom``). Quaternions enter Rerun as ``xyzw``.
@@ -105,8 +106,13 @@ class RobotStream:
         show_names: bool = False,
         robot_name: str = "",
         frame_prefix: str = "",
+        gather: bool = False,
     ) -> None:
         self.rec, self.tree, self.clock, self.timeline = rec, tree, clock, timeline
+        self.gather = gather
+        """No live viewer (a paced run that only saves): transforms go out with the plot values, every
+        ``PLOT_PERIOD_NS``, not every sample — Rerun keeps ~3 kB per chunk in memory for the file's footer until
+        the file closes, so a chunk per sample at 1 kHz grew a run by ~75 MB a minute."""
         self.fixed_frame = fixed_frame
         self.notices = Notices(rec, warn=warn, timeline=timeline)
         self.state = JointState(tree.actuated)
@@ -176,7 +182,7 @@ class RobotStream:
             self._flush_plots()
             self._pending, self._plot_from = samples, start
         for entity in samples.entities:
-            if not entity.plot:
+            if not entity.plot and not self.gather:
                 self._send_rows(samples, entity, start, stop)
         self._sent_to = stop
         span = int(samples.times_ns[stop - 1]) - int(samples.times_ns[self._plot_from])
@@ -194,7 +200,7 @@ class RobotStream:
         if samples is None or self._plot_from >= self._sent_to:
             return
         for entity in samples.entities:
-            if entity.plot:
+            if entity.plot or self.gather:
                 self._send_rows(samples, entity, self._plot_from, self._sent_to)
         self._plot_from = self._sent_to
         last = int(samples.times_ns[self._sent_to - 1])

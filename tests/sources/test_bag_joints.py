@@ -113,9 +113,11 @@ def test_big_endian_messages_decoded_by_rosbags(tmp_path: Path) -> None:
     spec = BagSpec().add("/joint_states", T0 + 5, big).add("/joint_states", T0 + 6, joint_state(T0, ["elbow"], [1]))
     with open_bag(write_bag(tmp_path / "b", spec)) as bag:
         times, rows = _all(_pass(bag, ARM))
-        header, _ = _all(_pass(bag, ARM, time="header"))
+        header, header_rows = _all(_pass(bag, ARM, time="header"))
     assert rows == [{"elbow": 0.25, "wrist": -1.5}, {"elbow": 1.0}]
-    assert times.tolist() == [T0 + 5, T0 + 6] and header.tolist() == [T0, T0]
+    assert times.tolist() == [T0 + 5, T0 + 6]
+    # by their stamps both are at T0: one sample, the second applied after the first (issue 29)
+    assert header.tolist() == [T0] and header_rows == [{"elbow": 1.0, "wrist": -1.5}]
 
 
 def test_header_stamps_that_go_back_are_held_with_one_warning(tmp_path: Path) -> None:

@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from r2d2_viz.sources.base import ArraySource, FrameTrack, JointState, SampleChunk, TfRecords, tf_root
+from r2d2_viz.sources.base import (
+    ArraySource,
+    FrameTrack,
+    JointState,
+    SampleChunk,
+    TfRecords,
+    last_per_time,
+    tf_root,
+)
 
 
 def _loop_reference(joints, chunks):
@@ -85,3 +93,17 @@ def test_tf_records_rows_keeps_the_rows_asked_for() -> None:
     kept = r.rows(np.array([0, 2]))
     assert kept.times_ns.tolist() == [1, 3] and kept.parents == ("a", "c") and kept.children == ("x", "z")
     assert kept.translation.tolist() == [[1, 0, 0], [0, 0, 1]] and not kept.static
+
+
+def test_samples_sharing_a_time_become_the_last_with_what_it_leaves_out_from_before() -> None:
+    """By hand: at t=2 three samples (a and b; b only; a only) leave a from the third, b from the second."""
+    nan = np.nan
+    times = np.array([1, 2, 2, 2, 3, 3], dtype=np.int64)
+    positions = np.array([[0.0, 0.0], [1.0, 1.0], [nan, 2.0], [3.0, nan], [nan, nan], [nan, 5.0]])
+    track = FrameTrack("odom", "base", np.arange(18.0).reshape(6, 3), np.tile([0.0, 0.0, 0.0, 1.0], (6, 1)))
+    got = last_per_time(SampleChunk(times, ("a", "b"), positions, (track,)))
+    assert got.times_ns.tolist() == [1, 2, 3]
+    np.testing.assert_array_equal(got.positions, [[0.0, 0.0], [3.0, 2.0], [nan, 5.0]])
+    np.testing.assert_array_equal(got.frames[0].translation, [[0, 1, 2], [9, 10, 11], [15, 16, 17]])
+    unique = SampleChunk(np.array([1, 2], dtype=np.int64), ("a",), np.array([[1.0], [2.0]]))
+    assert last_per_time(unique) is unique

@@ -171,3 +171,45 @@ def test_read_ahead_stops_its_reader_when_the_consumer_stops() -> None:
         time.sleep(0.05)
     assert not any(t.name == "r2d2-viz bag reader" for t in threading.enumerate())
     assert len(made) <= 5  # it read no further than its depth ahead
+
+
+def _zstd_bag(tmp_path: Path, n: int = 40) -> Path:
+    """A bag of zstd-compressed chunks (rosbags' storage compression; it closes a chunk past 1 MiB): a 300 kB
+    String every 10 ms, hardly compressible, and a small /tf between each two."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.rosbag2.enums import CompressionFormat, CompressionMode
+
+    rng = np.random.default_rng(0)
+    path = tmp_path / "zstd"
+    writer = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
+    writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+    with writer:
+        big = writer.add_connection("/blob", "std_msgs/msg/String", typestore=TS)
+        tf = writer.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=TS)
+        for k in range(n):
+            t = T0 + k * 10 * MS
+            text = "".join(map(chr, rng.integers(33, 127, 300_000)))
+            writer.write(big, t, string(text))
+            writer.write(tf, t + MS, tf_message([(t, "odom", "base", (k, 0, 0), (0, 0, 0, 1))]))
+    return path
+
+
+def test_windows_of_a_small_topic_are_sized_by_what_is_read(tmp_path: Path) -> None:
+    """A small topic of a bag of compressed chunks: each chunk is decompressed whole for it, so a window holds about
+    ``max_bytes`` of decompressed chunks (not ``max_bytes`` of the topic, which would be every chunk of the bag),
+    and a block keeps a copy of the topic's messages, not the decompressed chunk."""
+    path = _zstd_bag(tmp_path)
+    expected = _reference(storage_file(path))["/tf"]
+    with open_bag(path) as bag:
+        blocks = list(bag.blocks(["/tf"]))
+        limit = 2 << 20
+        windows = list(BagPass(bag, [Segment(("/tf",))], actuated=None, displays={}).windows(100_000, limit))
+    chunk = 1 << 20  # rosbags closes a chunk once it holds more than 1 MiB: four strings and three /tf
+    assert [bytes(b.data(i)) for b in blocks for i in range(len(b))] == [d for _, d in expected]
+    assert all(len(b.buffer) < 4096 for b in blocks)
+    # decompressed up to the last /tf of each chunk (three strings of its four); the last chunk is what was left
+    # at the end: /tf alone (kept as it is)
+    assert all(len(b.buffer) == b.nbytes and 900_000 < b.read_nbytes < chunk for b in blocks[:-1])
+    # 40 × 300 kB: ~9 MB decompressed for 40 small messages, in windows of about 2 MB read each
+    assert len(windows) >= 9_000_000 // (limit + 2 * chunk)
+    assert [int(t) for w in windows if w.tf is not None for t in w.tf.times_ns] == [t for t, _ in expected]

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import rerun as rr
+from rerun.chunk import RrdReader
 from rrd import read_recording, tf_by_child
 
 from r2d2_viz.kinematics.tree import compile_tree
@@ -14,15 +15,15 @@ from r2d2_viz.robot.model import default_urdf_path, load_urdf
 from r2d2_viz.sources.base import SampleChunk
 from r2d2_viz.sources.live.source import LiveBatch
 from r2d2_viz.sources.motion import make_motion
-from r2d2_viz.viewer.stream import RobotStream, robot_namespaces
+from r2d2_viz.viewer.stream import PLOT_PERIOD_NS, RobotStream, robot_namespaces
 
 
-def _record(out: Path, send) -> dict:
+def _record(out: Path, send, gather: bool = False) -> dict:
     rec = rr.RecordingStream("test")
     rec.save(out)
     tree = compile_tree(load_urdf(default_urdf_path()))
     motion = make_motion(tree.robot, "tutorial", n_samples=40)
-    stream = RobotStream(rec, tree, frames=motion.frames, clock=motion.clock, warn=lambda _: None)
+    stream = RobotStream(rec, tree, frames=motion.frames, clock=motion.clock, warn=lambda _: None, gather=gather)
     stream.log_static()
     send(stream, next(motion.chunks(40)))
     stream.finish()
@@ -46,6 +47,31 @@ def test_pieces_equal_the_whole(tmp_path: Path) -> None:
         assert ra.times == rb.times and ra.temporal["Transform3D:translation"] == rb.temporal["Transform3D:translation"]
     va, vb = a["/joints/limited"], b["/joints/limited"]
     assert va.times == vb.times and va.temporal["Scalars:scalars"] == vb.temporal["Scalars:scalars"]
+
+
+def _tf_chunks(path: Path) -> int:
+    reader = RrdReader(path)
+    return sum(1 for c in reader.stream(store=reader.recordings()[0]) if c.entity_path == "/tf" and not c.is_static)
+
+
+def test_a_run_without_a_live_viewer_gathers_its_transforms_and_loses_none(tmp_path: Path) -> None:
+    """Sent a sample at a time, as a paced save sends them: every sample's transforms are in the file, in a chunk
+    every PLOT_PERIOD_NS of samples rather than one per sample (Rerun keeps ~3 kB per chunk until the file
+    closes)."""
+
+    def one_by_one(stream, chunk):
+        prepared = stream.prepare(chunk)
+        for k in range(len(chunk)):
+            stream.send(prepared, k, k + 1)
+
+    a, b = tmp_path / "each.rrd", tmp_path / "gathered.rrd"
+    each, gathered = _record(a, one_by_one), _record(b, one_by_one, gather=True)
+    for child in ("axis", "body", "head", "rod"):
+        ra, rb = tf_by_child(each)[child], tf_by_child(gathered)[child]
+        assert len(ra.times) == 40 and ra.times == rb.times
+        assert ra.temporal["Transform3D:quaternion"] == rb.temporal["Transform3D:quaternion"]
+    span_s = (tf_by_child(each)["body"].times[-1] - tf_by_child(each)["body"].times[0]) * 1e-9
+    assert _tf_chunks(a) == 40 and _tf_chunks(b) <= span_s / (PLOT_PERIOD_NS * 1e-9) + 2
 
 
 def test_a_subset_of_joints_keeps_the_others_and_timestamps(tmp_path: Path) -> None:

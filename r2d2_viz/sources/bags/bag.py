@@ -180,7 +180,7 @@ class Bag:
                 out.append((t, topic, convert(data)))
             except MsgError:
                 self._bad[topic] = self._bad.get(topic, 0) + 1
-        return block_of(out, block.topics)
+        return dataclasses.replace(block_of(out, block.topics), read_nbytes=block.cost)
 
     def _problems(self, f: Storage) -> list[str]:
         """The damaged chunks (each counted once, on the pass that met it) and messages that do not fit their

@@ -28,6 +28,17 @@ def _zstd() -> ModuleType:
     return zstd
 
 
+def _zstd_decompress(raw: memoryview, size: int) -> bytes:
+    """A zstd chunk decompressed into a buffer of the size it announces (1.7× faster than ``zstd.decompress``, which
+    grows its buffer as it goes); several frames, or more data than announced, through ``zstd.decompress``."""
+    zstd = _zstd()
+    decompressor = zstd.ZstdDecompressor()
+    out: bytes = decompressor.decompress(raw, max_length=size)
+    if not decompressor.eof or decompressor.unused_data:
+        out = zstd.decompress(raw)
+    return out
+
+
 MAGIC = b"\x89MCAP0\r\n"
 OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE, OP_CHUNK = 0x02, 0x03, 0x04, 0x05, 0x06
 OP_MESSAGE_INDEX, OP_CHUNK_INDEX, OP_STATISTICS, OP_DATA_END = 0x07, 0x08, 0x0B, 0x0F
@@ -198,6 +209,7 @@ def merge_blocks(parts: list[Block]) -> Block:
         buffer,
         np.concatenate([p.starts + o for p, o in zip(parts, offsets, strict=True)]),
         np.concatenate([p.lengths for p in parts]),
+        sum(p.cost for p in parts),
     )
     return in_time_order(block)
 
@@ -230,7 +242,7 @@ def chunk_data(buf: mmap.mmap, start: int, end: int) -> memoryview:
 
         data: memoryview = memoryview(lz4_decompress(raw))
     elif compression == "zstd":
-        data = memoryview(_zstd().decompress(raw))
+        data = memoryview(_zstd_decompress(raw, uncompressed_size))
     elif compression:
         raise BrokenError(f"a chunk has an unknown compression ({compression[:20]!r})")
     else:

@@ -20,10 +20,12 @@ import contextlib
 import mmap
 import struct
 from collections.abc import Collection, Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
+from r2d2_viz.sources.bags.mcap_prefix import wanted_part
 from r2d2_viz.sources.bags.mcap_records import (
     HEAD,
     MAGIC,
@@ -178,15 +180,19 @@ class McapScan:
         if c.offset in self._damaged:
             return None
         try:
-            data = chunk_data(self._map, c.offset, c.offset + c.length)
+            part = wanted_part(self._map, c, wanted, lo, hi)  # a compressed chunk: up to its last wanted message
+            data = part if part is not None else chunk_data(self._map, c.offset, c.offset + c.length)
             found = indexed(self._map, c, order, wanted, data)
+            if found is None and part is not None:  # its index does not fit that part: the whole chunk
+                data = chunk_data(self._map, c.offset, c.offset + c.length)
+                found = indexed(self._map, c, order, wanted, data)
             block = found if found is not None else walk_messages(data, order, wanted)
         except READ_ERRORS as exc:
             self._skip(c, exc)
             return None
         keep = (block.times_ns >= lo) & (block.times_ns < hi)
         block = block if keep.all() else block.take(np.flatnonzero(keep))
-        return in_time_order(block) if len(block) else None
+        return in_time_order(_read_for(block, data, self._map)) if len(block) else None
 
     def _skip(self, c: ChunkIndex, exc: BaseException) -> None:
         """A damaged chunk: counted in :attr:`problems` (once) and not read again."""
@@ -326,3 +332,14 @@ def _loose_block(
     return Block(
         rows[:, 0].copy(), index[keep], order, memoryview(buf), rows[:, 2] + HEAD, rows[:, 3] - rows[:, 2] - HEAD
     )
+
+
+def _read_for(block: Block, data: memoryview, buf: mmap.mmap) -> Block:
+    """``block`` of a chunk's ``data``, counted as what its reading took: a compressed chunk was decompressed whole
+    (:attr:`Block.read_nbytes`), and when only a few of its messages were wanted they are copied out, so the
+    decompressed chunk does not stay alive with them (a window of a few small topics would keep most of the file's
+    chunks otherwise). An uncompressed chunk's messages are views of the file's pages: nothing more was read."""
+    if data.obj is buf:
+        return block
+    counted = replace(block, read_nbytes=len(data))
+    return counted.compacted() if 4 * block.nbytes < len(data) else counted

@@ -42,6 +42,9 @@ class Block:
     buffer: memoryview
     starts: I64
     lengths: I64
+    read_nbytes: int = 0
+    """Bytes the storage read or decompressed to give these messages, where that is more than their own (a
+    compressed chunk, decompressed whole for a few of its messages); 0: just theirs."""
 
     def __len__(self) -> int:
         return len(self.times_ns)
@@ -49,6 +52,11 @@ class Block:
     @property
     def nbytes(self) -> int:
         return int(self.lengths.sum())
+
+    @property
+    def cost(self) -> int:
+        """What reading it took: its bytes, or the bytes read for it where more (windows are sized by this)."""
+        return max(self.nbytes, self.read_nbytes)
 
     def data(self, i: int) -> memoryview:
         start = int(self.starts[i])
@@ -61,10 +69,25 @@ class Block:
         return np.flatnonzero(self.topic_index == self.topics.index(topic))
 
     def take(self, rows: np.ndarray) -> Block:
-        """The block of these rows (same buffer, no copy)."""
+        """The block of these rows (same buffer, no copy; what was read for the whole block stays counted)."""
         return Block(
-            self.times_ns[rows], self.topic_index[rows], self.topics, self.buffer, self.starts[rows], self.lengths[rows]
+            self.times_ns[rows],
+            self.topic_index[rows],
+            self.topics,
+            self.buffer,
+            self.starts[rows],
+            self.lengths[rows],
+            self.read_nbytes,
         )
+
+    def compacted(self) -> Block:
+        """The block over a buffer of its own messages only (copied), so that a big buffer it was read from (a
+        decompressed chunk) can go; what was read stays counted."""
+        starts = np.zeros(len(self), dtype=np.int64)
+        np.cumsum(self.lengths[:-1], out=starts[1:])
+        gather = np.repeat(self.starts - starts, self.lengths) + np.arange(self.nbytes, dtype=np.int64)
+        data = np.frombuffer(self.buffer, dtype=np.uint8)[gather]
+        return Block(self.times_ns, self.topic_index, self.topics, data.data, starts, self.lengths, self.cost)
 
     def messages(self) -> Iterator[tuple[int, str, memoryview]]:
         """``(time ns, topic, data)`` of each message, in order."""
