@@ -103,6 +103,15 @@ def build_parser() -> argparse.ArgumentParser:
         "/tf_static too; the robot's model is still read from /robot_description)",
     )
     bags.add_argument(
+        "--plot",
+        nargs="+",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="plot these fields in one view, Foxglove's message paths: /odom.twist.twist.linear.x, "
+        "/joint_states.effort[2] (repeat the flag for more views)",
+    )
+    bags.add_argument(
         "--fixed-frame",
         default=None,
         metavar="FRAME",
@@ -235,6 +244,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     _quiet_rerun()
     from r2d2_viz.progress import wanted
     from r2d2_viz.runner import RunConfig, print_summary, run
+    from r2d2_viz.rviz.tools import parse_tool_topics
     from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
     if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
@@ -277,6 +287,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         args.topics = [t for t in args.topics if ":=" not in t] or None
     if args.bag is None and (args.start_offset or args.topics is not None):
         raise UsageError("--start-offset and --topics choose what of a bag to replay: use them with --bag")
+    if args.plot and (args.bag is None or (args.save is not None and args.save.suffix == ".mcap")):
+        raise UsageError("--plot plots a bag's fields in the viewer: use it with --bag (and not --save X.mcap)")
     if not (math.isfinite(args.start_offset) and args.start_offset >= 0):
         raise UsageError(f"--start-offset must be a number of seconds >= 0, got {args.start_offset:g}")
     implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
@@ -316,7 +328,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         start_offset=args.start_offset,
         topics=tuple(args.topics) if args.topics is not None else None,
         progress=wanted(),
-        tool_topics=_tool_topics(args.tool_topic),
+        tool_topics=parse_tool_topics(args.tool_topic),
+        plots=tuple(tuple(p) for p in args.plot),
     )
 
     def on_ready(message: str) -> None:
@@ -344,26 +357,6 @@ def _frames(text: str | None) -> tuple[str, ...] | None:
     if not frames:
         raise UsageError(f"--shared-frames {text!r}: expected frame names separated by commas, such as map,world")
     return frames
-
-
-def _tool_topics(items: list[str]) -> tuple[tuple[str, str], ...]:
-    """``--tool-topic goal=/move_base_simple/goal`` → ``(("2D Goal Pose", "/move_base_simple/goal"),)``."""
-    from r2d2_viz.errors import UsageError
-    from r2d2_viz.rviz.tools import tool_name
-
-    found: dict[str, str] = {}
-    for item in items:
-        name, sep, topic = item.partition("=")
-        tool = tool_name(name)
-        if not sep or tool is None:
-            raise UsageError(
-                f"--tool-topic {item!r}: expected TOOL=TOPIC, TOOL one of goal, pose_estimate, point, teleop"
-            )
-        topic = topic.strip()
-        if not topic.startswith("/") or not all(part.isidentifier() for part in topic[1:].split("/")):
-            raise UsageError(f"--tool-topic {item!r}: {topic!r} is not a ROS topic name (such as /goal_pose)")
-        found[tool] = topic
-    return tuple(found.items())
 
 
 def _no_display(serving: str, port: int, web_port: int) -> str:

@@ -24,6 +24,7 @@ from typing import Protocol
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
+from r2d2_viz.msgs.typestore import typestore
 from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
@@ -41,6 +42,7 @@ from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.fields_feed import LiveFields
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
@@ -110,7 +112,8 @@ def run_on(
     gives to the scene until the deadline or a signal; the files are finalised or, on any failure, removed."""
     deadline = _Deadline(stop, time.monotonic() + config.duration if config.duration is not None else None)
     started = time.monotonic()
-    source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time)
+    store = typestore(getattr(graph, "distro", "jazzy"))
+    source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time, known_types=store.fielddefs)
     model = _Model(config)
     batches = _settle(source, model, deadline)
     plan, view = _plan(config, model.robot, batches)
@@ -288,6 +291,7 @@ class _Scene:
             styles=view.display_styles,
             load_mesh=uri_loader(model.packages, Path(".")),
         )
+        self.fields = LiveFields(rec, typestore(getattr(source.graph, "distro", "jazzy")), config.time == "header")
         self.robots = LiveRobots(self, batches, model.packages, lateness.sent)
         """The namespaced robots (several robots: :class:`r2d2_viz.viewer.stream.LiveRobots`)."""
         if model.robot is not None:
@@ -357,11 +361,13 @@ class _Scene:
         for message in batch.displays:
             self.feed.log(message)
             self.lateness.sent(message.topic, (message.time_ns,))
+        self.fields.log(batch.fields)
 
     def finish(self) -> None:
         for topic, line in self.source.problems():
             self.notices.report(f"{topic}: {line}")
         self.feed.finish()
+        self.fields.finish(self.notices.report)
         if self.streamer is not None:
             self.streamer.finish()
         self.robots.finish()

@@ -6,6 +6,7 @@ No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.viewe
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import sys
@@ -14,7 +15,7 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import SHOWN, UsageError, listed
+from r2d2_viz.errors import UsageError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.pacing import Feeds, paced
@@ -30,8 +31,9 @@ from r2d2_viz.sources.base import Clock, Source
 from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
 from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, read_ahead
-from r2d2_viz.sources.robots import SHARED_FRAMES, robots_read
+from r2d2_viz.sources.robots import SHARED_FRAMES
 from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.fields_feed import FieldsRun, fields_run, undecoded_line
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
@@ -90,6 +92,8 @@ class RunConfig:
     """Show a progress bar on stderr (the CLI sets it on a terminal)."""
     tool_topics: tuple[tuple[str, str], ...] = ()
     """``--tool-topic``: the page's tools' topics (``2D Goal Pose`` → ``/goal``), over the ``--rviz`` config's."""
+    plots: tuple[tuple[str, ...], ...] = ()
+    """``--plot`` paths of a bag's fields, one time-series view per flag (:mod:`r2d2_viz.msgs.generic.message_path`)."""
 
     @property
     def live(self) -> bool:
@@ -203,6 +207,9 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     tree = plan.tree
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    fields = fields_run(plan, config.plots, clock, header_time=config.time == "header")
+    if config.plots:
+        view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, field_plots=config.plots))
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
@@ -235,17 +242,22 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.push(plan.seek_messages)
-            feeds = Feeds(TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]])
+            feeds = Feeds(
+                TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None
+            )
             for robot in streamers:
                 robot.log_static()
             with progress_bar(plan, config) as shown:
-                windows = _windows(plan, config, displays)
+                windows = _windows(plan, config, displays, fields)
                 if config.live:
                     samples, interrupted = paced(streamer, windows, feeds, speed=config.speed, progress=shown)
                 else:
                     with sigterm_raises():
                         samples = _batch(streamer, windows, feeds, rec.flush, shown)
-            _other_topics(plan, config, notices)
+            if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
+                notices.report(f"{config.bag}: {line}")
+            if feeds.fields is not None:
+                feeds.fields.finish(notices.report)
             if displays is not None:
                 displays.finish()
             for robot in streamers:
@@ -302,7 +314,9 @@ def _robot_streams(
     ]
 
 
-def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> Iterator[Window]:
+def _windows(
+    plan: RunPlan, config: RunConfig, displays: DisplayFeed | None, fields: FieldsRun | None
+) -> Iterator[Window]:
     """The run's windows; a bag's read and decoded ahead in a thread (beside the recording's writing)."""
     if config.live:
         size = _live_block(config)
@@ -312,6 +326,7 @@ def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> 
         size,
         predecode=displays.decode if displays is not None else None,
         max_bytes=LIVE_WINDOW_BYTES if config.live else WINDOW_BYTES,
+        **({"fields": fields.decoding} if fields is not None else {}),
     )
     return read_ahead(windows) if plan.replay is not None else windows
 
@@ -341,27 +356,6 @@ def _batch(
             progress(window)
     feed.until(None)
     return (samples + sum(r.sent for r in feed.robots)) or feed.sent
-
-
-def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:
-    """The bag's topics no display of ours draws: what Rerun's own MCAP decoders show of them (batch runs, .mcap
-    storage), and one line naming the rest."""
-    skipped = dict(plan.undisplayed)
-    if plan.mcap_files and skipped and not config.live:
-        from r2d2_viz.viewer.bag_topics import OURS, log_other_topics
-
-        exclude = (*OURS, *plan.displays, *robots_read(plan.robots))
-        result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=exclude)
-        for topic in result.logged:
-            skipped.pop(topic, None)
-        failed = "".join(f"; Rerun's MCAP reader cannot read {f.name} ({why})" for f, why in result.failed[:1])
-    else:
-        failed = ""
-    if skipped:
-        names = listed(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
-        n = len(skipped)
-        every = " (--list shows every topic)" if n > SHOWN + 1 else ""
-        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}{failed}")
 
 
 def _live_block(config: RunConfig) -> int:

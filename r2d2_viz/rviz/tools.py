@@ -9,6 +9,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from r2d2_viz.errors import UsageError
+
 POSE_ESTIMATE = "2D Pose Estimate"
 GOAL_POSE = "2D Goal Pose"
 PUBLISH_POINT = "Publish Point"
@@ -74,3 +76,20 @@ def config_tool_topics(tools: Any) -> dict[str, str]:
 def tool_topics(config: Mapping[str, str] | None = None, overrides: Mapping[str, str] | None = None) -> dict[str, str]:
     """Each publishing tool's topic: RViz's default, else the config's, else ``overrides``'s (``--tool-topic``)."""
     return {**DEFAULT_TOPICS, **(config or {}), **(overrides or {})}
+
+
+def parse_tool_topics(items: list[str]) -> tuple[tuple[str, str], ...]:
+    """``--tool-topic goal=/move_base_simple/goal`` → ``(("2D Goal Pose", "/move_base_simple/goal"),)``."""
+    found: dict[str, str] = {}
+    for item in items:
+        name, sep, topic = item.partition("=")
+        tool = tool_name(name)
+        if not sep or tool is None:
+            raise UsageError(
+                f"--tool-topic {item!r}: expected TOOL=TOPIC, TOOL one of goal, pose_estimate, point, teleop"
+            )
+        topic = topic.strip()
+        if not topic.startswith("/") or not all(part.isidentifier() for part in topic[1:].split("/")):
+            raise UsageError(f"--tool-topic {item!r}: {topic!r} is not a ROS topic name (such as /goal_pose)")
+        found[tool] = topic
+    return tuple(found.items())

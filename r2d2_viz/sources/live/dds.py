@@ -95,6 +95,7 @@ class LiveGraph:
         latched_depth: int = 100,
     ) -> None:
         self._dds = cyclonedds_modules()
+        self.distro = distro
         self.discovery = RosDiscovery.from_env(env)
         config = self.discovery.cyclone_xml()
         uri = (os.environ if env is None else env).get("CYCLONEDDS_URI", "")
