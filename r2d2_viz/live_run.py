@@ -24,6 +24,7 @@ from typing import Protocol
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
+from r2d2_viz.msgs.video import EncoderName
 from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
@@ -46,6 +47,7 @@ from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.tf_recorded import RecordedTf
+from r2d2_viz.viewer.video_feed import VideoFeed
 
 POLL_SECONDS = 0.02
 """At the latest this often, what arrived is taken from the graph and logged (one chunk per entity)…"""
@@ -78,6 +80,8 @@ class LiveConfig(Protocol):
     def fixed_frame(self) -> str | None: ...
     @property
     def rviz(self) -> Path | None: ...
+    @property
+    def video(self) -> EncoderName | None: ...
 
 
 def run_live(
@@ -277,6 +281,7 @@ class _Scene:
             header_time=config.time == "header",
             styles=view.display_styles,
             load_mesh=uri_loader(model.packages, Path(".")),
+            video=VideoFeed(config.video, live=True),
         )
         self.robots = LiveRobots(self, batches, model.packages, lateness.sent)
         """The namespaced robots (several robots: :class:`r2d2_viz.viewer.stream.LiveRobots`)."""

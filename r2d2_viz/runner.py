@@ -17,6 +17,7 @@ from pathlib import Path
 from r2d2_viz.errors import SHOWN, UsageError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
+from r2d2_viz.msgs.video import EncoderName
 from r2d2_viz.pacing import Feeds, paced
 from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path
@@ -37,6 +38,7 @@ from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
+from r2d2_viz.viewer.video_feed import VideoFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""
@@ -87,6 +89,8 @@ class RunConfig:
     """Only these topics of the bag (``ros2 bag play --topics``); None: all."""
     progress: bool = False
     """Show a progress bar on stderr (the CLI sets it on a terminal)."""
+    video: EncoderName | None = None
+    """Encode 8-bit camera images as video (``--video``: av1 or h264); None: lossless ``Image`` s."""
 
     @property
     def live(self) -> bool:
@@ -227,6 +231,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     if plan.moving_tf is not None and len(plan.moving_tf)
                     else None,
                     tf=[r for r in (plan.static_tf, plan.moving_tf) if r is not None],
+                    video=VideoFeed(config.video, live=config.live),
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.push(plan.seek_messages)

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from r2d2_viz.errors import R2d2VizError, UsageError, one_line
 from r2d2_viz.fleet.identity import BagId, identify, is_up_to_date, output_path
+from r2d2_viz.msgs.video import EncoderName
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.viewer.catalog import MARKER_PROPERTY, TOPICS_PROPERTY, recording_marker
 
@@ -37,6 +38,8 @@ class Job:
     size: int
     recording_id: str
     marker: str
+    video: EncoderName | None = None
+    """``--video``: the cameras encoded as video (av1, h264)."""
 
 
 @dataclass(frozen=True)
@@ -65,8 +68,12 @@ def version() -> str:
     return __version__
 
 
-def plan_jobs(bags: Iterable[Path], out_dir: Path, *, force: bool, report: FleetReport) -> list[Job]:
-    """The bags to convert; bad ones (missing, unreadable, two of one name) and up-to-date ones go in ``report``."""
+def plan_jobs(
+    bags: Iterable[Path], out_dir: Path, *, force: bool, report: FleetReport, video: EncoderName | None = None
+) -> list[Job]:
+    """The bags to convert; bad ones (missing, unreadable, two of one name) and up-to-date ones go in ``report``.
+    A recording made with another ``video`` setting is not up to date (its marker's version says it)."""
+    made_by = version() + (f"+video-{video}" if video else "")
     check_out_dir(out_dir)
     found: dict[str, list[BagId]] = {}
     for path in bags:
@@ -85,10 +92,10 @@ def plan_jobs(bags: Iterable[Path], out_dir: Path, *, force: bool, report: Fleet
             continue
         bag = same[0]
         out = output_path(out_dir, bag)
-        if not force and out.exists() and is_up_to_date(out, bag, recording_marker(out), version()):
+        if not force and out.exists() and is_up_to_date(out, bag, recording_marker(out), made_by):
             report.up_to_date.append(bag.path)
             continue
-        jobs.append(Job(bag.path, out, bag.name, bag.size, bag.recording_id, bag.marker(version())))
+        jobs.append(Job(bag.path, out, bag.name, bag.size, bag.recording_id, bag.marker(made_by), video))
     return jobs
 
 
@@ -137,7 +144,7 @@ def convert_one(job: Job) -> Outcome:
         properties.append((TOPICS_PROPERTY, topics))
     sink = SinkConfig(save=tmp, recording_id=job.recording_id, properties=tuple(properties))
     try:
-        run(RunConfig(bag=job.bag, sink=sink))
+        run(RunConfig(bag=job.bag, sink=sink, video=job.video))
         os.replace(tmp, job.out)
     except R2d2VizError as exc:
         return Outcome(job, one_line(exc), time.perf_counter() - start)

@@ -9,6 +9,7 @@ import numpy as np
 from r2d2_viz.msgs.geometry import header_of
 from r2d2_viz.msgs.shapes import CompressedImage, Decoded, DecodeOptions, Image, Pinhole
 from r2d2_viz.msgs.typestore import MsgError, deserialize
+from r2d2_viz.msgs.video import video_codec, video_sample
 
 ColorModel = Literal["L", "RGB", "RGBA", "BGR", "BGRA"]
 # ROS encoding -> (numpy type, channels, colour model); 8UC3 / 8UC4 in OpenCV's BGR order, as cv_bridge reads them
@@ -69,10 +70,13 @@ def media_type(blob: bytes, fmt: str) -> str:
 
 
 def decode_compressed_image(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
-    """A CompressedImage's JPEG or PNG bytes (``compressedDepth`` and other formats are refused)."""
+    """A CompressedImage's JPEG or PNG bytes, or its video sample when its format names a video codec
+    (:mod:`r2d2_viz.msgs.video`); ``compressedDepth`` and other formats are refused."""
     msg = deserialize(data, "sensor_msgs/msg/CompressedImage")
     frame, stamp = header_of(msg)
     blob = bytes(msg.data)
+    if video_codec(str(msg.format)) is not None:
+        return Decoded(frame, stamp, (video_sample(str(msg.format), blob),))
     return Decoded(frame, stamp, (CompressedImage(blob, media_type(blob, str(msg.format))),))
 
 

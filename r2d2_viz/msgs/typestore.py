@@ -22,8 +22,11 @@ DISTROS = {"humble": "ROS2_HUMBLE", "jazzy": "ROS2_JAZZY", "kilted": "ROS2_KILTE
 EXTRA_TYPES = {
     "map_msgs/msg/OccupancyGridUpdate": "std_msgs/Header header\nint32 x\nint32 y\nuint32 width\nuint32 height\n"
     "int8[] data\n",
+    "foxglove_msgs/msg/CompressedVideo": "builtin_interfaces/Time timestamp\nstring frame_id\nuint8[] data\n"
+    "string format\n",
 }
-"""Types RViz displays that rosbags' stores lack (nav2's costmap updates), added to every store."""
+"""Types r2d2-viz displays that rosbags' stores lack (nav2's costmap updates, Foxglove's compressed video),
+added to every store."""
 
 
 @functools.cache

@@ -25,6 +25,7 @@ from r2d2_viz.viewer.decay import FixedFramePlacer
 from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
+from r2d2_viz.viewer.video_feed import VideoFeed
 
 _FOREVER = 2**63 - 1
 GRID = "nav_msgs/msg/OccupancyGrid"
@@ -70,8 +71,11 @@ class DisplayFeed:
         topics: Mapping[str, str] | None = None,
         start_ns: int | None = None,
         tf: Sequence[TfRecords] = (),
+        video: VideoFeed | None = None,
     ) -> None:
         self.notices, self.rec = notices, notices.rec
+        self.video = video or VideoFeed(None)
+        """Cameras as video (``--video``: raw images encoded) and video samples passed through."""
         self._pending: deque[TopicMessage] = deque()
         self.clock, self.fixed_frame, self.header_time = clock, fixed_frame, header_time
         self.styles = dict(styles or {})
@@ -159,6 +163,10 @@ class DisplayFeed:
                 key=f"display problem {message.topic}",
             )
             return
+        for note in self.video.notes(message.topic):
+            self.notices.report(f"{self._where(message.topic)}: {note}", key=f"video {message.topic} {note}")
+        if not self.video.ready(self.rec, message.topic, decoded):
+            return
         placed = self._placed(message.topic, decoded)
         if style.decay and self._placer is not None and isinstance(placed, Decoded):
             placed = self._placer.place(placed, message.time_ns)
@@ -199,6 +207,7 @@ class DisplayFeed:
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
             decoded: Decoded | list[MarkerOp] | MsgError = decode(message.msgtype, message.data, style.options)
+            decoded = self.video.encode(message.topic, message.time_ns, decoded)
         except MsgError as exc:
             decoded = exc
         prepared = None
@@ -228,6 +237,8 @@ class DisplayFeed:
 
     def finish(self) -> None:
         """Say, per topic, how many messages could not be shown (when more than the one already said)."""
+        for topic, note in self.video.finish():
+            self.notices.report(f"{self._where(topic)}: {note}")
         for topic, state in self.topics.items():
             if state.problems > 1:
                 self.notices.report(
