@@ -42,7 +42,8 @@ class Frames:
 def image(t: int, pixels: np.ndarray, encoding: str = "rgb8", frame: str = "camera_optical") -> bytes:
     h, w = pixels.shape[:2]
     step = pixels.strides[0]
-    msg = Image(Header(stamp(t), frame), h, w, encoding, 0, step, np.ascontiguousarray(pixels).view(np.uint8).reshape(-1))
+    data = np.ascontiguousarray(pixels).view(np.uint8).reshape(-1)
+    msg = Image(Header(stamp(t), frame), h, w, encoding, 0, step, data)
     return bytes(TS.serialize_cdr(msg, "sensor_msgs/msg/Image"))
 
 
