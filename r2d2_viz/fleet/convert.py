@@ -142,9 +142,12 @@ def convert_one(job: Job) -> Outcome:
     topics = _topics(job.bag)
     if topics is not None:
         properties.append((TOPICS_PROPERTY, topics))
-    sink = SinkConfig(save=tmp, recording_id=job.recording_id, properties=tuple(properties))
+    layout, tmp_layout = job.out.with_suffix(".rbl"), temp_path(job.out.with_suffix(".rbl"))
+    sink = SinkConfig(save=tmp, recording_id=job.recording_id, properties=tuple(properties), layout_file=tmp_layout)
     try:
         run(RunConfig(bag=job.bag, sink=sink, video=job.video))
+        if tmp_layout.exists():  # beside its recording: the dataset's layout when served (viewer/catalog.py)
+            os.replace(tmp_layout, layout)
         os.replace(tmp, job.out)
     except R2d2VizError as exc:
         return Outcome(job, one_line(exc), time.perf_counter() - start)
@@ -152,6 +155,7 @@ def convert_one(job: Job) -> Outcome:
         return Outcome(job, f"unexpected {type(exc).__name__}: {one_line(exc)}", time.perf_counter() - start)
     finally:
         tmp.unlink(missing_ok=True)
+        tmp_layout.unlink(missing_ok=True)
     return Outcome(job, None, time.perf_counter() - start)
 
 
@@ -159,7 +163,12 @@ def remove_partials(jobs: Iterable[Job]) -> None:
     """What killed workers left: the hidden temporary files of these outputs (and the runner's own, inside)."""
     for job in jobs:
         mine = f".{job.out.name}.fleet-*.partial"
-        for pattern in (mine, f".{mine}.*.partial"):  # ours, and the runner's own beside it (".<ours>.<pid>.partial")
+        layout = f".{job.out.with_suffix('.rbl').name}.fleet-*.partial"
+        for pattern in (
+            mine,
+            f".{mine}.*.partial",
+            layout,
+        ):  # ours, and the runner's own beside it (".<ours>.<pid>.partial")
             for leftover in job.out.parent.glob(pattern):
                 leftover.unlink(missing_ok=True)
 
