@@ -91,9 +91,8 @@ def live_latency(n: int) -> tuple[float, float, float]:
     from camerabag import Frames, image
 
     from r2d2_viz.sources.bag_displays import TopicMessage
-    from r2d2_viz.viewer.display_feed import DisplayFeed
+    from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
     from r2d2_viz.viewer.notices import Notices
-    from r2d2_viz.viewer.video_feed import VideoFeed
 
     frames = Frames()
     data = [image(i, frames(i % 60)) for i in range(min(n, 60))]

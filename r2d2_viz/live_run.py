@@ -40,14 +40,13 @@ from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_check import urdf_edges
-from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.tf_recorded import RecordedTf
-from r2d2_viz.viewer.video_feed import VideoFeed
 
 POLL_SECONDS = 0.02
 """At the latest this often, what arrived is taken from the graph and logged (one chunk per entity)…"""

@@ -31,14 +31,13 @@ from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
 from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, read_ahead
 from r2d2_viz.sources.robots import SHARED_FRAMES, robots_read
-from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
-from r2d2_viz.viewer.video_feed import VideoFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""

@@ -70,8 +70,7 @@ def write_camera_bag(path: Path, n: int, *, frames: Frames | None = None, rate: 
     return [t + 1 for t in times]
 
 
-FOXGLOVE_VIDEO = "builtin_interfaces/Time timestamp\nstring frame_id\nuint8[] data\nstring format\n"
-"""foxglove_msgs/msg/CompressedVideo.msg as Foxglove publishes it (foxglove/schemas, ros_foxglove_msgs)."""
+from msgs_build import FOXGLOVE_VIDEO  # noqa: E402
 
 
 def write_video_bag(path: Path, samples: list[tuple[str, int, str, bytes]]) -> None:
