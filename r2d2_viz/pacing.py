@@ -101,19 +101,28 @@ class Feeds:
         return self.tf.logged + (sum(s.messages for s in self.displays.topics.values()) if self.displays else 0)
 
 
+@dataclass(frozen=True)
+class WallClock:
+    """Where pacing reads the time and waits: the monotonic clock by default; tests inject a simulated one."""
+
+    now: Callable[[], float] = time.monotonic
+    sleep: Callable[[float], None] = time.sleep
+
+
 @dataclass
 class _Clock:
-    """The schedule: a time ``t`` (ns) is due at ``start + (t - t0) / speed`` seconds of ``time.monotonic``."""
+    """The schedule: a time ``t`` (ns) is due at ``start + (t - t0) / speed`` seconds of ``wall.now()``."""
 
     start: float
     t0: int
     speed: float
+    wall: WallClock
 
     def due(self, t_ns: int) -> float:
         return self.start + (t_ns - self.t0) * (1e-9 / self.speed)
 
     def now_ns(self) -> int:
-        return self.t0 + int((time.monotonic() - self.start) * self.speed * 1e9)
+        return self.t0 + int((self.wall.now() - self.start) * self.speed * 1e9)
 
 
 def _feed_until(clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Event, log: TextIO | None = None) -> None:
@@ -121,20 +130,20 @@ def _feed_until(clock: _Clock, feeds: Feeds, deadline: float, stop: threading.Ev
     is pending (the next window may hold more)."""
     while not stop.is_set():
         t = feeds.next_time_ns
-        now = time.monotonic()
+        now = clock.wall.now()
         if t is None:
             return
         if clock.due(t) > deadline:
             if deadline > now:
-                time.sleep(min(deadline - now, MAX_SLEEP))
+                clock.wall.sleep(min(deadline - now, MAX_SLEEP))
                 continue
             return
         if clock.due(t) > now:
-            time.sleep(min(clock.due(t) - now, MAX_SLEEP))
+            clock.wall.sleep(min(clock.due(t) - now, MAX_SLEEP))
             continue
-        feeds.until(clock.now_ns())
+        feeds.until(max(clock.now_ns(), t))  # t is due: float rounding of now_ns must not hold it back
         if log is not None:
-            log.write(f"f {time.monotonic() - clock.due(t):.6f}\n")
+            log.write(f"f {clock.wall.now() - clock.due(t):.6f}\n")
 
 
 def paced(
@@ -144,9 +153,11 @@ def paced(
     *,
     speed: float = 1.0,
     progress: Callable[[Window], None] | None = None,
+    wall: WallClock | None = None,
 ) -> tuple[int, bool]:
-    """Send each robot sample and every feed item of each window when due, until done or signalled; returns the
-    samples sent (or, without a robot, the items) and whether a signal stopped it."""
+    """Send each robot sample and every feed item of each window when due on ``wall``, until done or signalled;
+    returns the samples sent (or, without a robot, the items) and whether a signal stopped it."""
+    wall = wall or WallClock()
     stop = threading.Event()
     sent = 0
     log_path = os.environ.get(PACING_LOG_ENV)
@@ -160,7 +171,7 @@ def paced(
                 if chunk is not None and len(chunk):
                     first.append(int(chunk.times_ns[0]))
                 if first:
-                    clock = _Clock(time.monotonic(), min(first), speed)
+                    clock = _Clock(wall.now(), min(first), speed, wall)
             if clock is None:
                 continue
             if streamer is not None and chunk is not None and len(chunk):
@@ -198,15 +209,15 @@ def _paced_samples(
         _feed_until(clock, feeds, float(due[i]), stop, log)
         if stop.is_set():
             break
-        now = time.monotonic()
+        now = clock.wall.now()
         if due[i] > now:
-            time.sleep(min(float(due[i]) - now, MAX_SLEEP))
+            clock.wall.sleep(min(float(due[i]) - now, MAX_SLEEP))
             continue
         j = i + 1 + int(np.searchsorted(due[i + 1 :], now, side="right"))
         feeds.until(int(chunk.times_ns[j - 1]))
         streamer.send(prepared, i, j)
         if log is not None:
-            done = time.monotonic()
+            done = clock.wall.now()
             log.writelines(f"{sent + k - i} {done - due[k]:.6f}\n" for k in range(i, j))
             if sent == 0 and i == 0:
                 log.flush()  # the first sample's line at once: benchmarks time the first data by it

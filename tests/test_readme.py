@@ -30,3 +30,49 @@ def test_the_test_command_lints_before_testing() -> None:
     lint = [".venv/bin/ruff check .", ".venv/bin/ruff format --check .", ".venv/bin/mypy"]
     assert all(step in steps for step in lint)
     assert max(steps.index(step) for step in lint) < steps.index(".venv/bin/pytest")
+
+
+# The README is for a new user: short, and whatever it leaves out is one link away (docs/, benchmarks/).
+DOCS = [REPO / "README.md", REPO / "benchmarks" / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+
+
+def test_the_readme_is_short() -> None:
+    assert len((REPO / "README.md").read_text().splitlines()) <= 350
+
+
+def _cells(row: str) -> int:
+    # a cell's `|` inside backticks is still a separator in GitHub's tables; none of ours has one
+    return len(row.strip().strip("|").split("|"))
+
+
+def test_every_table_row_has_as_many_cells_as_its_header() -> None:
+    # renderers drop the cells beyond the header's (issue 29: rows of 8 cells under a 4-column header)
+    for doc in DOCS:
+        rows: list[str] = []
+        for line in [*doc.read_text().splitlines(), ""]:
+            if line.startswith("|"):
+                rows.append(line)
+                continue
+            if rows:
+                bad = [row for row in rows if _cells(row) != _cells(rows[0])]
+                assert not bad, (doc.name, rows[0], bad[:2])
+                rows = []
+
+
+def _anchor(heading: str) -> str:
+    # GitHub's rule: lower case, punctuation but `-` and `_` dropped, spaces to `-`
+    text = heading.strip().lower()
+    return re.sub(r"[^\w\- ]", "", text).replace(" ", "-")
+
+
+def test_relative_links_reach_a_file_and_its_heading() -> None:
+    for doc in DOCS:
+        for target in re.findall(r"\]\(([^)\s]+)\)", doc.read_text()):
+            if re.match(r"[a-z]+:", target):
+                continue
+            path, _, anchor = target.partition("#")
+            file = (doc.parent / path).resolve() if path else doc
+            assert file.exists(), (doc.name, target)
+            if anchor and file.suffix == ".md":
+                headings = re.findall(r"^#+ (.+)$", file.read_text(), flags=re.MULTILINE)
+                assert anchor in {_anchor(h) for h in headings}, (doc.name, target)

@@ -90,7 +90,7 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
 
 
 def displays_markdown() -> str:
-    """The README's "From RViz's displays to r2d2-viz" table."""
+    """The README's table of display types (in its "Bags" section)."""
     lines = ["| message type | RViz display | in Rerun |", "|---|---|---|"]
     lines += [f"| `{msgtype}` | {display} | {shown} |" for msgtype, (display, shown) in SHOWN_AS.items()]
     return "\n".join(lines)

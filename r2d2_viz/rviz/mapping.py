@@ -1,6 +1,6 @@
 """What each RViz display class and property becomes in Rerun: the converter's mapping, as a table.
 
-:func:`mapping_markdown` renders it for the README (a test keeps the two in step). Pure data; no rerun import.
+:func:`mapping_markdown` renders it for docs/rviz.md (a test keeps the two in step). Pure data; no rerun import.
 """
 
 from __future__ import annotations
@@ -127,11 +127,11 @@ def mapping_markdown() -> str:
 
 if (
     __name__ == "__main__"
-):  # python -m r2d2_viz.rviz.mapping: the README's table of RViz displays and their Rerun counterparts
+):  # python -m r2d2_viz.rviz.mapping: docs/rviz.md's table of RViz displays and their Rerun counterparts
     import argparse
 
     argparse.ArgumentParser(
         prog="python -m r2d2_viz.rviz.mapping",
-        description="Print the README's table of RViz displays and their Rerun counterparts (Markdown).",
+        description="Print docs/rviz.md's table of RViz displays and their Rerun counterparts (Markdown).",
     ).parse_args()
     print(mapping_markdown())

@@ -46,11 +46,13 @@ def load(path: Path) -> list[str]:
 
 
 def refusal(path: Path) -> str:
-    """Load ``path``, expect a UrdfError, check the one-line format and return the message."""
-    started = time.perf_counter()
+    """Load ``path``, expect a UrdfError, check the one-line format and return the message. Bounds in this file
+    are CPU time of the test's own thread (``time.thread_time``), not wall-clock time: a loaded machine does not
+    lengthen them, while an expanded entity or a quadratic walk still takes seconds of CPU."""
+    started = time.thread_time()
     with pytest.raises(UrdfError) as info:
         load(path)
-    assert time.perf_counter() - started < 1.0
+    assert time.thread_time() - started < 1.0
     message = str(info.value)
     assert "\n" not in message and "\r" not in message and len(message.splitlines()) == 1
     assert message.startswith(f"{path.name}: ")
@@ -142,18 +144,18 @@ def test_too_large_file_is_refused_without_reading_it(tmp_path: Path) -> None:
 
 
 def test_billion_laughs_is_refused_fast() -> None:
-    started = time.perf_counter()
+    started = time.thread_time()
     message = refusal(BAD / "billion_laughs.urdf")
-    assert time.perf_counter() - started < 1.0
+    assert time.thread_time() - started < 1.0
     assert "lol" not in message
 
 
 def test_bigger_billion_laughs_is_refused_fast(tmp_path: Path) -> None:
     decls = "".join(f'<!ENTITY e{i} "{("&e" + str(i - 1) + ";") * 50}">' for i in range(1, 40))
     path = write(tmp_path, f'<!DOCTYPE robot [<!ENTITY e0 "ha">{decls}]><robot name="&e39;"><link name="a"/></robot>')
-    started = time.perf_counter()
+    started = time.thread_time()
     assert "DOCTYPE declares entities" in refusal(path)
-    assert time.perf_counter() - started < 1.0
+    assert time.thread_time() - started < 1.0
 
 
 def test_external_entities_never_leak_file_content(tmp_path: Path) -> None:
@@ -248,9 +250,9 @@ def test_chain_of_3000_links_is_accepted_quickly(tmp_path: Path) -> None:
     ]
     parts.append("</robot>")
     path = write(tmp_path, "\n".join(parts))
-    started = time.perf_counter()
+    started = time.thread_time()
     assert load(path) == []
-    assert time.perf_counter() - started < 2.0
+    assert time.thread_time() - started < 2.0
 
 
 def test_long_cycle_is_reported_compactly(tmp_path: Path) -> None:
@@ -273,9 +275,9 @@ def test_long_mimic_chain_is_linear(tmp_path: Path) -> None:
         for i in range(1, n)
     )
     path = write(tmp_path, f"<robot>{links}{joints}</robot>")
-    started = time.perf_counter()
+    started = time.thread_time()
     assert load(path) == []
-    assert time.perf_counter() - started < 2.0
+    assert time.thread_time() - started < 2.0
 
 
 # --------------------------------------------------------------------------- meshes
