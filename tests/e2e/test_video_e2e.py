@@ -32,7 +32,7 @@ def test_a_video_recording_shows_its_camera_in_the_browser(chromium_browser, art
         source="http",
         timeout=120,
         ready=lambda img: _red(img) > 0.002,  # the first frame shown, not the end of playback
-        max_changed=1.0,
+        stable_polls=1,
         log_dir=artifacts_dir,
     )
     print(f"web --video: a camera frame after {shot.seconds:.1f} s, stages {shot.stages}")

@@ -147,3 +147,28 @@ def test_without_pyav_video_says_how_to_install_it(tmp_path: Path) -> None:
     assert result.returncode == 2
     assert result.stderr.strip().splitlines() == ["error: --video needs PyAV: pip install 'r2d2-viz[video]'"]
     assert not out.exists()
+
+
+def test_live_video_has_a_keyframe_a_second_under_two_megabits(tmp_path: Path) -> None:
+    """The live path (``--ros --video``): frames logged as they arrive (no reader thread), rate-capped."""
+    import rerun as rr
+
+    from r2d2_viz.sources.bag_displays import TopicMessage
+    from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
+    from r2d2_viz.viewer.notices import Notices
+
+    out, frames = tmp_path / "live.rrd", Frames()
+    rec = rr.RecordingStream("video_live_test")
+    rec.save(out)
+    feed = DisplayFeed(Notices(rec), clock="timestamp", fixed_frame="map", video=VideoFeed("av1", live=True))
+    times = [T0 + round(i * 1e9 / 30) for i in range(75)]
+    for i, t in enumerate(times):
+        feed.log(TopicMessage(t, CAMERA, "sensor_msgs/msg/Image", image(t, frames(i))))
+    feed.finish()
+    rec.flush()
+    rec.disconnect()
+    sample_times, samples, keys = _samples(out)
+    assert sample_times == times
+    assert [i for i, k in enumerate(keys) if k] == [0, 30, 60]
+    assert sum(map(len, samples)) * 8 / 2.5 <= 2_000_000  # bit/s over the 2.5 s
+    assert len(decoded_luma(samples, "av1")) == 75
