@@ -35,6 +35,7 @@ class Config:
     time: Any = "receive"
     fixed_frame: str | None = None
     rviz: Path | None = None
+    video: Any = None
 
 
 def _image() -> bytes:
