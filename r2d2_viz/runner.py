@@ -348,11 +348,14 @@ def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> None:
         result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=exclude)
         for topic in result.logged:
             skipped.pop(topic, None)
+        failed = "".join(f"; Rerun's MCAP reader cannot read {f.name} ({why})" for f, why in result.failed[:1])
+    else:
+        failed = ""
     if skipped:
         names = listed(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
         n = len(skipped)
         every = " (--list shows every topic)" if n > SHOWN + 1 else ""
-        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}")
+        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}{failed}")
 
 
 def _live_block(config: RunConfig) -> int:

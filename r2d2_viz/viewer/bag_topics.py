@@ -35,6 +35,8 @@ class OtherTopics:
     logged: tuple[str, ...]
     skipped: tuple[tuple[str, str], ...]
     """(topic, its message type) of what no decoder understood."""
+    failed: tuple[tuple[Path, str], ...] = ()
+    """(file, why) where Rerun's reader failed: those files' topics were not (all) shown."""
 
     def summary(self) -> str:
         if not self.skipped:
@@ -76,6 +78,7 @@ def other_topic_chunks(
         mcap,
         decoders=[d for d in DECODERS if d in McapReader.available_decoders()],
         exclude_topic_regex=[f"^{t}$" for t in exclude],
+        recover=True,  # a file without a summary (a recording cut short) is scanned from the start
     )
     source = _SOURCE_TIMELINE[time]
     kept = (_semantic(c, source, timeline) for c in reader.stream())
@@ -93,18 +96,31 @@ def log_other_topics(
     """Send the other topics of a bag's MCAP storage files to ``rec``; say which were skipped."""
     logged: set[str] = set()
     topics: dict[str, str] = {}
+    failed: list[tuple[Path, str]] = []
     for mcap in mcap_files:
-        chunks, reader = other_topic_chunks(mcap, time=time, timeline=timeline, exclude=exclude)
-        for channel in reader.info().channels:
-            if channel.topic not in exclude:
-                topics[channel.topic] = channel.schema.name if channel.schema else "?"
+        try:
+            chunks, reader = other_topic_chunks(mcap, time=time, timeline=timeline, exclude=exclude)
+            for channel in reader.info().channels:
+                if channel.topic not in exclude:
+                    topics[channel.topic] = channel.schema.name if channel.schema else "?"
 
-        def sent(chunks: Iterator[Chunk] = chunks) -> Iterator[Chunk]:
-            for chunk in chunks:
-                if chunk.timeline_names and not chunk.is_empty:
-                    logged.add(chunk.entity_path)
-                yield chunk
+            def sent(chunks: Iterator[Chunk] = chunks) -> Iterator[Chunk]:
+                for chunk in chunks:
+                    if chunk.timeline_names and not chunk.is_empty:
+                        logged.add(chunk.entity_path)
+                    yield chunk
 
-        rec.send_chunks(sent())
+            rec.send_chunks(sent())
+        except BaseException as exc:  # a second reader of a file ours has read: its failure is a warning
+            if not isinstance(exc, Exception) and type(exc).__name__ != "PanicException":  # pyo3's Rust panic
+                raise
+            failed.append((mcap, _why(exc)))
     skipped = tuple(sorted((t, m) for t, m in topics.items() if t not in logged))
-    return OtherTopics(tuple(sorted(logged & set(topics))), skipped)
+    return OtherTopics(tuple(sorted(logged & set(topics))), skipped, tuple(failed))
+
+
+def _why(exc: BaseException) -> str:
+    """The first line of an error, short enough for a warning line."""
+    lines = str(exc).strip().splitlines()
+    text = lines[0] if lines else type(exc).__name__
+    return text if len(text) <= 60 else text[:59] + "…"

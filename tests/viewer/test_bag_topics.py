@@ -7,10 +7,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 import rerun as rr
-from bagmaker import T0, TS, BagSpec, joint_state, storage_file, write_bag
+from bagmaker import T0, TS, TYPES, BagSpec, joint_state, storage_file, string, write_bag
+from conftest import REPO, cli
 from rerun.chunk import RrdReader
 
+from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.viewer.bag_topics import log_other_topics
 
 T = TS.types
@@ -99,3 +102,56 @@ def test_point_clouds_and_images_land_on_their_topics(tmp_path: Path) -> None:
     assert sorted(t for t, _ in image["Image:buffer"]) == [T0 + k * 10**8 + 2 for k in range(3)]
     assert image["CoordinateFrame:frame"][0][1] == ["camera_image_plane"]  # Rerun: in the pinhole of frame "camera"
     assert list(image["Image:buffer"][0][1][0]) == list(range(18))
+
+
+def _warnings(stderr: str) -> list[str]:
+    lines = [line for line in stderr.strip().splitlines() if not line.startswith("r2d2-viz: ")]  # the summary
+    assert not [line for line in lines if not line.startswith("warning: ")], stderr  # no error, no traceback
+    assert all(len(line) <= 300 for line in lines)
+    return lines
+
+
+@pytest.mark.slow
+def test_a_cut_recording_with_a_topic_without_display_replays_what_it_holds(
+    tmp_path: Path, tutorial_urdf: Path
+) -> None:
+    """A recorder killed mid-way (a rosbags bag cut at 60 %: no summary, no footer): exit 0, one warning (ours: the
+    file breaks off), and the undisplayed topic's recovered messages in the recording, through Rerun's reader."""
+    spec = BagSpec(types={**TYPES, "/chatter": "std_msgs/msg/String"})
+    for k in range(400):  # 10 kB strings: rosbags closes a chunk past 1 MiB, so the cut leaves whole chunks
+        t = T0 + k * 10**7
+        spec.add("/joint_states", t, joint_state(t, ["tilt"], [-k * 1e-3]))
+        spec.add("/chatter", t + 1, string(f"{k} " + "x" * 10_000))
+    data = storage_file(write_bag(tmp_path / "bag", spec)).read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: int(len(data) * 0.6)])
+    with open_bag(cut, warn=lambda _: None) as bag:
+        chatter = [t for t, _ in bag.raw("/chatter")]
+    assert 0 < len(chatter) < 400
+
+    out = tmp_path / "out.rrd"
+    run = cli("--bag", str(cut), "--urdf", str(tutorial_urdf), "--save", str(out))
+    assert run.returncode == 0, run.stderr
+    assert _warnings(run.stderr) == [
+        f"warning: {cut}: the file breaks off (no footer, no index): recovered {2 * len(chatter)} messages"
+    ]
+    shown = _read(out)["/chatter"]["TextDocument:text"]
+    assert sorted({t for t, _ in shown}) == chatter
+
+
+@pytest.mark.slow
+def test_a_file_rerun_cannot_read_is_one_warning(tmp_path: Path) -> None:
+    """The spec's unchunked variant without a summary: ours reads it, Rerun's reader refuses it (it recovers only
+    chunked files). Exit 0; one line names the file and says its undisplayed topic was not shown, and why."""
+    mcap = REPO / "tests" / "data" / "mcap_conformance" / "TenMessages" / "TenMessages.mcap"
+    rec = rr.RecordingStream("test_bag_topics")
+    rec.save(tmp_path / "direct.rrd")
+    result = log_other_topics(rec, [mcap])
+    rec.disconnect()
+    assert result.logged == () and [f for f, _ in result.failed] == [mcap]
+
+    run = cli("--bag", str(mcap), "--save", str(tmp_path / "out.rrd"))
+    assert run.returncode == 0, run.stderr
+    (line,) = [line for line in _warnings(run.stderr) if "example" in line]
+    assert line.startswith(f"warning: {mcap}: 1 topic with no display, not shown: example (Example)")
+    assert "Rerun's MCAP reader cannot read TenMessages.mcap" in line

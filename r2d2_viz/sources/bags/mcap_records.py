@@ -40,6 +40,10 @@ class BrokenError(Exception):
     """The file ends or is damaged here."""
 
 
+READ_ERRORS = (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError)
+"""What reading a damaged record or chunk raises (the codecs raise ``RuntimeError`` / ``ValueError``)."""
+
+
 def string_at(buf: bytes | mmap.mmap | memoryview, at: int) -> tuple[str, int]:
     (n,) = U32.unpack_from(buf, at)
     end = at + 4 + n
@@ -116,6 +120,19 @@ def chunk_index(buf: mmap.mmap, at: int, stop: int, size: int) -> ChunkIndex:
     if offset + length > size:
         raise BrokenError("a chunk index points past the end of the file")
     return ChunkIndex(start_ns, end_ns, offset, length, offsets)
+
+
+def index_counts(buf: mmap.mmap, c: ChunkIndex) -> dict[int, int] | None:
+    """Messages per channel in a chunk, from the lengths of its message index records (None: one is unusable)."""
+    counts: dict[int, int] = {}
+    for channel_id, at in c.index_offsets.items():
+        if at + 15 > len(buf) or buf[at] != OP_MESSAGE_INDEX:
+            return None
+        (n,) = U32.unpack_from(buf, at + 11)
+        if n % 16:
+            return None
+        counts[channel_id] = n // 16
+    return counts
 
 
 def message_times(data: memoryview, start: int, end: int) -> Iterator[tuple[int, int]]:

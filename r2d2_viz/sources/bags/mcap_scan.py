@@ -3,7 +3,9 @@
 none of the wanted topics, or lie outside the time asked for, are never read, and a chunk's wanted messages are
 found from its message indexes as numpy arrays, not record by record. A file without a summary (a recorder that was
 killed leaves none) is walked once when opened, record by record, up to the first damage, and the places, times
-and channels of its chunks noted: later reads go through that index as through the file's own. The file is mmapped:
+and channels of its chunks noted: later reads go through that index as through the file's own. What a valid summary
+lacks (every summary record is optional) is found in the data section by :mod:`.mcap_summary`, reading only what
+that needs; no chunk index: the data section is walked once as for a file without a summary. The file is mmapped:
 uncompressed chunks are handed on as views of the file's pages, not copies. MCAP: https://mcap.dev/spec; lz4 and zstd
 come with ``rosbags``.
 
@@ -32,6 +34,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     OP_MESSAGE,
     OP_SCHEMA,
     OP_STATISTICS,
+    READ_ERRORS,
     U64,
     BrokenError,
     Channel,
@@ -50,6 +53,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     walk_messages,
     walk_records,
 )
+from r2d2_viz.sources.bags.mcap_summary import Definitions, count_messages, find_definitions
 from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, topic_tuple
 
 
@@ -63,8 +67,9 @@ class McapScan:
         """Damage met while reading (kind → chunks skipped); the bag says it and clears it."""
         self._damaged: set[int] = set()
         """File offsets of the chunks found damaged (not read again)."""
-        self.channels: dict[int, Channel] = {}
-        self.schemas: dict[int, Schema] = {}
+        self._found = Definitions()
+        self.channels: dict[int, Channel] = self._found.channels
+        self.schemas: dict[int, Schema] = self._found.schemas
         self.chunks: list[ChunkIndex] | None = None
         """The chunk index: the summary's, or the one noted by the walk of a file without one (None: messages lie
         outside chunks, and every read walks the file from the start)."""
@@ -99,6 +104,7 @@ class McapScan:
             self.note = "its summary points outside the file"
             return False
         chunks: list[ChunkIndex] = []
+        counted = False
         try:
             for op, at, stop in walk_records(buf, summary_start, end):
                 if op == OP_SCHEMA:
@@ -109,16 +115,26 @@ class McapScan:
                     chunks.append(chunk_index(buf, at, stop, size))
                 elif op == OP_STATISTICS:
                     span, self._counts = statistics(buf, at, stop)
-                    self._span = span or self._span
+                    self._span, counted = span or self._span, True
         except (BrokenError, struct.error, IndexError) as exc:
             self.note = f"its summary is damaged ({exc or type(exc).__name__})"
-            self.channels, self.schemas, self._counts = {}, {}, {}
+            self.channels.clear()
+            self.schemas.clear()
+            self._counts = {}
             return False
-        if not chunks and self._counts and sum(self._counts.values()):
-            return False  # messages outside chunks: only a scan finds them
+        if not chunks and (not counted or self._span is not None):
+            return False  # no chunk index (or messages outside chunks): one walk through the data section finds them
         self.chunks = sorted(chunks, key=lambda c: (c.start_ns, c.offset))
-        if chunks and self._span is None:
+        if not counted:  # no Statistics record: counted from the chunks (damaged ones skipped)
+            self._counts, self._span, damaged = count_messages(buf, self.chunks, self._found)
+            for c in (c for c in self.chunks if c.offset in damaged):
+                self._skip(c, damaged[c.offset])
+        elif chunks and self._span is None:
             self._span = (min(c.start_ns for c in chunks), max(c.end_ns for c in chunks))
+        try:  # channels (and their schemas) with messages but no copy in the summary
+            find_definitions(buf, summary_start, {c for c, n in self._counts.items() if n}, self._found)
+        except READ_ERRORS as exc:
+            self.note = f"its data section is damaged ({exc or type(exc).__name__})"
         return True
 
     # --- reading ------------------------------------------------------------------------------------------------
@@ -130,7 +146,7 @@ class McapScan:
     def _wanted(self, topics: Collection[str]) -> dict[int, int]:
         """channel id → its topic's index in :func:`topic_tuple` order."""
         order = topic_tuple(topics)
-        return {c.id: order.index(c.topic) for c in self.channels.values() if c.topic in order}
+        return {c.id: order.index(c.topic) for c in self.channels.values() if c.topic in order and c.schema_id}
 
     def blocks(
         self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
@@ -145,7 +161,8 @@ class McapScan:
             return
         chosen = [c for c in self.chunks if c.end_ns >= lo and c.start_ns < hi and holds(c, wanted)]
         for cluster in overlapping(chosen):
-            parts = [b for c in cluster if (b := self._chunk_block(c, order, wanted, lo, hi)) is not None]
+            in_file_order = sorted(cluster, key=lambda c: c.offset)  # messages at one time: the file's order
+            parts = [b for c in in_file_order if (b := self._chunk_block(c, order, wanted, lo, hi)) is not None]
             if len(parts) == 1:
                 yield parts[0]
             elif parts:
@@ -161,14 +178,20 @@ class McapScan:
             data = chunk_data(self._map, c.offset, c.offset + c.length)
             found = indexed(self._map, c, order, wanted, data)
             block = found if found is not None else walk_messages(data, order, wanted)
-        except (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError) as exc:
-            kind = str(exc) if isinstance(exc, BrokenError) else f"cannot read ({type(exc).__name__})"
-            self.problems[kind] = self.problems.get(kind, 0) + 1
-            self._damaged.add(c.offset)
+        except READ_ERRORS as exc:
+            self._skip(c, exc)
             return None
         keep = (block.times_ns >= lo) & (block.times_ns < hi)
         block = block if keep.all() else block.take(np.flatnonzero(keep))
         return in_time_order(block) if len(block) else None
+
+    def _skip(self, c: ChunkIndex, exc: BaseException) -> None:
+        """A damaged chunk: counted in :attr:`problems` (once) and not read again."""
+        if c.offset in self._damaged:
+            return
+        kind = str(exc) if isinstance(exc, BrokenError) else f"cannot read ({type(exc).__name__})"
+        self.problems[kind] = self.problems.get(kind, 0) + 1
+        self._damaged.add(c.offset)
 
     # --- files without a summary ----------------------------------------------------------------------------------
 
@@ -191,22 +214,15 @@ class McapScan:
                     return
                 if op == OP_CHUNK:
                     data = chunk_data(self._map, at - 9, stop)
-                    self._note_definitions(data, 0, len(data))
+                    self._found.note(data, 0, len(data))
                     yield op, at - 9, data, 0, len(data)
                 elif op in (OP_SCHEMA, OP_CHANNEL):
-                    self._note_definitions(view, at - 9, stop)
+                    self._found.note(view, at - 9, stop)
                 elif op == OP_MESSAGE:
                     yield OP_CHUNK, at - 9, view, at - 9, stop
-        except (BrokenError, struct.error, IndexError, ValueError, RuntimeError, OverflowError, MemoryError) as exc:
+        except READ_ERRORS as exc:
             if not self.note:
                 self.note = f"the file is damaged ({exc or type(exc).__name__})"
-
-    def _note_definitions(self, data: memoryview, start: int, end: int) -> None:
-        for op, at, _ in walk_records(data, start, end):
-            if op == OP_SCHEMA:
-                self.schemas.update([schema_at(data, at)])
-            elif op == OP_CHANNEL:
-                self.channels.update([channel_at(data, at)])
 
     def _scan_blocks(self, order: tuple[str, ...], wanted: dict[int, int], lo: int, hi: int) -> Iterator[Block]:
         for _, _, data, start, end in self._walk_file():
@@ -245,6 +261,8 @@ class McapScan:
 def _topics(channels: dict[int, Channel], schemas: dict[int, Schema], counts: dict[int, int]) -> dict[str, TopicInfo]:
     topics: dict[str, TopicInfo] = {}
     for channel in channels.values():
+        if not channel.schema_id:
+            continue  # no schema (MCAP's schema id 0): nothing a ROS message could be decoded by
         schema = schemas.get(channel.schema_id, Schema("", "", ""))
         old = topics.get(channel.topic)
         count = (old.count if old else 0) + counts.get(channel.id, 0)
