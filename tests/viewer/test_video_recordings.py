@@ -172,3 +172,15 @@ def test_live_video_has_a_keyframe_a_second_under_two_megabits(tmp_path: Path) -
     assert [i for i, k in enumerate(keys) if k] == [0, 30, 60]
     assert sum(map(len, samples)) * 8 / 2.5 <= 2_000_000  # bit/s over the 2.5 s
     assert len(decoded_luma(samples, "av1")) == 75
+
+
+def test_a_seek_into_passed_through_video_starts_at_its_next_keyframe(tmp_path: Path) -> None:
+    packets = _h264_packets(40, gop=20)
+    samples = [("/foxglove/video", T0 + i * 33_000_000, "h264", p) for i, p in enumerate(packets)]
+    write_video_bag(tmp_path / "video", samples)
+    out = tmp_path / "v.rrd"
+    result = cli("--bag", str(tmp_path / "video"), "--save", str(out), "--start-offset", "0.2")  # frame 7 on
+    assert result.returncode == 0, result.stderr
+    times, passed, keys = _samples(out, "/foxglove/video")
+    assert passed == packets[20:] and keys[0] and times[0] == T0 + 20 * 33_000_000
+    assert sum("keyframe" in line for line in result.stderr.splitlines()) == 1, result.stderr
