@@ -24,8 +24,9 @@ if TYPE_CHECKING:
 Codec = Literal["AV1", "H264", "H265", "VP9"]
 EncoderName = Literal["av1", "h264"]
 INSTALL = "pip install 'r2d2-viz[video]'"
-VIDEO_FORMATS: dict[str, Codec] = {"h264": "H264", "avc": "H264", "h265": "H265", "hevc": "H265", "av1": "AV1"}
-VIDEO_FORMATS["vp9"] = "VP9"
+VIDEO_FORMATS: dict[str, Codec] = {
+    "h264": "H264", "avc": "H264", "h265": "H265", "hevc": "H265", "av1": "AV1", "vp9": "VP9",
+}  # fmt: skip
 """A message's ``format`` (lower case) → the Rerun codec of its samples."""
 PIXEL_FORMATS = {"RGB": "rgb24", "BGR": "bgr24", "RGBA": "rgba", "BGRA": "bgra", "L": "gray"}
 VIDEO_ENCODINGS = frozenset({"rgb8", "bgr8", "rgba8", "bgra8", "mono8", "8UC1", "8UC3", "8UC4"})
