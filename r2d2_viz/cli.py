@@ -99,7 +99,8 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="+",
         default=None,
         metavar="TOPIC",
-        help="replay only these topics of the bag, like ros2 bag play --topics",
+        help="replay only these topics of the bag, like ros2 bag play --topics (transforms: name /tf and "
+        "/tf_static too; the robot's model is still read from /robot_description)",
     )
     bags.add_argument(
         "--fixed-frame",

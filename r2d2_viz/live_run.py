@@ -42,7 +42,7 @@ from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
-from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
+from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
@@ -114,6 +114,8 @@ def run_on(
     model = _Model(config)
     batches = _settle(source, model, deadline)
     plan, view = _plan(config, model.robot, batches)
+    # the graph's log, diagnostics, fixes and sensors when the view is planned: their views (later ones: none)
+    view = dataclasses.replace(view, layout=with_telemetry(view.layout, source.display_topics))
     output = _Output(config.sink)
     lateness = LatenessLog.from_env()
     try:

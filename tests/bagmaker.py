@@ -112,3 +112,39 @@ def write_bag(path: Path, spec: BagSpec, *, storage: str = "mcap", version: int 
 
 def storage_file(bag_dir: Path) -> Path:
     return next(p for p in bag_dir.iterdir() if p.suffix in (".mcap", ".db3"))
+
+
+def write_split_bag(path: Path, parts: Sequence[BagSpec], *, storage: str = "mcap", metadata: bool = True) -> Path:
+    """A bag of several storage files, as ``ros2 bag record --max-bag-duration`` splits one: each part written by
+    rosbags as a bag of its own, its storage file moved into ``path`` as ``<path name>_<k>`` and, with ``metadata``,
+    one metadata.yaml listing them all (rosbags' own, its file list and per-topic counts merged)."""
+    path.mkdir()
+    files: list[str] = []
+    info: dict | None = None
+    counts: dict[tuple[str, str], dict] = {}
+    yaml = YAML(typ="safe")
+    for k, part in enumerate(parts):
+        single = write_bag(path.parent / f".{path.name}-part{k}", part, storage=storage)
+        own = storage_file(single)
+        name = f"{path.name}_{k}{own.suffix}"
+        own.rename(path / name)
+        files.append(name)
+        top = yaml.load((single / "metadata.yaml").read_text())
+        for topic in top["rosbag2_bagfile_information"]["topics_with_message_count"]:
+            key = topic["topic_metadata"]["name"], topic["topic_metadata"]["type"]
+            if key in counts:
+                counts[key]["message_count"] += topic["message_count"]
+            else:
+                counts[key] = topic
+        info = info or top
+        (single / "metadata.yaml").unlink()
+        single.rmdir()
+    if metadata and info is not None:
+        top = info["rosbag2_bagfile_information"]
+        top["relative_file_paths"] = files
+        top["files"] = [{"path": name} for name in files]
+        top["topics_with_message_count"] = list(counts.values())
+        top["message_count"] = sum(t["message_count"] for t in counts.values())
+        with (path / "metadata.yaml").open("w") as f:
+            yaml.dump(info, f)
+    return path

@@ -19,7 +19,7 @@ TYPES = {
     "/markers": "visualization_msgs/msg/MarkerArray",
     "/map": "nav_msgs/msg/OccupancyGrid",
     "/odom": "nav_msgs/msg/Odometry",
-    "/chatter": "std_msgs/msg/String",
+    "/chatter": "std_msgs/msg/ColorRGBA",  # a type no display draws
 }
 SCAN_TIMES = [T0 + k * S // 10 for k in range(20)]  # 10 Hz for 2 s
 RANGES = [1.0, 2.0, float("nan"), 50.0]  # beams at 0°, 90°, 180°, 270°: NaN and 50 m (> range_max 10) dropped
@@ -114,6 +114,6 @@ def write_display_bag(path: Path, *, storage: str = "mcap") -> Path:
     spec.add("/markers", SPHERE_DELETED, marker_array(marker(2, 2, "balls", 7)))
     for k in range(3):
         spec.add("/odom", T0 + k * S, odometry(int(T0 // S) + k, float(k)))
-    spec.add("/chatter", T0, cdr(T("std_msgs/msg/String")(data="hi")))
+    spec.add("/chatter", T0, cdr(color(1.0, 0.5, 0.0)))
     spec.messages.sort(key=lambda m: m[1])
     return write_bag(path, spec, storage=storage)

@@ -212,4 +212,66 @@ def samples() -> dict[str, bytes]:
         ),
         T("geometry_msgs/msg/TwistStamped")(header=header(), twist=twist),
     ]
-    return {m.__msgtype__: cdr(m) for m in msgs}
+    msgs += _telemetry_samples()
+    out = {m.__msgtype__: cdr(m) for m in msgs}
+    out["rosgraph_msgs/msg/Log"] = _ros1_log()
+    return out
+
+
+ROS1_LOG_AS_CDR = "std_msgs/Header header\nbyte level\nstring name\nstring msg\nstring file\nstring function\n"
+"""ROS 1's rosgraph_msgs/Log once a ROS 1 bag's message is converted to CDR (rosbags' ros1_to_cdr with ROS 2's
+header, which has no ``seq``)."""
+
+
+def _ros1_log() -> bytes:
+    from rosbags.typesys import get_types_from_msg
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    store.register(get_types_from_msg(ROS1_LOG_AS_CDR + "uint32 line\nstring[] topics\n", "rosgraph_msgs/msg/Log"))
+    msg = store.types["rosgraph_msgs/msg/Log"](header(), 4, "node", "text", "f.cpp", "fn", 3, ["/a"])
+    return bytes(store.serialize_cdr(msg, "rosgraph_msgs/msg/Log"))
+
+
+def _telemetry_samples() -> list[Any]:
+    """The log, diagnostics, sensors and numbers (:mod:`r2d2_viz.msgs.telemetry`)."""
+    stamp = T("builtin_interfaces/msg/Time")(sec=1, nanosec=2)
+    kv = T("diagnostic_msgs/msg/KeyValue")(key="v", value="1.5")
+    status = T("diagnostic_msgs/msg/DiagnosticStatus")(level=1, name="a/b", message="m", hardware_id="h", values=[kv])
+    cov = np.zeros(9)
+    msgs = [
+        T("rcl_interfaces/msg/Log")(stamp=stamp, level=30, name="n", msg="m", file="f", function="g", line=1),
+        T("diagnostic_msgs/msg/DiagnosticArray")(header=header(), status=[status]),
+        T("std_msgs/msg/String")(data="hello"),
+        T("sensor_msgs/msg/Imu")(header(), quat(), cov, vec(1, 2, 3), cov, vec(0, 0, 9.8), cov),
+        T("sensor_msgs/msg/NavSatFix")(
+            header(), T("sensor_msgs/msg/NavSatStatus")(status=0, service=1), 48.0, 2.0, 30.0, cov, 0
+        ),
+        T("sensor_msgs/msg/BatteryState")(
+            header(),
+            12.0,
+            20.0,
+            -1.0,
+            5.0,
+            10.0,
+            10.0,
+            0.5,
+            2,
+            1,
+            2,
+            True,
+            np.zeros(0, np.float32),
+            np.zeros(0, np.float32),
+            "base",
+            "SN",
+        ),
+        T("sensor_msgs/msg/Temperature")(header=header(), temperature=21.5, variance=0.0),
+        T("sensor_msgs/msg/FluidPressure")(header=header(), fluid_pressure=101325.0, variance=0.0),
+        T("sensor_msgs/msg/RelativeHumidity")(header=header(), relative_humidity=0.4, variance=0.0),
+        T("sensor_msgs/msg/Illuminance")(header=header(), illuminance=300.0, variance=0.0),
+        T("std_msgs/msg/Bool")(data=True),
+    ]
+    for kind, value in (("Float32", 1.5), ("Float64", 2.5)):
+        msgs.append(T(f"std_msgs/msg/{kind}")(data=value))
+    for bits in (8, 16, 32, 64):
+        msgs += [T(f"std_msgs/msg/Int{bits}")(data=-3), T(f"std_msgs/msg/UInt{bits}")(data=3)]
+    return msgs

@@ -254,23 +254,24 @@ def test_blueprint_entry_point_refuses_what_is_not_a_blueprint(tmp_path: Path) -
 def test_a_bag_with_78_undrawn_topics_says_so_in_one_short_line(tmp_path: Path) -> None:
     """A Gazebo bag's 78 topics no display draws used to be one 6,000-character line: now the count and the first
     few names (the bag written by rosbags; .db3, so Rerun's own MCAP decoders take none of them)."""
-    from bagmaker import T0, BagSpec, string, write_bag
+    from bagmaker import T0, BagSpec, write_bag
+    from msgs_build import cdr, color
 
     topics = [f"/gazebo/link_{k:02d}/diagnostics_with_a_long_name" for k in range(78)]
-    spec = BagSpec(types={t: "std_msgs/msg/String" for t in topics})
+    spec = BagSpec(types={t: "std_msgs/msg/ColorRGBA" for t in topics})
     for k, topic in enumerate(topics):
-        spec.add(topic, T0 + k, string("x"))
+        spec.add(topic, T0 + k, cdr(color(1.0, 0.0, 0.0)))
     bag = write_bag(tmp_path / "gz", spec, storage="sqlite3")
     result = cli("--bag", str(bag), "--save", str(tmp_path / "gz.rrd"), cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     [line] = [line for line in result.stderr.splitlines() if "not shown" in line]
     assert "78 topics with no display, not shown: " in line and "and 73 more (--list shows every topic)" in line
-    assert f"{topics[0]} (std_msgs/msg/String)" in line and topics[-1] not in line
+    assert f"{topics[0]} (std_msgs/msg/ColorRGBA)" in line and topics[-1] not in line
     path_len = len(str(tmp_path))  # the line names the bag; its folder (longer under xdist) is not the list
     assert max(len(line) - path_len for line in result.stderr.splitlines()) < 450, result.stderr
     listed = cli("--bag", str(bag), "--list", cwd=tmp_path)  # all of them, like ros2 bag info
     assert listed.returncode == 0 and listed.stderr == "", listed.stderr
-    assert listed.stdout.splitlines() == [f"{t} [std_msgs/msg/String] 1 message" for t in topics]
+    assert listed.stdout.splitlines() == [f"{t} [std_msgs/msg/ColorRGBA] 1 message" for t in topics]
 
 
 def test_the_summary_names_what_it_counted(tmp_path: Path, tutorial_urdf: Path) -> None:

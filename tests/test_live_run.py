@@ -156,6 +156,30 @@ def test_kilted_node_recorded_at_source_timestamps_and_streamed_to_a_viewer(tmp_
     assert _check_poses(received, header_time=False) >= 0.995 * COUNT
 
 
+@pytest.mark.slow
+def test_a_nodes_log_arrives_with_its_levels_in_a_log_view(tmp_path: Path) -> None:
+    """A real Jazzy node logs a line at each level: /rosout (rcl_interfaces/msg/Log, which every node publishes)
+    is read like a bag's, each line a TextLog with its level and rqt_console's text, in a log view."""
+    from rrd import blueprint_components
+    from sources.live.nodes.publish_robot import LOG_LINES
+
+    rrd = tmp_path / "log.rrd"
+    result = _scenario("jazzy", [["--save", str(rrd), "--duration", "8"]], node=["--log"])
+    [run] = result["runs"]
+    assert run["rc"] == 0, run["stderr"][-3000:]
+    rows = read_recording(rrd)["/rosout"]
+    lines = [
+        (level[0], text[0])
+        for level, text in zip(rows.temporal["TextLog:level"], rows.temporal["TextLog:text"], strict=True)
+        if text is not None
+    ]
+    assert [level for level, _ in lines] == [level for level, _ in LOG_LINES]
+    for (level, text), (_, method) in zip(lines, LOG_LINES, strict=True):
+        assert text.startswith(f"[r2d2_viz_test_robot] {level} line (") and "publish_robot.py:main:" in text, method
+    names = [c.get("ViewBlueprint:display_name") for c in blueprint_components(rrd).values()]
+    assert ["Log: /rosout"] in names
+
+
 def test_list_needs_ros_and_ros_refuses_a_bag(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--list"]) == 2
     assert main(["--ros", "--bag", "x.mcap"]) == 2

@@ -9,6 +9,7 @@ alone, since a dying worker also takes down the other conversions in flight in i
 
 from __future__ import annotations
 
+import glob
 import json
 import multiprocessing
 import os
@@ -76,7 +77,11 @@ def plan_jobs(
     made_by = version() + (f"+video-{video}" if video else "")
     check_out_dir(out_dir)
     found: dict[str, list[BagId]] = {}
+    seen: set[Path] = set()
     for path in bags:
+        if (resolved := path.resolve()) in seen:  # one bag given twice (a shell glob and a name): converted once
+            continue
+        seen.add(resolved)
         try:
             bag = identify(path)
         except UsageError as exc:
@@ -111,15 +116,13 @@ def check_out_dir(out_dir: Path) -> None:
 
 
 def _topics(bag: Path) -> str | None:
-    """The bag's topics as JSON ``{topic: [type, count]}``, from its index (rosbags); None if it cannot say."""
-    try:
-        from rosbags.highlevel import AnyReader
+    """The bag's topics as JSON ``{topic: [type, count]}``, from its index (the app's own reader, as the conversion
+    reads it); None if it cannot say."""
+    from r2d2_viz.sources.bags.bag import open_bag
 
-        with AnyReader([bag]) as reader:
-            topics: dict[str, list[object]] = {}
-            for c in reader.connections:
-                count = int(topics[c.topic][1]) if c.topic in topics else 0  # type: ignore[call-overload]
-                topics[c.topic] = [c.msgtype, count + c.msgcount]
+    try:
+        with open_bag(bag, warn=lambda _: None) as reader:
+            topics = {t.name: [t.msgtype, t.count] for t in reader.topics.values()}
         return json.dumps(topics, sort_keys=True)
     except Exception:
         return None
@@ -162,13 +165,10 @@ def convert_one(job: Job) -> Outcome:
 def remove_partials(jobs: Iterable[Job]) -> None:
     """What killed workers left: the hidden temporary files of these outputs (and the runner's own, inside)."""
     for job in jobs:
-        mine = f".{job.out.name}.fleet-*.partial"
-        layout = f".{job.out.with_suffix('.rbl').name}.fleet-*.partial"
-        for pattern in (
-            mine,
-            f".{mine}.*.partial",
-            layout,
-        ):  # ours, and the runner's own beside it (".<ours>.<pid>.partial")
+        mine = f".{glob.escape(job.out.name)}.fleet-*.partial"  # a bag named run[4]: its brackets are no pattern
+        layout = f".{glob.escape(job.out.with_suffix('.rbl').name)}.fleet-*.partial"
+        # ours, the runner's own beside it (".<ours>.<pid>.partial"), the layout's
+        for pattern in (mine, f".{mine}.*.partial", layout):
             for leftover in job.out.parent.glob(pattern):
                 leftover.unlink(missing_ok=True)
 
@@ -182,30 +182,67 @@ def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:
                 if _pool([job], 1, on_done):
                     on_done(Outcome(job, "its worker process died (killed, or out of memory)"))
     except KeyboardInterrupt:
-        for child in multiprocessing.active_children():
-            child.terminate()  # the runner turns SIGTERM into a clean stop: its partial file removed
+        _stop_workers()  # the runner turns SIGTERM into a clean stop: its partial file removed
         return False
     finally:
         remove_partials(jobs)
     return True
 
 
+def _ignore_sigint() -> None:
+    """A pool worker ignores Ctrl-C (a terminal sends it to every process of the run): the main process stops the
+    workers itself, with SIGTERM, so that none starts another conversion."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _convert_in_pool(job: Job) -> Outcome:
+    """:func:`convert_one` in a pool's worker: SIGTERM stops the conversion (its partial file removed) and ends the
+    worker, so the pool cannot hand it the next bag."""
+    try:
+        with sigterm_raises():
+            return convert_one(job)
+    except KeyboardInterrupt:
+        os._exit(130)
+
+
 def _pool(jobs: list[Job], workers: int, on_done: Progress) -> list[Job]:
-    """Run ``jobs``; the ones whose worker died are returned."""
+    """Run ``jobs``; the ones whose worker died are returned. Ctrl-C: the bags not started are dropped, the
+    workers stopped and awaited, the conversions that finished meanwhile reported, and KeyboardInterrupt raised."""
     broken: list[Job] = []
     context = multiprocessing.get_context("spawn")  # no fork of a process holding Rerun's threads
-    with ProcessPoolExecutor(max_workers=max(1, min(workers, len(jobs) or 1)), mp_context=context) as pool:
-        pending: dict[Future[Outcome], Job] = {pool.submit(convert_one, job): job for job in jobs}
-        try:
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in done:
-                    job = pending.pop(future)
-                    try:
-                        on_done(future.result())
-                    except BrokenProcessPool:
-                        broken.append(job)
-        except KeyboardInterrupt:
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
+    pool = ProcessPoolExecutor(
+        max_workers=max(1, min(workers, len(jobs) or 1)), mp_context=context, initializer=_ignore_sigint
+    )
+    pending: dict[Future[Outcome], Job] = {pool.submit(_convert_in_pool, job): job for job in jobs}
+    try:
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                job = pending.pop(future)
+                try:
+                    on_done(future.result())
+                except BrokenProcessPool:
+                    broken.append(job)
+    except KeyboardInterrupt:
+        pool.shutdown(wait=False, cancel_futures=True)  # no new conversion starts
+        _stop_workers()
+        for future in pending:  # finished as the interrupt came: they count
+            if future.done() and not future.cancelled() and future.exception() is None:
+                on_done(future.result())
+        raise
+    pool.shutdown(wait=True)
     return broken
+
+
+def _stop_workers(timeout_s: float = 60.0) -> None:
+    """SIGTERM to every worker (each removes its partial file and ends), then wait for them; SIGKILL to one that
+    takes longer than ``timeout_s`` (what it left is removed by :func:`remove_partials`)."""
+    children = multiprocessing.active_children()
+    for child in children:
+        child.terminate()
+    deadline = time.monotonic() + timeout_s
+    for child in children:
+        child.join(max(0.0, deadline - time.monotonic()))
+        if child.is_alive():
+            child.kill()
+            child.join(5)

@@ -76,7 +76,9 @@ def messages_per_type(topics: dict[str, list[object]]) -> dict[str, int]:
 
 
 def max_joint_speed(times_ns: np.ndarray, values: np.ndarray, names: list[str]) -> tuple[float | None, str | None]:
-    """The largest |Δq| / Δt between consecutive samples, and whose (None: fewer than two samples)."""
+    """The largest |Δq| / Δt between consecutive samples, and whose (None: fewer than two samples, no joint)."""
+    if len(times_ns) < 2 or not names:  # a recording without a robot, or without joints
+        return None, None
     order = np.argsort(times_ns, kind="stable")
     times_ns, values = times_ns[order].astype(np.int64), values[order]
     last = np.r_[times_ns[1:] != times_ns[:-1], True]  # several rows at one time: the last one stands

@@ -8,7 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from r2d2_viz.errors import one_line
-from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, video
+from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry, video
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 
@@ -36,7 +36,29 @@ DECODERS: dict[str, Decoder] = {
     "geometry_msgs/msg/PolygonStamped": poses.decode_polygon_stamped,
     "geometry_msgs/msg/WrenchStamped": poses.decode_wrench_stamped,
     "geometry_msgs/msg/TwistStamped": poses.decode_twist_stamped,
+    "rcl_interfaces/msg/Log": telemetry.decode_log,
+    "rosgraph_msgs/msg/Log": telemetry.decode_ros1_log,
+    "diagnostic_msgs/msg/DiagnosticArray": telemetry.decode_diagnostics,
+    "std_msgs/msg/String": telemetry.decode_string,
+    "sensor_msgs/msg/Imu": telemetry.decode_imu,
+    "sensor_msgs/msg/NavSatFix": telemetry.decode_navsatfix,
+    "sensor_msgs/msg/BatteryState": telemetry.decode_battery,
+    **telemetry.SCALAR_DECODERS,
+    **telemetry.NUMBER_DECODERS,
 }
+
+VIEWS: dict[str, str] = {
+    "rcl_interfaces/msg/Log": "log",
+    "rosgraph_msgs/msg/Log": "log",
+    "std_msgs/msg/String": "log",
+    "diagnostic_msgs/msg/DiagnosticArray": "state",
+    "sensor_msgs/msg/NavSatFix": "map",
+    "sensor_msgs/msg/Imu": "plot",
+    "sensor_msgs/msg/BatteryState": "plot",
+    **dict.fromkeys([*telemetry.SCALAR_DECODERS, *telemetry.NUMBER_DECODERS], "plot"),
+}
+"""The view beside the 3D one that a type needs: a log, a state timeline, a map, a plot (NavSatFix's altitude is
+plotted too)."""
 
 
 SHOWN_AS: dict[str, tuple[str, str]] = {
@@ -85,14 +107,39 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     "geometry_msgs/msg/PolygonStamped": ("Polygon", "a closed `LineStrips3D`"),
     "geometry_msgs/msg/WrenchStamped": ("Wrench", "`Arrows3D`: force, and torque"),
     "geometry_msgs/msg/TwistStamped": ("Twist", "`Arrows3D`: linear and angular velocity"),
+    "rcl_interfaces/msg/Log": (
+        "rqt_console",
+        "`TextLog` with its level (FATAL as Rerun's CRITICAL), `[node] text (file:function:line)`, in a log view",
+    ),
+    "rosgraph_msgs/msg/Log": ("rqt_console", "as above, ROS 1's levels 1-16 mapped to the same names"),
+    "diagnostic_msgs/msg/DiagnosticArray": (
+        "rqt_robot_monitor",
+        "`StateChange` per status on `<topic>/<name>` (OK, WARN, ERROR, STALE and its message) in a state view; "
+        "its key/values as fields (numbers plottable)",
+    ),
+    "std_msgs/msg/String": ("rqt_console", "`TextLog` without a level, in the log view"),
+    "sensor_msgs/msg/Imu": (
+        "(rviz_imu_plugin)",
+        "orientation as x/y/z `Arrows3D` in its frame; angular velocity and linear acceleration `Scalars`",
+    ),
+    "sensor_msgs/msg/NavSatFix": (
+        "(Foxglove's Map)",
+        "`GeoPoints` on a map view (none without a fix); altitude plotted",
+    ),
+    "sensor_msgs/msg/BatteryState": ("(rqt_plot)", "voltage, current, charge, percentage, temperature `Scalars`"),
+    **dict.fromkeys(telemetry.SCALAR_SENSORS, ("(rqt_plot)", "`Scalars` of its value (not its variance)")),
+    **dict.fromkeys(telemetry.NUMBERS, ("(rqt_plot)", "`Scalars` of its data (a Bool as 0/1)")),
 }
 """What each decoded type becomes: the RViz display that draws it, and the Rerun archetypes r2d2-viz logs."""
 
 
 def displays_markdown() -> str:
     """The README's table of display types (in its "Bags" section)."""
+    rows: dict[tuple[str, str], list[str]] = {}  # types shown alike share a row
+    for msgtype, how in SHOWN_AS.items():
+        rows.setdefault(how, []).append(msgtype)
     lines = ["| message type | RViz display | in Rerun |", "|---|---|---|"]
-    lines += [f"| `{msgtype}` | {display} | {shown} |" for msgtype, (display, shown) in SHOWN_AS.items()]
+    lines += [f"| {', '.join(f'`{t}`' for t in types)} | {d} | {shown} |" for (d, shown), types in rows.items()]
     return "\n".join(lines)
 
 

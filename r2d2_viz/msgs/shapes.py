@@ -171,6 +171,57 @@ class GridMap:
     T_frame_item: Pose = IDENTITY
 
 
+@dataclass(frozen=True)
+class LogLine:
+    """A line of a log (``/rosout``, a ``String`` topic): ``level`` in Rerun's names (DEBUG, INFO, WARN, ERROR,
+    CRITICAL; "" for none)."""
+
+    level: str
+    text: str
+
+
+@dataclass(frozen=True)
+class Status:
+    """One diagnostic status: its name as entity path parts (``/Robot/Motors`` → Robot, Motors), its level (OK,
+    WARN, ERROR, STALE), message, hardware id, key/values as the message gives them (text), and its ``name``."""
+
+    parts: tuple[str, ...]
+    level: str
+    message: str
+    hardware_id: str
+    values: tuple[tuple[str, str], ...]
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Statuses:
+    """A DiagnosticArray's statuses, each on its own entity below the topic's."""
+
+    items: tuple[Status, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class Series:
+    """Numbers to plot (one sample of each): on ``<topic>/<name>`` (the topic's own entity when ``name`` is "")
+    with one series per ``labels`` entry; NaN is a gap."""
+
+    name: str
+    labels: tuple[str, ...]
+    values: npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class GeoPoint:
+    """A position on the Earth (WGS 84 degrees), for a map."""
+
+    latitude: float
+    longitude: float
+
+
+Plain = LogLine | Statuses | Series | GeoPoint
+"""What is not drawn in 3D (a log, states, plots, a map): logged on entities of its own, in no TF frame."""
+
+
 Shape = (
     Points
     | LineStrips
@@ -186,7 +237,13 @@ Shape = (
     | VideoSample
     | Pinhole
     | GridMap
+    | Plain
 )
+
+
+def is_plain(item: Shape) -> bool:
+    """Whether ``item`` is not drawn in 3D (:data:`Plain`)."""
+    return isinstance(item, (LogLine, Statuses, Series, GeoPoint))
 
 
 @dataclass(frozen=True)

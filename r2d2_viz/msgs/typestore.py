@@ -22,11 +22,13 @@ DISTROS = {"humble": "ROS2_HUMBLE", "jazzy": "ROS2_JAZZY", "kilted": "ROS2_KILTE
 EXTRA_TYPES = {
     "map_msgs/msg/OccupancyGridUpdate": "std_msgs/Header header\nint32 x\nint32 y\nuint32 width\nuint32 height\n"
     "int8[] data\n",
+    "rosgraph_msgs/msg/Log": "std_msgs/Header header\nbyte level\nstring name\nstring msg\nstring file\n"
+    "string function\nuint32 line\nstring[] topics\n",
     "foxglove_msgs/msg/CompressedVideo": "builtin_interfaces/Time timestamp\nstring frame_id\nuint8[] data\n"
     "string format\n",
 }
-"""Types r2d2-viz displays that rosbags' stores lack (nav2's costmap updates, Foxglove's compressed video),
-added to every store."""
+"""Types the app shows that rosbags' stores lack (nav2's costmap updates; ROS 1's log, as ROS 1 bags hold it once
+converted to CDR: its header without ``seq``; Foxglove's compressed video), added to every store."""
 
 
 @functools.cache

@@ -206,6 +206,7 @@ def plan_bag(
     joint_topics = joint_topics_of(bag, robots, selected)
     robot_topics = (*(t for t, a in joint_topics if a), *(t for t, _ in tf_read[1:]))
     read = (*bag_topics_read(bag, None if robots else actuated, shown), *robot_topics)
+    read = tuple(t for t in read if t in selected)  # --topics: /tf only when named
     lookahead = [Segment(read, start, min(stop, start + LOOKAHEAD_NS))]
     preview = BagPass(
         bag,
@@ -301,7 +302,7 @@ def _stretch(bag: Bag, span: tuple[int, int], choice: BagChoice) -> tuple[int, i
 
 
 def _selected(bag: Bag, topics: Sequence[str] | None) -> set[str]:
-    """The topics replayed (all without ``--topics``); a topic the bag lacks is a BagError listing the bag's."""
+    """Topics replayed: all, or those named as ``ros2 bag play --topics`` does (/robot_description: the model)."""
     if topics is None:
         return set(bag.topics)
     if missing := [t for t in topics if t not in bag.topics]:

@@ -178,7 +178,8 @@ class BagPass:
             for problem in decoder.problems() if decoder is not None else ():
                 warn(f"{path}: {topic}: {problem}")
             if moved:
-                warn(f"{path}: {topic}: {moved} header stamps went back in time; they are shown at the previous stamp")
+                stamps = "header stamps" if self.time == "header" else "receive times"
+                warn(f"{path}: {topic}: {moved} {stamps} went back in time; they are shown at the previous one")
         if self.tf.bad:
             tf = TF if len(self.tf_topics) == 1 else "TF topics"
             warn(f"{path}: {tf}: skipped {self.tf.bad} messages that cannot be decoded")

@@ -24,13 +24,13 @@ import rerun as rr
 
 from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, Image, MarkerOp, MeshResource, VideoSample
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, Image, MarkerOp, MeshResource, VideoSample, is_plain
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.msgs.video import EncoderName, VideoEncoder
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.decay import FixedFramePlacer
-from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
+from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, PlainBook, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
 
@@ -58,6 +58,7 @@ class _TopicState:
     messages: int = 0
     problems: int = 0
     markers: MarkerBook = field(default_factory=MarkerBook)
+    plain: PlainBook = field(default_factory=PlainBook)
 
 
 class VideoFeed:
@@ -275,6 +276,7 @@ class DisplayFeed:
                     markers=state.markers,
                     load_mesh=self.load_mesh,
                     prepared=prepared,  # type: ignore[arg-type]  # what self.decode built: displays.Prepared
+                    plain=state.plain,
                 )
 
     def decode(self, message: TopicMessage) -> TopicMessage:
@@ -300,7 +302,7 @@ class DisplayFeed:
         """An empty frame id → the fixed frame (said once per topic)."""
 
         def fix(d: Decoded) -> Decoded:
-            if d.frame_id:
+            if d.frame_id or all(is_plain(item) for item in d.items):  # a log, a plot: in no frame
                 return d
             self.notices.report(
                 f"{self._where(topic)}: messages with an empty frame_id are drawn in the fixed frame "

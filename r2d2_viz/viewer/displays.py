@@ -8,10 +8,17 @@ Every entity stays in a TF frame at every time of the run, drawn or not (an enti
 implicit ``tf#/<path>`` frame, which no transform reaches: the view reports it): a marker entity sits in the
 fixed frame (the book's anchor) from the anchor's time until it is drawn, and again after each ``Clear``. A
 camera's pinhole names its frames (parent: the optical frame; child: ``<entity>#image``, its image plane).
+
+What is not drawn in 3D (:data:`r2d2_viz.msgs.shapes.Plain`) goes on entities in no frame: log lines as ``TextLog``,
+diagnostic statuses as ``StateChange`` (one entity per status below the topic's, its key/values as fields),
+numbers as ``Scalars`` (named series), fixes as ``GeoPoints``. A :class:`PlainBook` per topic remembers what was
+said: series' names and a state's colours are logged once, and each key/value field keeps the kind it was first
+logged as (Rerun fixes a component's type at its first row).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
@@ -20,7 +27,7 @@ import numpy as np
 import rerun as rr
 
 from r2d2_viz.msgs import shapes
-from r2d2_viz.msgs.shapes import Decoded, MarkerOp, Pose
+from r2d2_viz.msgs.shapes import Decoded, MarkerOp, Pose, is_plain
 
 Clock = Literal["duration", "timestamp"]
 MeshLoader = Callable[[str], "tuple[bytes, str] | None"]
@@ -155,7 +162,89 @@ def archetypes(item: shapes.Shape, load: MeshLoader | None = None) -> list[rr.As
     if isinstance(item, shapes.Pinhole):
         resolution = [item.width, item.height]
         return [rr.Pinhole(image_from_camera=item.K, resolution=resolution, camera_xyz=rr.ViewCoordinates.RDF)]
-    return _grid(item)
+    if isinstance(item, shapes.GridMap):
+        return _grid(item)
+    return []  # logs, states, plots, fixes: on entities of their own (:func:`log_plain`)
+
+
+STATE_COLORS = {"OK": 0x2E7D32FF, "WARN": 0xF9A825FF, "ERROR": 0xC62828FF, "STALE": 0x757575FF}
+"""rqt_robot_monitor's colours: green, yellow, red, grey."""
+MAX_STATES = 64
+"""A status's distinct states (level and message) given their level's colour; past this, the viewer's palette."""
+
+
+@dataclass
+class PlainBook:
+    """What one topic's plain entities were given so far."""
+
+    numeric: dict[tuple[str, str], bool] = field(default_factory=dict)
+    """(entity, key) → whether the field is a number (its first value parsed as one)."""
+    styled: set[str] = field(default_factory=set)
+    """Entities whose series names are logged."""
+    states: dict[str, list[str]] = field(default_factory=dict)
+    """Status entity → its states so far (each given its level's colour)."""
+
+
+def status_entity(entity_path: str, status: shapes.Status) -> str:
+    """``<topic>/<part>/…`` (the parts are safe already; escaped all the same)."""
+    return "/".join([entity_path, *(rr.escape_entity_path_part(p) for p in status.parts)])
+
+
+def state_of(status: shapes.Status) -> str:
+    """What the state view shows: ``LEVEL: message`` (the level alone without a message)."""
+    return f"{status.level}: {status.message}" if status.message else status.level
+
+
+def _number(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _fields(entity: str, status: shapes.Status, book: PlainBook) -> dict[str, object]:
+    """The status's level, message, hardware id and key/values; a key first seen with a number stays a number
+    (NaN when a later value is not one), one first seen with text stays text."""
+    out: dict[str, object] = {"name": status.name, "level": status.level, "message": status.message}
+    out["hardware_id"] = status.hardware_id
+    for key, text in status.values:
+        if key in out:
+            key = f"{key} (value)"
+        value = _number(text)
+        numeric = book.numeric.setdefault((entity, key), value is not None)
+        out[key] = [(math.nan if value is None else value)] if numeric else [text]
+    return out
+
+
+def _statuses(rec: rr.RecordingStream, entity_path: str, item: shapes.Statuses, book: PlainBook) -> None:
+    for status in item.items:
+        entity, state = status_entity(entity_path, status), state_of(status)
+        known = book.states.setdefault(entity, [])
+        if state not in known and len(known) < MAX_STATES:
+            known.append(state)
+            colors = [STATE_COLORS.get(s.split(":", 1)[0], 0x1565C0FF) for s in known]
+            rec.log(entity, rr.StateConfiguration(values=known, colors=np.array(colors, dtype=np.uint32)), static=True)
+        rec.log(
+            entity,
+            rr.StateChange(state=state),
+            rr.DynamicArchetype("DiagnosticStatus", components=_fields(entity, status, book)),
+        )
+
+
+def log_plain(rec: rr.RecordingStream, entity_path: str, item: shapes.Plain, book: PlainBook) -> None:
+    """Log one plain item of a message of the topic on ``entity_path`` (the time is set already)."""
+    if isinstance(item, shapes.LogLine):
+        rec.log(entity_path, rr.TextLog(item.text, level=item.level or None))
+    elif isinstance(item, shapes.Statuses):
+        _statuses(rec, entity_path, item, book)
+    elif isinstance(item, shapes.Series):
+        entity = f"{entity_path}/{item.name}" if item.name else entity_path
+        if entity not in book.styled:
+            book.styled.add(entity)
+            rec.log(entity, rr.SeriesLines(names=list(item.labels)), static=True)
+        rec.log(entity, rr.Scalars(item.values))
+    else:
+        rec.log(entity_path, rr.GeoPoints(lat_lon=[[item.latitude, item.longitude]], radii=rr.Radius.ui_points(6.0)))
 
 
 Prepared = list[tuple[str, list[rr.AsComponents]]]
@@ -186,8 +275,8 @@ def _components(item: shapes.Shape, decoded: Decoded, entity: str, load: MeshLoa
 def prepare(decoded: Decoded, load: MeshLoader | None = None) -> Prepared | None:
     """The archetypes of every item of ``decoded`` (pure: a bag's reader thread builds them beside the logging);
     None when they depend on the entity they go to (a camera's pinhole names its image plane by it)."""
-    if any(isinstance(item, shapes.Pinhole) for item in decoded.items):
-        return None
+    if any(isinstance(item, shapes.Pinhole) or is_plain(item) for item in decoded.items):
+        return None  # (plain items: logged with what their topic was given so far)
     many = len(decoded.items) > 1
     return [(f"/{i}" if many else "", _components(item, decoded, "", load)) for i, item in enumerate(decoded.items)]
 
@@ -198,15 +287,20 @@ def _log_items(
     decoded: Decoded,
     load: MeshLoader | None,
     prepared: Prepared | None = None,
+    plain: PlainBook | None = None,
 ) -> None:
     if prepared is not None:
         for suffix, components in prepared:
             rec.log(entity_path + suffix, *components)
         return
-    many = len(decoded.items) > 1
-    for i, item in enumerate(decoded.items):
+    drawn = [item for item in decoded.items if not is_plain(item)]
+    many = len(drawn) > 1
+    for i, item in enumerate(drawn):
         entity = f"{entity_path}/{i}" if many else entity_path
         rec.log(entity, *_components(item, decoded, entity, load))
+    for item in decoded.items:
+        if isinstance(item, shapes.LogLine | shapes.Statuses | shapes.Series | shapes.GeoPoint):
+            log_plain(rec, entity_path, item, plain if plain is not None else PlainBook())
 
 
 def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, time_ns: int, clock: Clock) -> None:
@@ -279,13 +373,15 @@ def log_decoded(
     markers: MarkerBook | None = None,
     load_mesh: MeshLoader | None = None,
     prepared: Prepared | None = None,
+    plain: PlainBook | None = None,
 ) -> None:
     """Log one decoded message on ``entity_path`` at ``time_ns`` (its archetypes ``prepared`` ahead, if they
     were). Marker messages need the topic's ``markers`` book (for DELETEALL and lifetimes); markers that expired
-    before ``time_ns`` are cleared first."""
+    before ``time_ns`` are cleared first. Logs, states and plots (:data:`~r2d2_viz.msgs.shapes.Plain`) need the
+    topic's ``plain`` book."""
     if isinstance(decoded, Decoded):
         set_time(rec, timeline, time_ns, clock)
-        _log_items(rec, entity_path, decoded, load_mesh, prepared)
+        _log_items(rec, entity_path, decoded, load_mesh, prepared, plain)
         return
     book = markers if markers is not None else MarkerBook()
     expire_markers(rec, book, timeline, time_ns, clock)

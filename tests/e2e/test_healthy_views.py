@@ -169,3 +169,14 @@ def test_a_frame_the_bag_never_connects_is_said_once_like_rviz(headless_client, 
     lines = [line for line in stderr.splitlines() if "No transform from" in line]
     assert lines == ["warning: /sim_markers: No transform from [person] to [odom]: nothing joins them in the bag's "
                      "transforms; not shown (RViz says the same)"]  # fmt: skip
+
+
+def test_the_log_diagnostics_map_and_plots_leave_every_view_healthy(headless_client, tmp_path: Path) -> None:
+    """The robot's log, its diagnostics, an Imu (axes in its frame, plots), a fix, a battery and std_msgs topics
+    (tests/telemetrybags.py, and ROS 1's real example bag with its /rosout): no view reports an error."""
+    from telemetrybags import write_telemetry_bag
+
+    rrd, _ = record(write_telemetry_bag(tmp_path / "tele"), tmp_path / "tele.rrd")
+    assert reports(headless_client, rrd) == []
+    ros1, _ = record(REPO / "tests" / "data" / "bags" / "ros1" / "example-lz4.bag", tmp_path / "ros1.rrd")
+    assert reports(headless_client, ros1) == []

@@ -5,6 +5,8 @@ a dying worker, Ctrl-C that keeps finished recordings and leaves no partial one.
 from __future__ import annotations
 
 import os
+import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -196,3 +198,101 @@ def test_video_converts_every_bags_camera_and_a_plain_recording_is_not_up_to_dat
         camera = read_recording(out / f"{bag.name}.rrd")["/camera/image_raw"]
         assert sum(s is not None for s in camera.temporal["VideoStream:sample"]) == 8
         assert "Image:buffer" not in camera.temporal
+
+
+EXE = str(Path(sys.executable).parent / "r2d2-viz")
+PARTIAL = re.compile(r"^\.+(?P<name>.+?)\.rrd\.fleet-(?P<pid>\d+)\.partial")
+
+
+def _converting(out: Path, written: int = 0) -> dict[str, int]:
+    """Bag name → pid of the worker converting it, from the hidden partial files in ``out`` (what a user sees)
+    holding more than ``written`` bytes (samples are being written)."""
+    found = {}
+    for p in out.iterdir() if out.is_dir() else ():
+        try:
+            if (m := PARTIAL.match(p.name)) and p.stat().st_size > written:
+                found[m["name"]] = int(m["pid"])
+        except FileNotFoundError:  # renamed into place meanwhile
+            continue
+    return found
+
+
+def _wait_converting(
+    proc: subprocess.Popen[str], out: Path, n: int, written: int = 0, timeout_s: float = 180
+) -> dict[str, int]:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline and proc.poll() is None:
+        if len(found := _converting(out, written)) >= n:
+            return found
+        time.sleep(0.02)
+    raise AssertionError(f"never {n} conversions at once (exit {proc.poll()})")
+
+
+def test_ctrl_c_while_two_convert_starts_no_other_and_counts_what_finished(tmp_path: Path) -> None:
+    """Issue 33, finding 3: one SIGINT to the app while two bags convert; the two not started never are, the
+    report counts what finished, nothing hidden is left, and the next run converts the rest."""
+    bags = [still_bag(tmp_path / "big0", samples=200_000)]  # a few seconds of writing samples per bag
+    bags += [Path(shutil.copytree(bags[0], tmp_path / f"big{k}")) for k in (1, 2, 3)]  # the same recording, 4 names
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [EXE, "--bag", *map(str, bags), "--save-dir", str(out), "--jobs", "2"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        converting = set(_wait_converting(proc, out, 2, written=1 << 20))  # both writing their samples
+        proc.send_signal(signal.SIGINT)  # to the app alone, as in the finding
+        _, err = proc.communicate(timeout=180)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    finished = {p.stem for p in out.glob("*.rrd")}
+    assert finished <= converting  # nothing started after the signal
+    assert f"{len(finished)} converted, {4 - len(finished)} not done (interrupted)" in err
+    assert not _hidden(out)
+    result = cli(*["--bag", *map(str, bags)], "--save-dir", str(out), "--jobs", "2")
+    assert result.returncode == 0, result.stderr
+    up_to_date = f", {len(finished)} up to date" if finished else ""
+    assert f"r2d2-viz: {4 - len(finished)} converted{up_to_date} →" in result.stderr
+    assert {p.stem for p in out.glob("*.rrd")} == {b.name for b in bags} and not _hidden(out)
+
+
+def test_a_worker_killed_on_a_bag_named_with_glob_characters_leaves_no_partial_file(tmp_path: Path) -> None:
+    """Issue 33, finding 3: the clean-up of what a killed worker left takes the bag's name literally."""
+    bag = still_bag(tmp_path / "run[4]", samples=20000)
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [EXE, "--bag", str(bag), str(still_bag(tmp_path / "b1")), "--save-dir", str(out), "--jobs", "2"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        pid = _wait_converting(proc, out, 1)
+        while "run[4]" not in pid and proc.poll() is None:
+            pid = _wait_converting(proc, out, 1)
+        os.kill(pid["run[4]"], signal.SIGKILL)  # the worker dies mid-conversion: its partial file stays behind it
+        _, err = proc.communicate(timeout=180)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert "Traceback" not in err
+    assert not _hidden(out), err  # the killed worker's partial file removed, brackets and all
+    assert (out / "b1.rrd").exists()
+
+
+def test_the_same_bag_given_twice_is_converted_once(tmp_path: Path) -> None:
+    """Issue 33, finding 6: ``--bag runs/alpha runs/alpha`` (and the same folder by another path)."""
+    alpha = still_bag(tmp_path / "runs" / "alpha")
+    out = tmp_path / "out"
+    again = tmp_path / "runs" / ".." / "runs" / "alpha"
+    result = cli("--bag", str(alpha), str(alpha), str(again), "--save-dir", str(out))
+    assert result.returncode == 0, result.stderr
+    assert "r2d2-viz: 1 converted →" in result.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["alpha.rbl", "alpha.rrd"]
+    assert _recording_id(out / "alpha.rrd") == _expected_id(alpha)

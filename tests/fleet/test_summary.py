@@ -49,7 +49,7 @@ def test_base_travel_composes_the_chain_up_to_the_tree_root() -> None:
 
 def test_messages_are_summed_per_drawn_type() -> None:
     topics = {"/a": ["sensor_msgs/msg/LaserScan", 2], "/b": ["sensor_msgs/msg/LaserScan", 3]}
-    topics["/c"] = ["std_msgs/msg/String", 7]
+    topics["/c"] = ["rcl_interfaces/msg/ParameterEvent", 7]  # no display draws it
     assert messages_per_type(topics) == {"messages_LaserScan": 5}
 
 
@@ -104,3 +104,43 @@ def test_a_bad_summary_target_is_one_line(fleet: Path, tmp_path: Path) -> None:
     assert len(result.stderr.splitlines()) == 1 and not list(tmp_path.iterdir())
     result = cli("--dataset", str(tmp_path / "nowhere"), "--summary")
     assert result.returncode == 2 and "not a directory" in result.stderr
+
+
+def test_a_fleet_of_what_archives_hold_is_summed_up(tmp_path: Path) -> None:
+    """Issue 33, findings 2 and 5: a TF-only recording (no robot, no joint) gets empty cells instead of failing
+    the summary; a .db3 bag under a folder named ``run #2`` and a bag folder without metadata.yaml get their topic
+    counts (read by the app's own reader, as the conversion reads them)."""
+    from bagmaker import T0, BagSpec, joint_state, storage_file, string, tf_message, write_bag
+
+    from r2d2_viz.robot.model import default_urdf_path
+
+    step = 100_000_000
+    tf_only = BagSpec()
+    for k in range(5):
+        tf_only.add("/tf", T0 + k * step, tf_message([(T0 + k * step, "odom", "axis", (0.1 * k, 0, 0), (0, 0, 0, 1))]))
+    joints = BagSpec().add("/robot_description", T0, string(default_urdf_path().read_text()))
+    for k in range(10):  # swivel 0.1 rad per 0.1 s: 1 rad/s, by hand
+        joints.add(
+            "/joint_states", T0 + k * step, joint_state(T0 + k * step, ["swivel", "tilt", "periscope"], [0.1 * k, 0, 0])
+        )
+    write_bag(tmp_path / "tfonly", tf_only)
+    (tmp_path / "run #2").mkdir()
+    night = write_bag(tmp_path / "night", joints, storage="sqlite3").rename(tmp_path / "run #2" / "night")
+    # (written elsewhere and moved: rosbags' own SQLite writer takes a '#' in the path as the URI's fragment)
+    loose = write_bag(tmp_path / "loose", joints)
+    (loose / "metadata.yaml").unlink()
+    assert storage_file(loose).suffix == ".mcap"
+    out = tmp_path / "out"
+    result = cli("--bag", str(tmp_path / "tfonly"), str(night), str(loose), "--save-dir", str(out), "--jobs", "2")
+    assert result.returncode == 0, result.stderr
+    result = cli("--dataset", str(out), "--summary", str(tmp_path / "fleet.csv"))
+    assert result.returncode == 0, result.stderr
+    with (tmp_path / "fleet.csv").open() as f:
+        rows = {r["bag"]: r for r in csv.DictReader(f)}
+    assert set(rows) == {"tfonly", "night", "loose"}
+    assert rows["tfonly"]["topics"] == "1" and rows["tfonly"]["messages_TFMessage"] == "5"
+    assert rows["tfonly"]["max_joint_speed"] == "" and rows["tfonly"]["fastest_joint"] == ""
+    assert rows["tfonly"]["distance_m"] == ""  # no robot: no base to follow
+    for name in ("night", "loose"):
+        assert rows[name]["topics"] == "2" and rows[name]["messages_JointState"] == "10", rows[name]
+        assert float(rows[name]["max_joint_speed"]) == pytest.approx(1.0) and rows[name]["fastest_joint"] == "swivel"

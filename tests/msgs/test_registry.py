@@ -23,7 +23,7 @@ def test_every_table_type_has_a_sample_and_decodes() -> None:
 
 def test_unknown_type() -> None:
     with pytest.raises(MsgError, match="no display"):
-        decode("std_msgs/msg/String", b"\x00\x01\x00\x00")
+        decode("geometry_msgs/msg/Vector3", b"\x00\x01\x00\x00")
 
 
 @pytest.mark.filterwarnings("error")

@@ -32,7 +32,7 @@ def test_the_display_topics_merged_by_receive_time_as_rosbags_reads_them(tmp_pat
             "/odom": "nav_msgs/msg/Odometry",
             "/scan": "sensor_msgs/msg/LaserScan",
         }
-        assert other == {"/chatter": "std_msgs/msg/String"}  # /tf and /tf_static are the robot pipeline's
+        assert other == {"/chatter": "std_msgs/msg/ColorRGBA"}  # /tf and /tf_static are the robot pipeline's
         windows = BagPass(bag, [Segment(tuple(shown))], actuated=None, displays=shown).windows(1000)
         messages = [m for w in windows for m in w.displays]
         assert all(m.msgtype == shown[m.topic] for m in messages)

@@ -271,3 +271,25 @@ def test_start_offset_and_topics_on_the_command_line(tmp_path: Path) -> None:
         lines = bad.stderr.strip().splitlines()
         assert bad.returncode == 2 and len(lines) == 1 and problem in lines[0], bad.stderr
         assert not (tmp_path / "bad.rrd").exists()
+
+
+def test_topics_replays_exactly_the_topics_named_as_ros2_bag_play_does(tmp_path: Path) -> None:
+    """Issue 33, finding 4: ``--topics /joint_states`` replays no transform of the bag; a user who wants them
+    names /tf (and /tf_static). The robot's model still comes from /robot_description (its set-up, not replayed
+    data). fleetbags.walk_bag: odom → axis on /tf (9 samples), map → odom on /tf_static."""
+    from fleetbags import walk_bag
+
+    bag = walk_bag(tmp_path / "walk")
+    bag_edges = {"axis"}  # the children /tf moves; "odom" is /tf_static's child
+    seen = {}
+    for topics in (["/joint_states"], ["/joint_states", "/tf"], ["/joint_states", "/tf", "/tf_static"]):
+        out = tmp_path / f"{len(topics)}.rrd"
+        result = cli("--bag", str(bag), "--topics", *topics, "--save", str(out))
+        assert result.returncode == 0, result.stderr
+        recording = read_recording(out)
+        moving = tf_by_child(recording)
+        assert len(moving["head"].times) == 9  # the robot moves by its joint states in every run
+        seen[len(topics)] = (bag_edges & set(moving), "/tf_static/odom" in recording)
+    assert seen == {1: (set(), False), 2: ({"axis"}, False), 3: ({"axis"}, True)}
+    help_text = cli("--help").stdout
+    assert "name /tf and /tf_static too" in " ".join(help_text.split())

@@ -116,7 +116,7 @@ def test_a_cut_recording_with_a_topic_without_display_replays_what_it_holds(
     tmp_path: Path, tutorial_urdf: Path
 ) -> None:
     """A recorder killed mid-way (a rosbags bag cut at 60 %: no summary, no footer): exit 0, one warning (ours: the
-    file breaks off), and the undisplayed topic's recovered messages in the recording, through Rerun's reader."""
+    file breaks off), and the String topic's recovered messages in the recording."""
     spec = BagSpec(types={**TYPES, "/chatter": "std_msgs/msg/String"})
     for k in range(400):  # 10 kB strings: rosbags closes a chunk past 1 MiB, so the cut leaves whole chunks
         t = T0 + k * 10**7
@@ -135,7 +135,7 @@ def test_a_cut_recording_with_a_topic_without_display_replays_what_it_holds(
     assert _warnings(run.stderr) == [
         f"warning: {cut}: the file breaks off (no footer, no index): recovered {2 * len(chatter)} messages"
     ]
-    shown = _read(out)["/chatter"]["TextDocument:text"]
+    shown = _read(out)["/chatter"]["TextLog:text"]  # (a String is a log line of ours)
     assert sorted({t for t, _ in shown}) == chatter
 
 
@@ -153,5 +153,5 @@ def test_a_file_rerun_cannot_read_is_one_warning(tmp_path: Path) -> None:
     run = cli("--bag", str(mcap), "--save", str(tmp_path / "out.rrd"))
     assert run.returncode == 0, run.stderr
     (line,) = [line for line in _warnings(run.stderr) if "example" in line]
-    assert line.startswith(f"warning: {mcap}: 1 topic with no display, not shown: example (Example)")
+    assert line.startswith(f"warning: {mcap}: 1 topic with no display, not shown: /example (Example)")
     assert "Rerun's MCAP reader cannot read TenMessages.mcap" in line

@@ -24,7 +24,8 @@ from r2d2_viz.errors import BagError, listed
 from r2d2_viz.msgs.definitions import Convert
 from r2d2_viz.msgs.typestore import MsgError, deserialize
 from r2d2_viz.sources.bags.mcap_scan import McapScan
-from r2d2_viz.sources.bags.storage import Block, Storage, TopicInfo, block_of
+from r2d2_viz.sources.bags.merge import merged, overlapping_files
+from r2d2_viz.sources.bags.storage import Block, Storage, TopicInfo, block_of, renamed, topic_name, topic_tuple
 
 Warn = Callable[[str], None]
 
@@ -60,6 +61,8 @@ class Bag:
     def __init__(self, path: Path, *, warn: Warn = to_stderr) -> None:
         self.path, self.warn = path, warn
         self._files: list[Storage] = []
+        self._names: list[dict[str, list[str]]] = []
+        """Per storage file (in time order): the bag's topic name → the file's own names for it."""
         self._damage_said = False
         self._convert: dict[str, Convert] = {}
         """Topics whose definitions are not Humble's layout → the conversion of each message to it."""
@@ -75,7 +78,7 @@ class Bag:
 
     def _open(self) -> None:
         path = self.path
-        expected: dict[str, int] = {}
+        expected: dict[tuple[str, str], int] = {}
         if not path.exists():
             raise BagError(f"{path}: no such file or directory")
         if path.is_dir():
@@ -95,18 +98,12 @@ class Bag:
                 raise BagError(f"{file}: cannot read this bag: {_problem(exc)}") from None
             self._files.append(storage)
             if storage.note and any(t.count for t in storage.topics.values()):  # nothing read: the error says it
-                listed = sum(expected.values()) if len(files) == 1 else 0
-                self.warn(f"{file}: {storage.note}" + (f" (the metadata lists {listed})" if listed else ""))
-        topics: dict[str, TopicInfo] = {}
-        for f in self._files:
-            for topic, info in f.topics.items():
-                old = topics.get(topic)
-                if old is not None and old.msgtype != info.msgtype:
-                    raise BagError(f"{path}: topic {topic} has two types, {old.msgtype} and {info.msgtype}")
-                count = (old.count if old else 0) + info.count
-                topics[topic] = dataclasses.replace(old or info, count=count)
-        for topic, count in expected.items():  # the metadata's counts, where it has them
-            if topic in topics:
+                announced = sum(expected.values()) if len(files) == 1 and "recovered" in storage.note else 0
+                self.warn(f"{file}: {storage.note}" + (f" (the metadata lists {announced})" if announced else ""))
+        self._files.sort(key=lambda f: f.span[0] if f.span is not None else 2**64)  # in time, whatever their names
+        topics, self._names = _merged_topics(self._files, path, self.warn)
+        for (topic, msgtype), count in expected.items():  # the metadata's counts, where it has them
+            if topic in topics and topics[topic].msgtype == msgtype:
                 topics[topic] = dataclasses.replace(topics[topic], count=max(count, topics[topic].count))
         if sum(t.count for t in topics.values()) == 0:
             raise BagError(f"{path}: empty bag (no messages)")
@@ -143,27 +140,30 @@ class Bag:
         self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
     ) -> Iterator[Block]:
         """The messages on ``topics`` received in ``[start_ns, stop_ns)``, in time order, in one pass over each
-        storage file (:meth:`Storage.blocks`). Damage is one warning: a file that breaks off gives what was read
-        before it; damaged chunks are skipped and counted."""
+        storage file (:meth:`Storage.blocks`): files read one after the other where their spans do not overlap,
+        merged by receive time where they do (:mod:`.merge`). Damage is one warning: a file that breaks off gives
+        what was read before it; damaged chunks are skipped and counted."""
         wanted = [t for t in topics if t in self.topics]
         if not wanted:
             return
-        got = 0
+        order = topic_tuple(wanted)
         said: list[str] = []  # damage met in this pass: said once, in one warning, at its end
+        got = [0]
+        reads = [
+            (f.span, _file_blocks(f, own, order, (start_ns, stop_ns), len(self._files) == 1, said, got))
+            for f, names in zip(self._files, self._names, strict=True)
+            if (own := [n for t in wanted for n in names.get(t, ())])
+        ]
+        for group in overlapping_files([span for span, _ in reads]):
+            streams = [reads[k][1] for k in group]
+            for block in streams[0] if len(streams) == 1 else merged(streams):
+                yield self._converted(block) if self._convert.keys() & set(block.topics) else block
         for f in self._files:
-            try:
-                for block in f.blocks(wanted, start_ns=start_ns, stop_ns=stop_ns):
-                    got += len(block)
-                    yield self._converted(block) if self._convert.keys() & set(block.topics) else block
-            except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
-                if got == 0 and len(self._files) == 1:
-                    raise BagError(f"{f.path}: cannot read {listed(wanted)}: {_problem(exc)}") from None
-                said.append(f"{f.path}: the rest of the file cannot be read ({_problem(exc)})")
             said += self._problems(f)
         expected = sum(self.topics[t].count for t in wanted)
         whole = start_ns is None and stop_ns is None and not any(f.note for f in self._files)
-        if whole and got < expected and not self._damage_said:
-            said.append(f"{self.path}: {listed(sorted(wanted))}: recovered {got} of {expected} messages")
+        if whole and got[0] < expected and not self._damage_said:
+            said.append(f"{self.path}: {listed(sorted(wanted))}: recovered {got[0]} of {expected} messages")
         if said:
             self._damage_said = True
             self.warn("; ".join(said))
@@ -206,23 +206,28 @@ class Bag:
 
     def last(self, topic: str, *, before_ns: int | None = None) -> tuple[int, bytes] | None:
         """The last message on ``topic`` received before ``before_ns`` (the bag's last when None), through the
-        storages' indexes."""
+        storages' indexes: the latest of every file's (files that end before a message found are not asked)."""
         if topic not in self.topics:
             return None
-        for f in reversed(self._files):
-            try:
-                found = f.last(topic, before_ns=before_ns)
-            except Exception as exc:
-                self.warn(f"{f.path}: {topic}: cannot read its last message ({_problem(exc)})")
-                continue
-            if found is not None and (convert := self._convert.get(topic)) is not None:
+        best: tuple[int, bytes] | None = None
+        holding = [(f, own) for f, names in zip(self._files, self._names, strict=True) if (own := names.get(topic))]
+        for f, own in sorted(holding, key=lambda h: h[0].span[1] if h[0].span is not None else -1, reverse=True):
+            if best is not None and (f.span is None or f.span[1] < best[0]):
+                break
+            for name in own:
                 try:
-                    return found[0], bytes(convert(found[1]))
-                except MsgError:
+                    found = f.last(name, before_ns=before_ns)
+                except Exception as exc:
+                    self.warn(f"{f.path}: {topic}: cannot read its last message ({_problem(exc)})")
                     continue
-            if found is not None:
-                return found
-        return None
+                if found is not None and (convert := self._convert.get(topic)) is not None:
+                    try:
+                        found = found[0], bytes(convert(found[1]))
+                    except MsgError:
+                        continue
+                if found is not None and (best is None or found[0] >= best[0]):
+                    best = found
+        return best
 
     def deserialize(self, data: bytes | memoryview, msgtype: str) -> Any:
         """One message as rosbags' dataclass; a MsgError when it cannot be decoded."""
@@ -243,6 +248,54 @@ class Bag:
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.close()
+
+
+def _merged_topics(
+    files: list[Storage], path: Path, warn: Warn
+) -> tuple[dict[str, TopicInfo], list[dict[str, list[str]]]]:
+    """The bag's topics from its files' (ROS 2 names given their leading slash, as ROS 1 names are), and per file
+    the bag's topic name → the file's own names; a topic of another type in a later file is left out there, said
+    once."""
+    topics: dict[str, TopicInfo] = {}
+    other_types: dict[str, str] = {}
+    out: list[dict[str, list[str]]] = []
+    for f in files:
+        names: dict[str, list[str]] = {}
+        for own, info in f.topics.items():
+            topic = topic_name(own)
+            old = topics.get(topic)
+            if old is not None and old.msgtype != info.msgtype:
+                other_types[topic] = f"{topic} ({info.msgtype} in {f.path.name}, left out)"
+                continue
+            names.setdefault(topic, []).append(own)
+            count = (old.count if old else 0) + info.count
+            topics[topic] = dataclasses.replace(old or info, name=topic, count=count)
+        out.append(names)
+    if other_types:
+        warn(f"{path}: topics with another type in another file: {listed(sorted(other_types.values()))}")
+    return topics, out
+
+
+def _file_blocks(
+    f: Storage,
+    own: list[str],
+    order: tuple[str, ...],
+    stretch: tuple[int | None, int | None],
+    alone: bool,
+    said: list[str],
+    got: list[int],
+) -> Iterator[Block]:
+    """One file's blocks of its topics ``own``, renamed to the bag's ``order``; its damage noted in ``said``
+    (raised, when ``alone`` in its bag and nothing could be read), the messages counted in ``got``."""
+    before = got[0]
+    try:
+        for block in f.blocks(own, start_ns=stretch[0], stop_ns=stretch[1]):
+            got[0] += len(block)
+            yield renamed(block, order)
+    except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
+        if got[0] == before and alone:
+            raise BagError(f"{f.path}: cannot read {listed(order)}: {_problem(exc)}") from None
+        said.append(f"{f.path}: the rest of the file cannot be read ({_problem(exc)})")
 
 
 def own_definitions(
@@ -270,7 +323,7 @@ def own_definitions(
     return {n: t for n, t in topics.items() if n not in unusable}, converters
 
 
-def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:
+def _directory(path: Path) -> tuple[list[Path], dict[tuple[str, str], int]]:
     """The storage files of a rosbag2 directory and its topics' message counts, from its metadata.yaml.
 
     The files are then read one by one: rosbags' directory reader also matches each file's topics to the
@@ -293,10 +346,10 @@ def _directory(path: Path) -> tuple[list[Path], dict[str, int]]:
         if storage not in ("sqlite3", "mcap"):
             raise BagError(f"{meta}: storage {storage!r} is not supported (sqlite3 and mcap are)")
         files = [path / Path(str(name)).name for name in info["relative_file_paths"]]
-        counts: dict[str, int] = {}
+        counts: dict[tuple[str, str], int] = {}
         for t in info.get("topics_with_message_count") or []:
-            name = str(t["topic_metadata"]["name"])
-            counts[name] = counts.get(name, 0) + int(t["message_count"])
+            key = topic_name(str(t["topic_metadata"]["name"])), str(t["topic_metadata"]["type"])
+            counts[key] = counts.get(key, 0) + int(t["message_count"])
     except BagError:
         raise
     except Exception as exc:  # YAML errors, missing keys, wrong types

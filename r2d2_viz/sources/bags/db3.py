@@ -21,7 +21,7 @@ from collections.abc import Collection, Iterator
 from pathlib import Path
 from urllib.parse import quote
 
-from r2d2_viz.sources.bags.storage import Block, TopicInfo, block_of, topic_tuple
+from r2d2_viz.sources.bags.storage import Block, TopicInfo, block_of, other_types_note, topic_tuple
 
 BLOCK_ROWS = 4096
 BLOCK_BYTES = 16 << 20
@@ -64,15 +64,20 @@ class Db3:
         self._ids: dict[str, list[int]] = {}
         self._topic_of: dict[int, str] = {}
         self.topics: dict[str, TopicInfo] = {}
+        other_types: dict[tuple[str, str, str], int] = {}
         for topic_id, name, msgtype, count in rows:
             name, msgtype = str(name), str(msgtype)
+            old = self.topics.get(name)
+            if old is not None and old.msgtype != msgtype:  # kept: the first one's type, as a ROS 1 bag's reader
+                key = name, old.msgtype, msgtype
+                other_types[key] = other_types.get(key, 0) + int(count)
+                continue
             self._ids.setdefault(name, []).append(int(topic_id))
             self._topic_of[int(topic_id)] = name
-            old = self.topics.get(name)
-            if old is not None and old.msgtype != msgtype:
-                raise sqlite3.DatabaseError(f"topic {name} has two types, {old.msgtype} and {msgtype}")
             definition, encoding = definitions.get(msgtype, ("", ""))
             self.topics[name] = TopicInfo(name, msgtype, (old.count if old else 0) + int(count), definition, encoding)
+        if other_types:
+            self.note = "; ".join(filter(None, [self.note, other_types_note(other_types)]))
         first, last = self._db.execute("SELECT min(timestamp), max(timestamp) FROM messages").fetchone()
         self._span = (int(first), int(last)) if first is not None else None
 

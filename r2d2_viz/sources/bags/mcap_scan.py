@@ -16,6 +16,7 @@ reader) in ``benchmarks/mcap_readers.py``. Pure: no rerun import.
 
 from __future__ import annotations
 
+import contextlib
 import mmap
 import struct
 from collections.abc import Collection, Iterator
@@ -54,7 +55,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     walk_records,
 )
 from r2d2_viz.sources.bags.mcap_summary import Definitions, count_messages, find_definitions
-from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, topic_tuple
+from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, other_types_note, topic_tuple
 
 
 class McapScan:
@@ -76,6 +77,7 @@ class McapScan:
         self._counts: dict[int, int] = {}
         self._span: tuple[int, int] | None = None
         self._loose: np.ndarray | None = None
+        self._other_types: set[int] = set()  # channels left out: no schema, or not their topic's first type
         with path.open("rb") as f:
             size = f.seek(0, 2)
             if size < len(MAGIC):
@@ -85,7 +87,8 @@ class McapScan:
             raise ValueError("not an MCAP file (no magic)")
         if not self._read_summary():
             self._scan_everything()
-        self.topics = _topics(self.channels, self.schemas, self._counts)
+        self.topics, self._other_types, other_types = _topics(self.channels, self.schemas, self._counts)
+        self.note = "; ".join(filter(None, [self.note, other_types]))
 
     # --- the summary --------------------------------------------------------------------------------------------
 
@@ -145,8 +148,8 @@ class McapScan:
 
     def _wanted(self, topics: Collection[str]) -> dict[int, int]:
         """channel id → its topic's index in :func:`topic_tuple` order."""
-        order = topic_tuple(topics)
-        return {c.id: order.index(c.topic) for c in self.channels.values() if c.topic in order and c.schema_id}
+        order, left_out = topic_tuple(topics), self._other_types
+        return {c.id: order.index(c.topic) for c in self.channels.values() if c.topic in order and c.id not in left_out}
 
     def blocks(
         self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
@@ -196,9 +199,8 @@ class McapScan:
     # --- files without a summary ----------------------------------------------------------------------------------
 
     def _scan_everything(self) -> None:
-        """Channels, schemas, counts and span of a file without a summary: one walk up to its first damage. Its
-        chunks' places, times and channels are noted as it goes: later reads go through that index (each a stretch
-        or a few topics) instead of walking the file again, as long as no message lies outside a chunk."""
+        """Channels, schemas, counts and span of a file without a summary: one walk up to its first damage, noting
+        its chunks' places, times and channels (later reads go through that index unless a message is outside)."""
         self._counts, self._span, total, self.chunks, self._loose = _scan_index(self._walk_file(), self._map)
         if self.note:
             self.note = f"{self.note}: recovered {total} messages"
@@ -252,22 +254,32 @@ class McapScan:
         return best
 
     def close(self) -> None:
-        try:
+        with contextlib.suppress(BufferError):  # blocks still hold views of its pages: it closes when they go
             self._map.close()
-        except BufferError:  # blocks still hold views of the file's pages: the map closes when they are gone
-            pass
 
 
-def _topics(channels: dict[int, Channel], schemas: dict[int, Schema], counts: dict[int, int]) -> dict[str, TopicInfo]:
+def _topics(
+    channels: dict[int, Channel], schemas: dict[int, Schema], counts: dict[int, int]
+) -> tuple[dict[str, TopicInfo], set[int], str]:
+    """The topics of the channels, the channels left out and a note on them: those whose type is not their topic's
+    first channel's (a topic recorded with two types keeps the first, as a ROS 1 bag's reader does)."""
     topics: dict[str, TopicInfo] = {}
-    for channel in channels.values():
-        if not channel.schema_id:
-            continue  # no schema (MCAP's schema id 0): nothing a ROS message could be decoded by
+    left: dict[tuple[str, str, str], int] = {}
+    other_types: set[int] = set()
+    for channel in sorted(channels.values(), key=lambda c: c.id):
+        if not channel.schema_id:  # no schema (MCAP's schema id 0): nothing a ROS message could be decoded by
+            other_types.add(channel.id)
+            continue
         schema = schemas.get(channel.schema_id, Schema("", "", ""))
         old = topics.get(channel.topic)
+        if old is not None and old.msgtype != schema.name:
+            other_types.add(channel.id)
+            key = channel.topic, old.msgtype, schema.name
+            left[key] = left.get(key, 0) + counts.get(channel.id, 0)
+            continue
         count = (old.count if old else 0) + counts.get(channel.id, 0)
         topics[channel.topic] = TopicInfo(channel.topic, schema.name, count, schema.data, schema.encoding)
-    return topics
+    return topics, other_types, other_types_note(left)
 
 
 def _scan_index(

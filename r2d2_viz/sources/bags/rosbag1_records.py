@@ -16,6 +16,8 @@ from typing import BinaryIO
 
 import numpy as np
 
+from r2d2_viz.sources.bags.storage import topic_name
+
 MAGIC = b"#ROSBAG V2.0\n"
 OP_MSG, OP_BAG_HEADER, OP_INDEX, OP_CHUNK, OP_CHUNK_INFO, OP_CONNECTION = 2, 3, 4, 5, 6, 7
 RENAMED_TYPES = {"tf/msg/tfMessage": "tf2_msgs/msg/TFMessage"}
@@ -57,11 +59,6 @@ def time_ns(value: bytes) -> int:
         raise BrokenError
     sec, nsec = _TIME.unpack(value)
     return int(sec) * 1_000_000_000 + int(nsec)
-
-
-def topic_name(name: str) -> str:
-    """rosbag2's name for a ROS 1 topic: one leading slash, no empty parts."""
-    return "/" + "/".join(p for p in name.split("/") if p)
 
 
 def ros2_type(ros1_type: str) -> str:

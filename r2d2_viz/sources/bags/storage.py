@@ -125,6 +125,28 @@ class Storage(Protocol):
     def close(self) -> None: ...
 
 
+def other_types_note(left: dict[tuple[str, str, str], int]) -> str:
+    """The note on topics recorded with two types, from ``(topic, type kept, type left out) → messages left out``:
+    each topic keeps the type it was first recorded with (as a ROS 1 bag's reader keeps its first connection's)."""
+    return "; ".join(
+        f"{topic}: {n} {other} message{'s' if n != 1 else ''} left out (the topic is {kept}, as first recorded)"
+        for (topic, kept, other), n in sorted(left.items())
+    )
+
+
+def topic_name(name: str) -> str:
+    """A topic's full name: one leading slash, no empty parts (``tf`` → ``/tf``, as rosbag2 records names)."""
+    return "/" + "/".join(p for p in name.split("/") if p)
+
+
+def renamed(block: Block, order: tuple[str, ...]) -> Block:
+    """``block`` with its topics (a file's own names) given as their full names' places in ``order``."""
+    if block.topics == order:
+        return block
+    places = np.array([order.index(topic_name(t)) for t in block.topics], dtype=np.int32)
+    return Block(block.times_ns, places[block.topic_index], order, block.buffer, block.starts, block.lengths)
+
+
 def topic_tuple(topics: Collection[str]) -> tuple[str, ...]:
     """Topics in a stable order (a block's ``topics``)."""
     return tuple(sorted(set(topics)))

@@ -155,6 +155,11 @@ class LiveSource:
                 continue
             self.subscribed[topic] = rtype
 
+    @property
+    def display_topics(self) -> dict[str, str]:
+        """The display topics subscribed to so far (topic → type): the robot pipeline's own left out."""
+        return {topic: rtype for topic, rtype in self.subscribed.items() if robot_topic(topic) is None}
+
     def set_joints(self, actuated: Sequence[str] | None, namespace: str = "") -> None:
         """The robot's actuated joints (a new description), or None: no robot, joint states are kept for later;
         ``namespace``: another robot's (``/robot2``)."""

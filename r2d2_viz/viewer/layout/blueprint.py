@@ -61,6 +61,14 @@ class Layout:
     them (RViz's 3D view draws none either; each has its 2D view)."""
     robots: tuple[str, ...] = ()
     """Several robots: their namespaces (shapes under ``/robots/<namespace>``, plots under ``/joints/<namespace>``)."""
+    logs: tuple[str, ...] = ()
+    """Log topics (``/rosout``, strings): a log view of them, rqt_console's."""
+    states: tuple[str, ...] = ()
+    """Diagnostics topics: a state timeline of their statuses, rqt_robot_monitor's."""
+    maps: tuple[str, ...] = ()
+    """NavSatFix topics: a map of their fixes."""
+    plots: tuple[str, ...] = ()
+    """Topics plotted (IMUs, batteries, scalar sensors, std_msgs numbers): a time-series view each, as tabs."""
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
@@ -131,6 +139,13 @@ def generate_blueprint(
     shares.append(1)
     parts["side"] = rrb.Vertical(*side, row_shares=shares)
     parts["root"] = rrb.Horizontal(scene, parts["side"], column_shares=[2, 1])
+    below = _telemetry_views(layout)
+    if below:  # a row under the 3D view and plots; none without such topics (the tutorial's layout unchanged)
+        parts.update(below)
+        parts["main"] = parts["root"]
+        shares = [BELOW_SHARES[key] for key in below]
+        parts["below"] = rrb.Horizontal(*below.values(), column_shares=shares)
+        parts["root"] = rrb.Vertical(parts["main"], parts["below"], row_shares=[3, 2])
     for key, part in parts.items():
         _stable_id(part, key)
     return rrb.Blueprint(
@@ -142,6 +157,41 @@ def generate_blueprint(
         rrb.TimePanel(state=rrb.components.PanelState.Collapsed, timeline=TIMELINE),
         auto_views=False,
     )
+
+
+BELOW_SHARES = {"robot log": 3.0, "diagnostics": 2.0, "map": 1.0, "sensors": 2.0}
+"""The widths of the views below the 3D one: the log's lines are long."""
+
+
+def _telemetry_views(layout: Layout) -> dict[str, rrb.View | rrb.Container]:
+    """The views of what a 3D view does not show: the log, diagnostics' states, fixes on a map, and sensor plots
+    (a tab per topic)."""
+
+    def contents(topics: tuple[str, ...]) -> list[str]:
+        return [f"+ {t}/**" for t in topics]
+
+    views: dict[str, rrb.View | rrb.Container] = {}
+    if layout.logs:
+        columns = [rrb.encodings.TextLogColumn(kind) for kind in ("LogLevel", "Body", "EntityPath")]  # text first
+        views["robot log"] = rrb.TextLogView(
+            name="Log: " + " · ".join(layout.logs),
+            contents=contents(layout.logs),
+            columns=rrb.archetypes.TextLogColumns(text_log_columns=columns),
+        )
+    if layout.states:
+        views["diagnostics"] = rrb.StateTimelineView(
+            name="Diagnostics: " + " · ".join(layout.states), contents=contents(layout.states)
+        )
+    if layout.maps:
+        views["map"] = rrb.MapView(name="Map: " + " · ".join(layout.maps), contents=contents(layout.maps))
+    plots = {f"plot {t}": rrb.TimeSeriesView(name=t, origin=t) for t in layout.plots}  # units differ: one each
+    for key, plot in plots.items():
+        _stable_id(plot, key)
+    if len(plots) == 1:
+        views["sensors"] = next(iter(plots.values()))
+    elif plots:
+        views["sensors"] = rrb.Tabs(*plots.values(), name="Sensors")
+    return views
 
 
 def _grid(spec: ViewSpec) -> rrb.LineGrid3D:

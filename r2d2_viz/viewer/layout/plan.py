@@ -5,6 +5,7 @@ once, before anything is logged."""
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -14,7 +15,7 @@ import numpy as np
 from r2d2_viz.errors import listed
 from r2d2_viz.kinematics.transforms import quat_to_matrix
 from r2d2_viz.msgs.extent import extent_points
-from r2d2_viz.msgs.registry import decode
+from r2d2_viz.msgs.registry import VIEWS, decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
@@ -99,6 +100,7 @@ def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> V
         robots=tuple(r.namespace for r in plan.robots) if len(plan.robots) > 1 else (),
         flat_images=_flat_images(plan.displays),
     )
+    layout = with_telemetry(layout, plan.displays)
     show_names = spec.tf.show_names if spec.tf is not None else False
     styles = _styles(spec) if rviz is not None else {}
     return ViewPlan(spec, layout, axis_length, show_names, tuple(notes), styles)
@@ -155,6 +157,20 @@ def _flat_images(displays: dict[str, str]) -> tuple[str, ...]:
     """Image topics no CameraInfo gives a pinhole (:func:`camera_images` pairs them like RViz's Camera display)."""
     with_camera = {t for images in camera_images(displays).values() for t in images}
     return tuple(t for t, m in sorted(displays.items()) if m in IMAGES and t not in with_camera)
+
+
+def with_telemetry(layout: Layout, displays: Mapping[str, str]) -> Layout:
+    """``layout`` with the log, state, map and plot topics (:data:`r2d2_viz.msgs.registry.VIEWS`) among
+    ``displays`` (topic → type: a bag's display topics, or those a live graph offered when its view was planned);
+    a NavSatFix's altitude is plotted too."""
+
+    def of(view: str) -> tuple[str, ...]:
+        return tuple(t for t, m in sorted(displays.items()) if VIEWS.get(m) == view or (view, m) == ("plot", NAVSAT))
+
+    return dataclasses.replace(layout, logs=of("log"), states=of("state"), maps=of("map"), plots=of("plot"))
+
+
+NAVSAT = "sensor_msgs/msg/NavSatFix"
 
 
 MAP_SCHEMES = ("map", "costmap", "raw")

@@ -314,3 +314,36 @@ def test_the_last_message_of_a_split_bag_is_in_its_last_file_that_has_one(tmp_pa
         assert found is not None and bag.deserialize(found[1], "std_msgs/msg/String").data == "<robot name='late'/>"
         early = bag.last("/robot_description", before_ns=T0 + 10**9)
         assert early is not None and early[0] == T0
+
+
+def test_ros2_names_without_a_leading_slash_are_the_full_names(tmp_path: Path) -> None:
+    """Issue 33, finding 8: a bag written with ``joint_states``, ``tf`` and ``robot_description`` (no leading
+    slash) is the robot's bag as with ``/joint_states``…: as ROS 1 names are, they are given their slash."""
+    from conftest import cli
+    from rrd import read_recording, tf_by_child
+
+    from r2d2_viz.robot.model import default_urdf_path
+
+    types = {"joint_states": "sensor_msgs/msg/JointState", "tf": "tf2_msgs/msg/TFMessage"}
+    spec = BagSpec(types={**types, "robot_description": "std_msgs/msg/String"})
+    spec.add("robot_description", T0, string(default_urdf_path().read_text()))
+    for k in range(5):
+        t = T0 + k * 100_000_000
+        spec.add("joint_states", t, joint_state(t, ["swivel", "tilt", "periscope"], [0.1 * k, 0.0, 0.0]))
+        spec.add("tf", t, tf_message([(t, "odom", "axis", (0.1 * k, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))]))
+    for storage in ("mcap", "sqlite3"):
+        bag = write_bag(tmp_path / storage, spec, storage=storage)
+        listed = cli("--bag", str(bag), "--list")
+        assert listed.returncode == 0, listed.stderr
+        assert [line.split()[0] for line in listed.stdout.splitlines()] == [
+            "/joint_states",
+            "/robot_description",
+            "/tf",
+        ]
+        out = tmp_path / f"{storage}.rrd"
+        result = cli("--bag", str(bag), "--save", str(out))
+        assert result.returncode == 0, result.stderr
+        assert "no display" not in result.stderr and "no robot" not in result.stderr, result.stderr
+        recording = read_recording(out)
+        assert len(recording["/joints/continuous"].times) == 5
+        assert tf_by_child(recording)["axis"].times == [T0 + k * 100_000_000 for k in range(5)]

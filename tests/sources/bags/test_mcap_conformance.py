@@ -110,13 +110,14 @@ def test_ties_and_disorder_are_in_the_variants() -> None:
 
 def test_a_bag_of_a_variant_says_nothing() -> None:
     """Through the bag (what the app opens): the topic's count, no warning, for variants without statistics,
-    chunk index or channels in the summary."""
+    chunk index or channels in the summary. The bag names the topic ``/example``: ROS 2 names get their leading
+    slash there, as rosbag2 records them (the variants' channel is ``example``)."""
     for name in ("TenMessages-ch-mx", "TenMessages-rch", "TenMessages-ch-chx-mx-rsh-st", "TenMessages"):
         warnings: list[str] = []
         with open_bag(DATA / "TenMessages" / f"{name}.mcap", warn=warnings.append) as bag:
-            assert bag.topic_type("example") == "Example"
-            assert [len(b) for b in bag.blocks(["example"])] and not warnings, name
-            assert sum(len(b) for b in bag.blocks(["example"])) == 10
+            assert bag.topic_type("/example") == "Example"
+            assert [len(b) for b in bag.blocks(["/example"])] and not warnings, name
+            assert sum(len(b) for b in bag.blocks(["/example"])) == 10
 
 
 CLI_VARIANTS = [

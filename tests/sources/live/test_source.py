@@ -55,7 +55,7 @@ def test_topics_subscribed_as_they_appear_and_wrong_types_said_once() -> None:
     source = LiveSource(graph, refresh=1.0)
     graph.pubs = [
         Publication("/joint_states", JS, False, False),
-        Publication("/rosout", "rcl_interfaces/msg/Log", 1, 0),
+        Publication("/parameter_events", "rcl_interfaces/msg/ParameterEvent", 1, 0),  # no display draws it
     ]
     source.poll(now=0.0)
     assert graph.subscribed == [("/joint_states", JS)]

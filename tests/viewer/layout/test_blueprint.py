@@ -201,3 +201,35 @@ def test_each_robot_takes_the_robot_model_display_of_its_description_topic() -> 
     assert robot_display(spec, "/robot2") is two
     assert robot_display(spec, "/robot1") is default  # a display for /robot_description draws the others
     assert robot_display(ViewSpec("x.rviz", robot=two), "/robot1") is None  # no display draws robot1: hidden
+
+
+def test_a_log_diagnostics_a_map_and_plots_each_get_a_view_below_only_when_there_are_some(
+    tmp_path, fresh: dict
+) -> None:
+    from r2d2_viz.viewer.layout.blueprint import Layout
+
+    kinds = {"TextLog", "StateTimeline", "Map", "TimeSeries"}
+    plain = {c["ViewBlueprint:class_identifier"][0] for c in fresh.values() if "ViewBlueprint:class_identifier" in c}
+    assert plain & kinds == {"TextLog", "TimeSeries"}  # the tutorial's: its warnings and joint plots, nothing new
+    path = tmp_path / "telemetry.rbl"
+    layout = Layout(
+        logs=("/rosout",), states=("/diagnostics", "/diagnostics_agg"), maps=("/fix",), plots=("/imu", "/b")
+    )
+    generate_blueprint(layout=layout).save("r2d2_viz", path)
+    components = blueprint_components(path)
+    states = ["+ /diagnostics/**", "+ /diagnostics_agg/**"]
+    for kind, name, query in [
+        ("TextLog", "Log: /rosout", ["+ /rosout/**"]),
+        ("StateTimeline", "Diagnostics: /diagnostics · /diagnostics_agg", states),
+        ("Map", "Map: /fix", ["+ /fix/**"]),
+        ("TimeSeries", "/imu", ["$origin/**"]),  # a plot per topic (their units differ), as tabs
+        ("TimeSeries", "/b", ["$origin/**"]),
+    ]:
+        view = _view(components, kind, name)
+        assert components[f"{view}/ViewContents"]["ViewContents:query"] == query
+    # the log's level and text come first (a node's lines are long)
+    [tabs] = [c for c in components.values() if c.get("ContainerBlueprint:display_name") == ["Sensors"]]
+    assert tabs["ContainerBlueprint:container_kind"] == [1] and len(tabs["ContainerBlueprint:contents"]) == 2  # Tabs
+    log = _view(components, "TextLog", "Log: /rosout")
+    columns = components[f"{log}/TextLogColumns"]["TextLogColumns:text_log_columns"]
+    assert [c["kind"] for c in columns] == [2, 3, 1]  # LogLevel, Body, EntityPath (TextLogColumnKind)

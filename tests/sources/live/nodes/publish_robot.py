@@ -53,6 +53,10 @@ def bad_samples(names: list[str]) -> list[bytes]:
     ]
 
 
+LOG_LINES = (("DEBUG", "debug"), ("INFO", "info"), ("WARN", "warning"), ("ERROR", "error"), ("CRITICAL", "fatal"))
+"""What ``--log`` logs: Rerun's name of each line's level and the rclpy logger's method (levels 10 … 50)."""
+
+
 def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--urdf", required=True)
@@ -65,6 +69,7 @@ def main() -> int:
     parser.add_argument("--bad", action="store_true", help="first publish the malformed samples of bad_samples()")
     parser.add_argument("--namespace", default="", help="publish /<namespace>/robot_description and joint_states")
     parser.add_argument("--shift", type=float, default=0.0, help="added to every position")
+    parser.add_argument("--log", action="store_true", help="log one line at each level (to /rosout) once matched")
     args = parser.parse_args()
 
     import rclpy
@@ -85,6 +90,17 @@ def main() -> int:
         time.sleep(0.01)
     matched = states.get_subscription_count() >= args.subscribers
     time.sleep(0.2)  # the reader's side of the match settles too
+    if args.log:
+        from rclpy.logging import LoggingSeverity
+
+        logger = node.get_logger()
+        logger.set_level(LoggingSeverity.DEBUG)
+        # one call site per level: rclpy refuses two severities from the same line
+        logger.debug("DEBUG line")
+        logger.info("INFO line")
+        logger.warning("WARN line")
+        logger.error("ERROR line")
+        logger.fatal("CRITICAL line")
     if args.bad:
         for data in bad_samples(names):
             states.publish(data)  # bytes: rclpy publishes them as an already serialized message
