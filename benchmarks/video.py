@@ -127,7 +127,7 @@ def main() -> None:
         args.frames, args.rounds = 45, 1
     from camerabag import write_camera_bag
 
-    from r2d2_viz.msgs.video import CRF
+    from r2d2_viz.msgs.images import CRF
 
     with tempfile.TemporaryDirectory() as scratch:
         bag = Path(scratch) / "cam"

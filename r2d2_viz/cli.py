@@ -338,7 +338,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
 def _check_video(args: argparse.Namespace) -> None:
     """``--video`` goes with a bag or a live graph, into a recording, and needs PyAV (not imported here)."""
-    from r2d2_viz.msgs.video import require_av
+    from r2d2_viz.msgs.images import require_av
 
     if args.video is None:
         return

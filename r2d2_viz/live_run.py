@@ -24,7 +24,7 @@ from typing import Protocol
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
-from r2d2_viz.msgs.video import EncoderName
+from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex

@@ -17,7 +17,7 @@ from pathlib import Path
 from r2d2_viz.errors import SHOWN, UsageError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
-from r2d2_viz.msgs.video import EncoderName
+from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.pacing import Feeds, paced
 from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path

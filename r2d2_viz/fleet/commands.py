@@ -16,7 +16,7 @@ from typing import Any
 
 from r2d2_viz.errors import UsageError
 from r2d2_viz.fleet.convert import FleetReport, Outcome, Progress, plan_jobs, run_local
-from r2d2_viz.msgs.video import EncoderName, require_av
+from r2d2_viz.msgs.images import EncoderName, require_av
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
 

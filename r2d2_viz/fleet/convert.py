@@ -23,7 +23,7 @@ from pathlib import Path
 
 from r2d2_viz.errors import R2d2VizError, UsageError, one_line
 from r2d2_viz.fleet.identity import BagId, identify, is_up_to_date, output_path
-from r2d2_viz.msgs.video import EncoderName
+from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.viewer.catalog import MARKER_PROPERTY, TOPICS_PROPERTY, recording_marker
 

@@ -8,7 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from r2d2_viz.errors import one_line
-from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry, video
+from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 
@@ -22,7 +22,7 @@ DECODERS: dict[str, Decoder] = {
     "sensor_msgs/msg/Image": images.decode_image,
     "sensor_msgs/msg/CompressedImage": images.decode_compressed_image,
     "sensor_msgs/msg/CameraInfo": images.decode_camera_info,
-    "foxglove_msgs/msg/CompressedVideo": video.decode_compressed_video,
+    "foxglove_msgs/msg/CompressedVideo": images.decode_compressed_video,
     "visualization_msgs/msg/Marker": markers.decode_marker,
     "visualization_msgs/msg/MarkerArray": markers.decode_marker_array,
     "nav_msgs/msg/Path": nav.decode_path,

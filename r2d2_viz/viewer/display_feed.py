@@ -22,11 +22,11 @@ from dataclasses import dataclass, field
 
 import rerun as rr
 
+from r2d2_viz.msgs.images import EncoderName, VideoEncoder
 from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, Image, MarkerOp, MeshResource, VideoSample, is_plain
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.msgs.video import EncoderName, VideoEncoder
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.decay import FixedFramePlacer

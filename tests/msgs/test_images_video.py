@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from camerabag import Frames
 
+from r2d2_viz.msgs.images import VideoEncoder, is_keyframe, video_codec
 from r2d2_viz.msgs.shapes import Image
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.msgs.video import VideoEncoder, is_keyframe, video_codec
 
 ENCODERS = {"H264": "libx264", "H265": "libx265", "AV1": "libsvtav1", "VP9": "libvpx-vp9"}
 OPTIONS = {
