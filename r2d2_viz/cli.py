@@ -13,7 +13,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from r2d2_viz.errors import DEBUG_ENV, R2d2VizError
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError
 from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -165,6 +165,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
     )
+    parser.add_argument(
+        "--video",
+        nargs="?",
+        const="av1",
+        default=None,
+        choices=("av1", "h264"),
+        help="a bag's or live graph's 8-bit camera images as video (default av1; needs r2d2-viz[video])",
+    )
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
     sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
     sinks.add_argument(
@@ -291,6 +299,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError("--plot plots a bag's fields in the viewer: use it with --bag (and not --save X.mcap)")
     if not (math.isfinite(args.start_offset) and args.start_offset >= 0):
         raise UsageError(f"--start-offset must be a number of seconds >= 0, got {args.start_offset:g}")
+    _check_video(args)
     implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
     fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
     sink = SinkConfig(
@@ -327,6 +336,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         ros=args.ros,
         start_offset=args.start_offset,
         topics=tuple(args.topics) if args.topics is not None else None,
+        video=args.video,
         progress=wanted(),
         tool_topics=parse_tool_topics(args.tool_topic),
         plots=tuple(tuple(p) for p in args.plot),
@@ -345,6 +355,19 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise
     print_summary(result, config)
     return EXIT_OK
+
+
+def _check_video(args: argparse.Namespace) -> None:
+    """``--video`` goes with a bag or a live graph, into a recording, and needs PyAV (not imported here)."""
+    from r2d2_viz.msgs.images import require_av
+
+    if args.video is None:
+        return
+    if args.bag is None and not args.ros:
+        raise UsageError("--video encodes the cameras of a bag or a live graph: use it with --bag or --ros")
+    if args.save is not None and args.save.suffix == ".mcap":
+        raise UsageError(f"--save {args.save}: a bag keeps its images as they are; --video is for recordings")
+    require_av()
 
 
 def _frames(text: str | None) -> tuple[str, ...] | None:

@@ -24,6 +24,7 @@ from typing import Protocol
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
+from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.msgs.typestore import typestore
 from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
@@ -41,7 +42,7 @@ from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_check import urdf_edges
-from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import LiveFields
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
@@ -83,6 +84,8 @@ class LiveConfig(Protocol):
     def rviz(self) -> Path | None: ...
     @property
     def tool_topics(self) -> tuple[tuple[str, str], ...]: ...
+    @property
+    def video(self) -> EncoderName | None: ...
 
 
 def run_live(
@@ -290,6 +293,7 @@ class _Scene:
             header_time=config.time == "header",
             styles=view.display_styles,
             load_mesh=uri_loader(model.packages, Path(".")),
+            video=VideoFeed(config.video, live=True),
         )
         self.fields = LiveFields(rec, typestore(getattr(source.graph, "distro", "jazzy")), config.time == "header")
         self.robots = LiveRobots(self, batches, model.packages, lateness.sent)

@@ -18,6 +18,7 @@ from pathlib import Path
 from r2d2_viz.errors import UsageError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
+from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.pacing import Feeds, paced
 from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path
@@ -32,7 +33,7 @@ from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
 from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, read_ahead
 from r2d2_viz.sources.robots import SHARED_FRAMES
-from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import FieldsRun, fields_run, undecoded_line
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
@@ -94,6 +95,8 @@ class RunConfig:
     """``--tool-topic``: the page's tools' topics (``2D Goal Pose`` → ``/goal``), over the ``--rviz`` config's."""
     plots: tuple[tuple[str, ...], ...] = ()
     """``--plot`` paths of a bag's fields, one time-series view per flag (:mod:`r2d2_viz.msgs.generic.message_path`)."""
+    video: EncoderName | None = None
+    """Encode 8-bit camera images as video (``--video``: av1 or h264); None: lossless ``Image`` s."""
 
     @property
     def live(self) -> bool:
@@ -239,6 +242,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     if plan.moving_tf is not None and len(plan.moving_tf)
                     else None,
                     tf=[r for r in (plan.static_tf, plan.moving_tf) if r is not None],
+                    video=VideoFeed(config.video, live=config.live),
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.push(plan.seek_messages)

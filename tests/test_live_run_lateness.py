@@ -36,6 +36,7 @@ class Config:
     fixed_frame: str | None = None
     rviz: Path | None = None
     tool_topics: tuple[tuple[str, str], ...] = ()
+    video: Any = None
 
 
 def _image() -> bytes:

@@ -50,6 +50,8 @@ class SinkConfig:
     """None: a random one (Rerun's default); fleet conversions give each bag its own stable id."""
     properties: tuple[tuple[str, str], ...] = ()
     """Recording properties, ``/__properties/<name>`` text values (what a fleet recording says of its bag)."""
+    layout_file: Path | None = None
+    """The blueprint also written to this ``.rbl`` (a fleet's: the catalog gives it to its dataset)."""
 
     @property
     def live(self) -> bool:
@@ -125,6 +127,8 @@ def open_recording(
     if save_to is not None:
         sinks.append(rr.FileSink(save_to, write_footer=True))
     rec.set_sinks(*sinks, default_blueprint=blueprint)
+    if config.layout_file is not None and blueprint is not None:
+        blueprint.save(APP_ID, config.layout_file)
     if config.serve and on_ready is not None:
         host = "localhost" if config.bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else config.bind
         public = uri.replace("127.0.0.1", host)
