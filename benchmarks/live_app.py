@@ -104,6 +104,7 @@ def scenario(spec: dict[str, Any]) -> dict[str, Any]:
     )  # fmt: skip
     exe = Path(sys.executable).parent / "r2d2-viz"
     app_cmd = [str(exe), "--ros", "--urdf", str(urdf), "--save", str(rrd), "--duration", str(spec["seconds"] + 6)]
+    app_cmd += ["--video"] if spec.get("video") else []
     app = subprocess.Popen(
         app_cmd, env={**os.environ, PACING_LOG_ENV: str(log)}, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
     )
@@ -226,6 +227,7 @@ def main() -> int:
     parser.add_argument("--distro", default="jazzy", choices=["jazzy", "kilted"])
     parser.add_argument("--json", type=Path)
     parser.add_argument("--sensors-only", action="store_true", help="only the camera and lidar run (2.)")
+    parser.add_argument("--video", action="store_true", help="the app with --video (the camera encoded as it arrives)")
     parser.add_argument("--scenario", help=argparse.SUPPRESS)
     parser.add_argument("--sdk-floor", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -266,7 +268,7 @@ def main() -> int:
         # from the app's start: it subscribes within ~2 s, the node then streams for --sensor-seconds
         sensor_window = (4.0, args.sensor_seconds) if not args.smoke else (2.0, 3.0)
         spec = {**base, "name": "sensors", "seconds": args.sensor_seconds, "node": node, "cpu_window": sensor_window,
-                "cpu_from_start": True}  # fmt: skip
+                "cpu_from_start": True, "video": args.video}  # fmt: skip
         figures["sensor_window_s"] = sensor_window
         sensors = in_namespace(spec)
     figures["floor_batched_cpu"] = batched

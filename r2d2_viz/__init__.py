@@ -17,6 +17,8 @@ __version__ = "0.1.0"
 
 _EXPORTS = {
     "RobotLogger": "api",
+    "on_pick": "api",
+    "serve_tools": "api",
     "load_urdf": "robot.model",
     "load_robot": "robot.xacro_load",
     "parse_urdf": "robot.model",
@@ -55,11 +57,13 @@ __all__ = [
     "load_robot",
     "load_urdf",
     "make_motion",
+    "on_pick",
     "parse_urdf",
+    "serve_tools",
 ]
 
 if TYPE_CHECKING:
-    from r2d2_viz.api import RobotLogger
+    from r2d2_viz.api import RobotLogger, on_pick, serve_tools
     from r2d2_viz.errors import R2d2VizError, UrdfError, UsageError
     from r2d2_viz.fleet.dataset import fleet_summary
     from r2d2_viz.robot.model import Robot, default_urdf_path, load_urdf, parse_urdf

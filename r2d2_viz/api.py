@@ -10,13 +10,18 @@
     logger.log_joint_positions(t, np.sin(t)[:, None] * np.ones(len(logger.joints)))
     logger.finish()                                     # limit lines up to the last sample
 
+A script can take picks from the viewer as its input, with r2d2-viz's page (RViz's tools in the web viewer)::
+
+    page = r2d2_viz.serve_tools(fixed_frame="map")      # prints nothing; page.url is what to open
+    r2d2_viz.on_pick(lambda pick: print(pick.tool, pick.points))   # every 2D Goal Pose, Publish Point, …
+
 Same pinned kinematics and the same entities as the ``r2d2-viz`` command line (``/tf``, ``/tf_static/…``,
 ``/robot/visual/…``, ``/joints/…``); :func:`r2d2_viz.generate_blueprint` gives the RViz-like layout.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -27,13 +32,15 @@ from r2d2_viz.errors import UsageError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.robot.model import Robot
 from r2d2_viz.robot.xacro_load import load_robot
+from r2d2_viz.ros_out.tools_out import PICK_CALLBACKS, ToolOutput, attach_tools, detach_tools
 from r2d2_viz.runner import BATCH_CHUNK_SAMPLES
 from r2d2_viz.sources.base import ArraySource, Clock, FrameTrack, Source
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Warn, to_stderr
-from r2d2_viz.viewer.sinks import current_recording
+from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, current_recording, serve_recording
 from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.web.events import Pick
 
 if TYPE_CHECKING:
     from rerun import RecordingStream  # annotations only: the viewer stage talks to Rerun
@@ -138,3 +145,42 @@ def _nanoseconds(times: npt.ArrayLike) -> npt.NDArray[np.int64]:
     if not np.isfinite(seconds).all():
         raise UsageError("times must be finite numbers of seconds")
     return np.rint(seconds * 1e9).astype(np.int64)
+
+
+def on_pick(callback: Callable[[Pick], None]) -> Callable[[], None]:
+    """Call ``callback`` (from the page's server thread) with every use of a tool in r2d2-viz's page — the
+    ``r2d2-viz --serve`` page or :func:`serve_tools`'s: a :class:`~r2d2_viz.viewer.web.events.Pick` with the tool's
+    name and its clicked points in the fixed frame. Returns a function that unsubscribes."""
+    PICK_CALLBACKS.append(callback)
+    return lambda: PICK_CALLBACKS.remove(callback) if callback in PICK_CALLBACKS else None
+
+
+class ToolsPage:
+    """r2d2-viz's page for a script's recording (:func:`serve_tools`); :attr:`url` to open, :meth:`close` to stop."""
+
+    def __init__(self, recording: Recording, tools: ToolOutput | None) -> None:
+        self.recording, self.tools = recording, tools
+        page = recording.page
+        self.url = page.url() if page is not None else ""
+
+    def close(self) -> None:
+        detach_tools(self.recording, self.tools)
+        close_recording(self.recording)
+
+
+def serve_tools(
+    recording: RecordingStream | None = None,
+    *,
+    fixed_frame: str = ODOM,
+    bind: str = "127.0.0.1",
+    port: int = 9876,
+    web_port: int = 9090,
+    say: Callable[[str], None] = lambda line: None,
+) -> ToolsPage:
+    """Stream ``recording`` (default: the current one) to r2d2-viz's page — Rerun's web viewer with RViz's tools,
+    on ``bind`` behind a per-run token — instead of its other sinks. The tools pick, draw and call
+    :func:`on_pick`'s callbacks (and ``say`` with each line); nothing is published."""
+    served = serve_recording(
+        current_recording(recording), SinkConfig(serve=True, bind=bind, port=port, web_port=web_port)
+    )
+    return ToolsPage(served, attach_tools(served, fixed_frame, say=say))

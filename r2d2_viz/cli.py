@@ -12,17 +12,13 @@ import os
 import sys
 import traceback
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, listed, stderr_line
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, stderr_line
 from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 CONNECT_DEFAULT = "rerun+http://127.0.0.1:9876/proxy"
 SAVE_SUFFIXES = (".rrd", ".mcap")
-
-if TYPE_CHECKING:  # the runner (and rerun with it) is imported when a run starts, not for --help
-    from r2d2_viz.runner import RunConfig, RunResult
 
 
 class _Parser(argparse.ArgumentParser):
@@ -108,6 +104,15 @@ def build_parser() -> argparse.ArgumentParser:
         "/tf_static too; the robot's model is still read from /robot_description)",
     )
     bags.add_argument(
+        "--plot",
+        nargs="+",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="plot these fields in one view, Foxglove's message paths: /odom.twist.twist.linear.x, "
+        "/joint_states.effort[2] (repeat the flag for more views)",
+    )
+    bags.add_argument(
         "--fixed-frame",
         default=None,
         metavar="FRAME",
@@ -161,6 +166,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="print the topics and exit: with --bag every topic, type and message count (like ros2 bag info); "
         "with --ros the graph's topics, types and publishers (like ros2 topic list -t)",
     )
+    parser.add_argument(
+        "--video",
+        nargs="?",
+        const="av1",
+        default=None,
+        choices=("av1", "h264"),
+        help="a bag's or live graph's 8-bit camera images as video (default av1; needs r2d2-viz[video])",
+    )
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
     sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
     sinks.add_argument(
@@ -182,6 +195,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--port", type=int, default=None, help="gRPC port for --spawn / --serve (default 9876; --dataset: 51234)"
     )
     sinks.add_argument("--web-port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
+    sinks.add_argument(
+        "--tool-topic",
+        action="append",
+        default=[],
+        metavar="TOOL=TOPIC",
+        help="--serve's toolbar: publish a tool (goal, pose_estimate, point, teleop) on TOPIC instead",
+    )
     return parser
 
 
@@ -235,7 +255,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         )
     _quiet_rerun()
     from r2d2_viz.progress import wanted
-    from r2d2_viz.runner import RunConfig, run
+    from r2d2_viz.runner import RunConfig, print_summary, run
+    from r2d2_viz.rviz.tools import parse_tool_topics
     from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
     if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
@@ -278,8 +299,11 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         args.topics = [t for t in args.topics if ":=" not in t] or None
     if args.bag is None and (args.start_offset or args.topics is not None):
         raise UsageError("--start-offset and --topics choose what of a bag to replay: use them with --bag")
+    if args.plot and (args.bag is None or (args.save is not None and args.save.suffix == ".mcap")):
+        raise UsageError("--plot plots a bag's fields in the viewer: use it with --bag (and not --save X.mcap)")
     if not (math.isfinite(args.start_offset) and args.start_offset >= 0):
         raise UsageError(f"--start-offset must be a number of seconds >= 0, got {args.start_offset:g}")
+    _check_video(args)
     implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
     fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
     sink = SinkConfig(
@@ -316,7 +340,10 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         ros=args.ros,
         start_offset=args.start_offset,
         topics=tuple(args.topics) if args.topics is not None else None,
+        video=args.video,
         progress=wanted(),
+        tool_topics=parse_tool_topics(args.tool_topic),
+        plots=tuple(tuple(p) for p in args.plot),
     )
 
     def on_ready(message: str) -> None:
@@ -330,8 +357,21 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if fallback:  # the user typed no --serve: say why it was tried
             raise SinkError(f"no display for a viewer window, and the web viewer instead failed: {exc}") from None
         raise
-    _print_summary(result, config)
+    print_summary(result, config)
     return EXIT_OK
+
+
+def _check_video(args: argparse.Namespace) -> None:
+    """``--video`` goes with a bag or a live graph, into a recording, and needs PyAV (not imported here)."""
+    from r2d2_viz.msgs.images import require_av
+
+    if args.video is None:
+        return
+    if args.bag is None and not args.ros:
+        raise UsageError("--video encodes the cameras of a bag or a live graph: use it with --bag or --ros")
+    if args.save is not None and args.save.suffix == ".mcap":
+        raise UsageError(f"--save {args.save}: a bag keeps its images as they are; --video is for recordings")
+    require_av()
 
 
 def _frames(text: str | None) -> tuple[str, ...] | None:
@@ -379,17 +419,3 @@ def _list_topics() -> int:
         print(f"r2d2-viz: {searched}", file=sys.stderr)  # what was searched, then how to check: two short lines
         print(f"r2d2-viz: {EMPTY_GRAPH_HINT}; {EMPTY_LIST_NEXT}", file=sys.stderr, flush=True)
     return EXIT_OK
-
-
-def _print_summary(result: RunResult, config: RunConfig) -> None:
-    """The run's last line: what it wrote or showed, from where, to where."""
-    where = f" to {result.saved}" if result.saved else ""
-    how = " (stopped by signal)" if result.interrupted else ""
-    origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
-    origin = "from the ROS 2 graph" if config.ros else origin
-    what = "joint states" if config.ros else result.what
-    counted, n = f"{result.samples} {what}", len(result.other_topics)
-    if n:  # what Rerun's MCAP decoders wrote is in the file too: say so, not "0 transforms and display messages"
-        other = f"{n} topic{'s' * (n != 1)} decoded by Rerun ({listed(result.other_topics)})"
-        counted = other if result.samples == 0 else f"{counted} and {other}"
-    print(f"r2d2-viz: {counted} {origin}{where}{how}", file=sys.stderr)

@@ -41,6 +41,10 @@ class SinkError(R2d2VizError):
     """A sink cannot be opened: no viewer possible, port in use, unwritable output."""
 
 
+class ToolEventError(R2d2VizError):
+    """A tool event from the web page that is not one of the tools' messages (refused, nothing sent)."""
+
+
 class BagError(R2d2VizError):
     """A ROS 2 bag cannot be read or holds the wrong thing: ``run.mcap: /joint_states is std_msgs/msg/String``."""
 

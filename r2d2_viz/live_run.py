@@ -24,11 +24,14 @@ from typing import Protocol
 from r2d2_viz.errors import R2d2VizError, listed
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
+from r2d2_viz.msgs.images import EncoderName
+from r2d2_viz.msgs.typestore import typestore
 from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import load_robot
 from r2d2_viz.ros_out.live_record import LiveBagRecorder
+from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
 from r2d2_viz.rviz.config import load_rviz
 from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.bag_joints import TimeSource
@@ -39,7 +42,8 @@ from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_check import urdf_edges
-from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
+from r2d2_viz.viewer.fields_feed import LiveFields
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
@@ -78,6 +82,10 @@ class LiveConfig(Protocol):
     def fixed_frame(self) -> str | None: ...
     @property
     def rviz(self) -> Path | None: ...
+    @property
+    def tool_topics(self) -> tuple[tuple[str, str], ...]: ...
+    @property
+    def video(self) -> EncoderName | None: ...
 
 
 def run_live(
@@ -107,7 +115,8 @@ def run_on(
     gives to the scene until the deadline or a signal; the files are finalised or, on any failure, removed."""
     deadline = _Deadline(stop, time.monotonic() + config.duration if config.duration is not None else None)
     started = time.monotonic()
-    source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time)
+    store = typestore(getattr(graph, "distro", "jazzy"))
+    source = LiveSource(graph, topics=wanted_topics(config.rviz), time=config.time, known_types=store.fielddefs)
     model = _Model(config)
     batches = _settle(source, model, deadline)
     plan, view = _plan(config, model.robot, batches)
@@ -115,8 +124,10 @@ def run_on(
     view = dataclasses.replace(view, layout=with_telemetry(view.layout, source.display_topics))
     output = _Output(config.sink)
     lateness = LatenessLog.from_env()
+    tools = None
     try:
         recording = output.open(view, on_ready)
+        tools = attach_view_tools(recording, view, dict(config.tool_topics), publisher=graph)
         scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
         latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
         for k, batch in enumerate(batches):
@@ -134,8 +145,11 @@ def run_on(
                 time.sleep(GATHER_SECONDS)
         scene.finish()
         _say_received(source, time.monotonic() - started)
+        detach_tools(recording, tools)
         output.close()
     except BaseException:
+        if output.recording is not None:
+            detach_tools(output.recording, tools)
         output.abort()
         raise
     finally:
@@ -279,7 +293,9 @@ class _Scene:
             header_time=config.time == "header",
             styles=view.display_styles,
             load_mesh=uri_loader(model.packages, Path(".")),
+            video=VideoFeed(config.video, live=True),
         )
+        self.fields = LiveFields(rec, typestore(getattr(source.graph, "distro", "jazzy")), config.time == "header")
         self.robots = LiveRobots(self, batches, model.packages, lateness.sent)
         """The namespaced robots (several robots: :class:`r2d2_viz.viewer.stream.LiveRobots`)."""
         if model.robot is not None:
@@ -349,11 +365,13 @@ class _Scene:
         for message in batch.displays:
             self.feed.log(message)
             self.lateness.sent(message.topic, (message.time_ns,))
+        self.fields.log(batch.fields)
 
     def finish(self) -> None:
         for topic, line in self.source.problems():
             self.notices.report(f"{topic}: {line}")
         self.feed.finish()
+        self.fields.finish(self.notices.report)
         if self.streamer is not None:
             self.streamer.finish()
         self.robots.finish()

@@ -23,6 +23,7 @@ from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.base import SampleChunk
 from r2d2_viz.sources.playback import Window
 from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.viewer.fields_feed import FieldsFeed
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.tf_recorded import TfFeed
 
@@ -67,6 +68,8 @@ class Feeds:
     displays: DisplayFeed | None = None
     robots: list[RobotFeed] = field(default_factory=list)
     """Several robots: the second, third… (the first is the run's streamer)."""
+    fields: FieldsFeed | None = None
+    """Other topics' fields and ``--plot`` series."""
 
     def push(self, window: Window) -> None:
         """A stretch's transforms and display messages, logged by :meth:`until` when due."""
@@ -77,13 +80,16 @@ class Feeds:
                 self.displays.push(window.displays)
         for robot, chunk in zip(self.robots, window.more_joints, strict=False):
             robot.push(chunk)
+        if self.fields is not None:
+            self.fields.push(window.fields)
 
     @property
     def next_time_ns(self) -> int | None:
         tf = self.tf.next_time_ns
         shown = self.displays.next_time_ns if self.displays is not None else None
         first = shown if tf is None else tf if shown is None else min(tf, shown)
-        for robot in self.robots:
+        feeds: list[RobotFeed | FieldsFeed] = [*self.robots, *([self.fields] if self.fields is not None else [])]
+        for robot in feeds:
             t = robot.next_time_ns
             first = t if first is None else first if t is None else min(first, t)
         return first
@@ -94,6 +100,8 @@ class Feeds:
             self.displays.until(time_ns)
         for robot in self.robots:
             robot.until(time_ns)
+        if self.fields is not None:
+            self.fields.until(time_ns)
 
     @property
     def sent(self) -> int:

@@ -6,6 +6,7 @@ No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.viewe
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import sys
@@ -14,14 +15,16 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import SHOWN, UsageError, listed
+from r2d2_viz.errors import UsageError
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
+from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.pacing import Feeds, paced
 from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
+from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.bags.bag import open_bag
@@ -29,8 +32,9 @@ from r2d2_viz.sources.base import Clock, Source
 from r2d2_viz.sources.motion import ODOM, make_motion
 from r2d2_viz.sources.plan import BagChoice, RunPlan, plan_bag, plan_motion
 from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, read_ahead
-from r2d2_viz.sources.robots import SHARED_FRAMES, robots_read
-from r2d2_viz.viewer.display_feed import DisplayFeed
+from r2d2_viz.sources.robots import SHARED_FRAMES
+from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
+from r2d2_viz.viewer.fields_feed import FieldsRun, fields_run, undecoded_line
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
@@ -87,6 +91,12 @@ class RunConfig:
     """Only these topics of the bag (``ros2 bag play --topics``); None: all."""
     progress: bool = False
     """Show a progress bar on stderr (the CLI sets it on a terminal)."""
+    tool_topics: tuple[tuple[str, str], ...] = ()
+    """``--tool-topic``: the page's tools' topics (``2D Goal Pose`` → ``/goal``), over the ``--rviz`` config's."""
+    plots: tuple[tuple[str, ...], ...] = ()
+    """``--plot`` paths of a bag's fields, one time-series view per flag (:mod:`r2d2_viz.msgs.generic.message_path`)."""
+    video: EncoderName | None = None
+    """Encode 8-bit camera images as video (``--video``: av1 or h264); None: lossless ``Image`` s."""
 
     @property
     def live(self) -> bool:
@@ -111,7 +121,6 @@ class RunResult:
     what: str = "samples"
     """What ``samples`` counts, for the summary: a motion's samples, a bag's joint states, or — in a bag without
     joint states — its transforms and display messages."""
-    other_topics: tuple[str, ...] = ()  # the bag's topics Rerun's own MCAP decoders wrote (none of our displays)
 
 
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -197,13 +206,17 @@ def _plan(config: RunConfig, inputs: ExitStack) -> RunPlan:
 def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | None) -> RunResult:
     save = config.sink.save
     tmp = _temp_path(save) if save is not None else None
-    samples, interrupted, other = 0, False, tuple[str, ...]()
+    samples, interrupted = 0, False
     tree = plan.tree
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    fields = fields_run(plan, config.plots, clock, header_time=config.time == "header")
+    if config.plots:
+        view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, field_plots=config.plots))
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
+        tools = attach_view_tools(recording, view, dict(config.tool_topics))
         try:
             rec = recording.rec
             gather = config.realtime and not config.sink.live  # saved only: no viewer waits for each sample
@@ -229,25 +242,32 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     if plan.moving_tf is not None and len(plan.moving_tf)
                     else None,
                     tf=[r for r in (plan.static_tf, plan.moving_tf) if r is not None],
+                    video=VideoFeed(config.video, live=config.live),
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.push(plan.seek_messages)
-            feeds = Feeds(TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]])
+            feeds = Feeds(
+                TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None
+            )
             for robot in streamers:
                 robot.log_static()
             with progress_bar(plan, config) as shown:
-                windows = _windows(plan, config, displays)
+                windows = _windows(plan, config, displays, fields)
                 if config.live:
                     samples, interrupted = paced(streamer, windows, feeds, speed=config.speed, progress=shown)
                 else:
                     with sigterm_raises():
                         samples = _batch(streamer, windows, feeds, rec.flush, shown)
-            other = _other_topics(plan, config, notices)
+            if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
+                notices.report(f"{config.bag}: {line}")
+            if feeds.fields is not None:
+                feeds.fields.finish(notices.report)
             if displays is not None:
                 displays.finish()
             for robot in streamers:
                 robot.finish()
         finally:
+            detach_tools(recording, tools)
             close_recording(recording)
         if tmp is not None and save is not None:
             os.replace(tmp, save)
@@ -255,7 +275,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
         if tmp is not None:
             tmp.unlink(missing_ok=True)
         raise
-    return RunResult(samples=samples, interrupted=interrupted, saved=save, other_topics=other)
+    return RunResult(samples=samples, interrupted=interrupted, saved=save)
 
 
 def _robot_streams(
@@ -298,7 +318,9 @@ def _robot_streams(
     ]
 
 
-def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> Iterator[Window]:
+def _windows(
+    plan: RunPlan, config: RunConfig, displays: DisplayFeed | None, fields: FieldsRun | None
+) -> Iterator[Window]:
     """The run's windows; a bag's read and decoded ahead in a thread (beside the recording's writing)."""
     if config.live:
         size = _live_block(config)
@@ -308,6 +330,7 @@ def _windows(plan: RunPlan, config: RunConfig, displays: DisplayFeed | None) -> 
         size,
         predecode=displays.decode if displays is not None else None,
         max_bytes=LIVE_WINDOW_BYTES if config.live else WINDOW_BYTES,
+        **({"fields": fields.decoding} if fields is not None else {}),
     )
     return read_ahead(windows) if plan.replay is not None else windows
 
@@ -339,28 +362,6 @@ def _batch(
     return (samples + sum(r.sent for r in feed.robots)) or feed.sent
 
 
-def _other_topics(plan: RunPlan, config: RunConfig, notices: Notices) -> tuple[str, ...]:
-    """The bag's topics no display of ours draws: what Rerun's own MCAP decoders show of them (batch runs, .mcap
-    storage), and one line naming the rest; returns the topics Rerun's decoders wrote."""
-    skipped, logged = dict(plan.undisplayed), tuple[str, ...]()
-    if plan.mcap_files and skipped and not config.live:
-        from r2d2_viz.viewer.bag_topics import OURS, log_other_topics
-
-        exclude = (*OURS, *plan.displays, *robots_read(plan.robots))
-        result = log_other_topics(notices.rec, plan.mcap_files, time=config.time, exclude=exclude)
-        for topic in (logged := result.logged):
-            skipped.pop(topic, None)
-        failed = "".join(f"; Rerun's MCAP reader cannot read {f.name} ({why})" for f, why in result.failed[:1])
-    else:
-        failed = ""
-    if skipped:
-        names = listed(f"{topic} ({msgtype})" for topic, msgtype in sorted(skipped.items()))
-        n = len(skipped)
-        every = " (--list shows every topic)" if n > SHOWN + 1 else ""
-        notices.report(f"{config.bag}: {n} topic{'s' * (n != 1)} with no display, not shown: {names}{every}{failed}")
-    return logged
-
-
 def _live_block(config: RunConfig) -> int:
     rate = config.rate if config.bag is None else 100.0  # a bag's rate is its own: blocks of about a second
     return max(1, min(round(rate * LIVE_BLOCK_SECONDS), LIVE_BLOCK_SAMPLES))
@@ -390,3 +391,12 @@ def _temp_path(save: Path) -> Path:
 def batch_chunk_samples(n_moving: int) -> int:
     """Samples per chunk of a batch run for a robot with ``n_moving`` moving joints."""
     return max(1, min(BATCH_CHUNK_SAMPLES, BATCH_CHUNK_CELLS // max(1, n_moving)))
+
+
+def print_summary(result: RunResult, config: RunConfig) -> None:
+    where = f" to {result.saved}" if result.saved else ""
+    how = " (stopped by signal)" if result.interrupted else ""
+    origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
+    origin = "from the ROS 2 graph" if config.ros else origin
+    what = "joint states" if config.ros else result.what
+    print(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}", file=sys.stderr)

@@ -6,9 +6,12 @@ import math
 from typing import Any
 
 import numpy as np
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 TS = get_typestore(Stores.ROS2_HUMBLE)
+FOXGLOVE_VIDEO = "builtin_interfaces/Time timestamp\nstring frame_id\nuint8[] data\nstring format\n"
+"""foxglove_msgs/msg/CompressedVideo.msg as Foxglove publishes it (in no distro: bags carry it)."""
+TS.register(get_types_from_msg(FOXGLOVE_VIDEO, "foxglove_msgs/msg/CompressedVideo"))
 
 
 def T(name: str) -> Any:
@@ -165,6 +168,12 @@ def samples() -> dict[str, bytes]:
         ),
         T("sensor_msgs/msg/CompressedImage")(
             header=header(), format="png", data=np.frombuffer(b"\x89PNG\r\n\x1a\nxxxx", np.uint8)
+        ),
+        T("foxglove_msgs/msg/CompressedVideo")(  # an H.264 SPS and IDR slice (Annex B), a keyframe
+            timestamp=T("builtin_interfaces/msg/Time")(sec=12, nanosec=345),
+            frame_id="camera",
+            data=np.frombuffer(b"\x00\x00\x00\x01\x67\x42\x00\x0a\x00\x00\x00\x01\x65\x88\x84", np.uint8),
+            format="h264",
         ),
         T("sensor_msgs/msg/CameraInfo")(
             header=header(),

@@ -158,3 +158,36 @@ def test_a_xacro_file_with_arguments_through_the_logger(tmp_path: Path) -> None:
     assert _worst(read_recording(out), tmp_path / "ur.urdf", times, configs) < 1e-5
     with pytest.raises(UsageError, match="arguments for a xacro file"):
         r2d2_viz.RobotLogger(ARM, mappings={"x": "1"}, recording=rec)
+
+
+def test_a_script_takes_picks_from_the_page() -> None:
+    """``serve_tools`` + ``on_pick``: a tool used in the page (its event POSTed as the page does, with the token)
+    reaches the script's callback; without the token nothing does."""
+    import json
+    import socket
+    import urllib.error
+    import urllib.request
+
+    ports = []
+    for _ in range(2):
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            ports.append(s.getsockname()[1])
+    rec = rr.RecordingStream("test_api_picks")
+    picks: list[r2d2_viz.api.Pick] = []
+    lines: list[str] = []
+    unsubscribe = r2d2_viz.on_pick(picks.append)
+    page = r2d2_viz.serve_tools(rec, fixed_frame="map", port=ports[0], web_port=ports[1], say=lines.append)
+    try:
+        assert page.url.startswith(f"http://localhost:{ports[1]}/")
+        event = json.dumps({"tool": "2D Goal Pose", "points": [[0, 0, 0], [0, 2, 0]]}).encode()
+        with pytest.raises(urllib.error.HTTPError):
+            urllib.request.urlopen(urllib.request.Request(f"http://127.0.0.1:{ports[1]}/event", data=event), timeout=30)
+        assert picks == []
+        with urllib.request.urlopen(urllib.request.Request(page.url + "event", data=event), timeout=30) as answer:
+            assert json.loads(answer.read()) == {"line": "goal: map (0.00, 0.00) yaw 90.0°"}
+    finally:
+        unsubscribe()
+        page.close()
+    assert [(p.tool, p.points) for p in picks] == [("2D Goal Pose", ((0.0, 0.0, 0.0), (0.0, 2.0, 0.0)))]
+    assert lines == ["goal: map (0.00, 0.00) yaw 90.0°"]

@@ -35,6 +35,8 @@ class Config:
     time: Any = "receive"
     fixed_frame: str | None = None
     rviz: Path | None = None
+    tool_topics: tuple[tuple[str, str], ...] = ()
+    video: Any = None
 
 
 def _image() -> bytes:

@@ -29,6 +29,7 @@ NOT_FOR_A_GENERATED_MOTION = (
     "pyarrow.compute",  # 60 ms that nothing of a run needs
     "yourdfpy",
     "scipy",
+    "av",  # --video only
 )
 
 

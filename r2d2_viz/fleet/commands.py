@@ -16,6 +16,7 @@ from typing import Any
 
 from r2d2_viz.errors import UsageError
 from r2d2_viz.fleet.convert import FleetReport, Outcome, Progress, plan_jobs, run_local
+from r2d2_viz.msgs.images import EncoderName, require_av
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
 
@@ -33,6 +34,8 @@ def fleet_main(args: argparse.Namespace) -> int:
     if args.save_dir is not None and args.dataset is not None:
         raise UsageError("--save-dir converts bags and --dataset serves recordings: one at a time")
     if args.save_dir is not None:
+        if args.video is not None:
+            require_av()
         if not args.bag:
             raise UsageError("--save-dir DIR: give the bags to convert with --bag BAG [BAG ...]")
         others = [f for f, v in (("--save", args.save), ("--urdf", args.urdf), ("--motion", args.motion)) if v]
@@ -41,7 +44,13 @@ def fleet_main(args: argparse.Namespace) -> int:
         if args.jobs is not None and args.jobs < 1:
             raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
         return convert_command(
-            args.bag, args.save_dir, jobs=args.jobs, force=args.force, ray=args.ray, use_ray=args.ray is not None
+            args.bag,
+            args.save_dir,
+            jobs=args.jobs,
+            force=args.force,
+            ray=args.ray,
+            use_ray=args.ray is not None,
+            video=args.video,
         )
     if args.bag or fleet_only:
         raise UsageError(f"--dataset serves recordings; {'--bag' if args.bag else fleet_only[0]} goes with --save-dir")
@@ -59,7 +68,14 @@ def fleet_main(args: argparse.Namespace) -> int:
 
 
 def convert_command(
-    bags: list[Path], out_dir: Path, *, jobs: int | None, force: bool, ray: str | None, use_ray: bool
+    bags: list[Path],
+    out_dir: Path,
+    *,
+    jobs: int | None,
+    force: bool,
+    ray: str | None,
+    use_ray: bool,
+    video: EncoderName | None = None,
 ) -> int:
     start = time.perf_counter()
     report = FleetReport()
@@ -67,7 +83,7 @@ def convert_command(
         from r2d2_viz.fleet.ray_run import import_ray
 
         import_ray()  # before anything: without Ray, one line saying how to install it
-    work = plan_jobs(bags, out_dir, force=force, report=report)
+    work = plan_jobs(bags, out_dir, force=force, report=report, video=video)
     for path, why in report.failed:
         _say(f"error: {why}" if str(path) in why else f"error: {path}: {why}")
     total = sum(job.size for job in work)

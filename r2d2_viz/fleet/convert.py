@@ -23,6 +23,7 @@ from pathlib import Path
 
 from r2d2_viz.errors import R2d2VizError, UsageError, one_line
 from r2d2_viz.fleet.identity import BagId, identify, is_up_to_date, output_path
+from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.viewer.catalog import MARKER_PROPERTY, TOPICS_PROPERTY, recording_marker
 
@@ -38,6 +39,8 @@ class Job:
     size: int
     recording_id: str
     marker: str
+    video: EncoderName | None = None
+    """``--video``: the cameras encoded as video (av1, h264)."""
 
 
 @dataclass(frozen=True)
@@ -66,8 +69,12 @@ def version() -> str:
     return __version__
 
 
-def plan_jobs(bags: Iterable[Path], out_dir: Path, *, force: bool, report: FleetReport) -> list[Job]:
-    """The bags to convert; bad ones (missing, unreadable, two of one name) and up-to-date ones go in ``report``."""
+def plan_jobs(
+    bags: Iterable[Path], out_dir: Path, *, force: bool, report: FleetReport, video: EncoderName | None = None
+) -> list[Job]:
+    """The bags to convert; bad ones (missing, unreadable, two of one name) and up-to-date ones go in ``report``.
+    A recording made with another ``video`` setting is not up to date (its marker's version says it)."""
+    made_by = version() + (f"+video-{video}" if video else "")
     check_out_dir(out_dir)
     found: dict[str, list[BagId]] = {}
     seen: set[Path] = set()
@@ -90,10 +97,10 @@ def plan_jobs(bags: Iterable[Path], out_dir: Path, *, force: bool, report: Fleet
             continue
         bag = same[0]
         out = output_path(out_dir, bag)
-        if not force and out.exists() and is_up_to_date(out, bag, recording_marker(out), version()):
+        if not force and out.exists() and is_up_to_date(out, bag, recording_marker(out), made_by):
             report.up_to_date.append(bag.path)
             continue
-        jobs.append(Job(bag.path, out, bag.name, bag.size, bag.recording_id, bag.marker(version())))
+        jobs.append(Job(bag.path, out, bag.name, bag.size, bag.recording_id, bag.marker(made_by), video))
     return jobs
 
 
@@ -138,9 +145,12 @@ def convert_one(job: Job) -> Outcome:
     topics = _topics(job.bag)
     if topics is not None:
         properties.append((TOPICS_PROPERTY, topics))
-    sink = SinkConfig(save=tmp, recording_id=job.recording_id, properties=tuple(properties))
+    layout, tmp_layout = job.out.with_suffix(".rbl"), temp_path(job.out.with_suffix(".rbl"))
+    sink = SinkConfig(save=tmp, recording_id=job.recording_id, properties=tuple(properties), layout_file=tmp_layout)
     try:
-        run(RunConfig(bag=job.bag, sink=sink))
+        run(RunConfig(bag=job.bag, sink=sink, video=job.video))
+        if tmp_layout.exists():  # beside its recording: the dataset's layout when served (viewer/catalog.py)
+            os.replace(tmp_layout, layout)
         os.replace(tmp, job.out)
     except R2d2VizError as exc:
         return Outcome(job, one_line(exc), time.perf_counter() - start)
@@ -148,6 +158,7 @@ def convert_one(job: Job) -> Outcome:
         return Outcome(job, f"unexpected {type(exc).__name__}: {one_line(exc)}", time.perf_counter() - start)
     finally:
         tmp.unlink(missing_ok=True)
+        tmp_layout.unlink(missing_ok=True)
     return Outcome(job, None, time.perf_counter() - start)
 
 
@@ -155,7 +166,9 @@ def remove_partials(jobs: Iterable[Job]) -> None:
     """What killed workers left: the hidden temporary files of these outputs (and the runner's own, inside)."""
     for job in jobs:
         mine = f".{glob.escape(job.out.name)}.fleet-*.partial"  # a bag named run[4]: its brackets are no pattern
-        for pattern in (mine, f".{mine}.*.partial"):  # ours, and the runner's own beside it (".<ours>.<pid>.partial")
+        layout = f".{glob.escape(job.out.with_suffix('.rbl').name)}.fleet-*.partial"
+        # ours, the runner's own beside it (".<ours>.<pid>.partial"), the layout's
+        for pattern in (mine, f".{mine}.*.partial", layout):
             for leftover in job.out.parent.glob(pattern):
                 leftover.unlink(missing_ok=True)
 

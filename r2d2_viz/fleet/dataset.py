@@ -21,7 +21,7 @@ import pyarrow as pa
 from r2d2_viz.errors import SinkError, UsageError
 from r2d2_viz.fleet.summary import summarise
 from r2d2_viz.signals import sigterm_raises
-from r2d2_viz.viewer.catalog import catalog_server, read_fleet, server_url
+from r2d2_viz.viewer.catalog import catalog_server, read_fleet, register_layout, server_url
 from r2d2_viz.viewer.sinks import viewer_executable
 
 DEFAULT_PORT = 51234
@@ -65,6 +65,7 @@ def serve_dataset(
             raise SinkError("--spawn: no display to open the viewer on; use --serve or --headless instead")
     name = dataset_name(directory)
     with catalog_server(directory, name=name, bind=bind, port=port) as server:
+        register_layout(server, name, directory)
         local = server_url(server).replace("0.0.0.0", "127.0.0.1")
         process = _start_viewer(viewer, local, bind=bind, web_port=web_port, say=say)
         say(f"serving dataset {name!r} ({directory}) at {local}; Ctrl-C stops")

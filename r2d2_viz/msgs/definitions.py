@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from r2d2_viz.errors import one_line
-from r2d2_viz.msgs.known_layouts import known_humble
+from r2d2_viz.msgs.generic.known_layouts import known_humble
 from r2d2_viz.msgs.typestore import MAX_MESSAGE_BYTES, MsgError, typestore
 
 if TYPE_CHECKING:

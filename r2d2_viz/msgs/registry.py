@@ -22,6 +22,7 @@ DECODERS: dict[str, Decoder] = {
     "sensor_msgs/msg/Image": images.decode_image,
     "sensor_msgs/msg/CompressedImage": images.decode_compressed_image,
     "sensor_msgs/msg/CameraInfo": images.decode_camera_info,
+    "foxglove_msgs/msg/CompressedVideo": images.decode_compressed_video,
     "visualization_msgs/msg/Marker": markers.decode_marker,
     "visualization_msgs/msg/MarkerArray": markers.decode_marker_array,
     "nav_msgs/msg/Path": nav.decode_path,
@@ -73,8 +74,12 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     ),
     "sensor_msgs/msg/PointCloud": ("PointCloud", "`Points3D`; its `intensity` channel as the rainbow"),
     "sensor_msgs/msg/Range": ("Range", "`LineStrips3D` cone of its field of view; nothing outside its limits"),
-    "sensor_msgs/msg/Image": ("Image", "`Image` in a 2D view (mono, rgb, bgr, 16-bit, with row padding)"),
-    "sensor_msgs/msg/CompressedImage": ("Image", "`EncodedImage` (JPEG, PNG)"),
+    "sensor_msgs/msg/Image": (
+        "Image",
+        "`Image` in a 2D view (mono, rgb, bgr, 16-bit, with row padding); 8-bit ones as `VideoStream` with `--video`",
+    ),
+    "sensor_msgs/msg/CompressedImage": ("Image", "`EncodedImage` (JPEG, PNG); `VideoStream` (h264, h265, av1, vp9)"),
+    "foxglove_msgs/msg/CompressedVideo": ("Image", "`VideoStream` samples as they are (h264, h265, av1, vp9)"),
     "sensor_msgs/msg/CameraInfo": ("Camera", "`Pinhole` from K, so images also show in 3D"),
     "visualization_msgs/msg/Marker": (
         "Marker",

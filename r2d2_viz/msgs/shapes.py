@@ -142,6 +142,16 @@ class CompressedImage:
     media_type: str
 
 
+@dataclass(frozen=True)
+class VideoSample:
+    """One frame of a video stream (Rerun's ``VideoStream`` sample): ``codec`` AV1 / H264 / H265 / VP9, its bytes
+    (Annex B for H.264/H.265, low-overhead OBUs for AV1), and whether a decoder can start there."""
+
+    codec: Literal["AV1", "H264", "H265", "VP9"]
+    data: bytes
+    keyframe: bool
+
+
 @dataclass(frozen=True, eq=False)
 class Pinhole:
     """A camera model: intrinsics ``K`` (3x3, pixels) and image size; the frame is the optical frame (RDF)."""
@@ -224,6 +234,7 @@ Shape = (
     | MeshResource
     | Image
     | CompressedImage
+    | VideoSample
     | Pinhole
     | GridMap
     | Plain

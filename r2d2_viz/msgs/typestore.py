@@ -24,9 +24,11 @@ EXTRA_TYPES = {
     "int8[] data\n",
     "rosgraph_msgs/msg/Log": "std_msgs/Header header\nbyte level\nstring name\nstring msg\nstring file\n"
     "string function\nuint32 line\nstring[] topics\n",
+    "foxglove_msgs/msg/CompressedVideo": "builtin_interfaces/Time timestamp\nstring frame_id\nuint8[] data\n"
+    "string format\n",
 }
 """Types the app shows that rosbags' stores lack (nav2's costmap updates; ROS 1's log, as ROS 1 bags hold it once
-converted to CDR: its header without ``seq``), added to every store."""
+converted to CDR: its header without ``seq``; Foxglove's compressed video), added to every store."""
 
 
 @functools.cache

@@ -5,6 +5,7 @@ to look like it. Read with a YAML safe loader (no tags, no objects; size-limited
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from functools import lru_cache
 from pathlib import Path
@@ -12,6 +13,7 @@ from typing import Any
 
 from r2d2_viz.rviz.read import Reader
 from r2d2_viz.rviz.spec import MAX_BYTES, RvizError, ViewSpec
+from r2d2_viz.rviz.tools import config_tool_topics
 
 
 def default_rviz_path() -> Path:
@@ -70,4 +72,5 @@ def spec_from_data(data: Any, *, source: str) -> ViewSpec:
     manager = data.get("Visualization Manager")
     if not isinstance(manager, dict):
         raise RvizError(f"{source}: no 'Visualization Manager' mapping; is this an RViz config?")
-    return Reader(source).spec(data, manager)
+    spec = Reader(source).spec(data, manager)
+    return dataclasses.replace(spec, tool_topics=tuple(sorted(config_tool_topics(manager.get("Tools")).items())))

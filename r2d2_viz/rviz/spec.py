@@ -153,6 +153,8 @@ class ViewSpec:
     """One line per thing with no counterpart in Rerun, naming it."""
     more_robots: tuple[RobotModel, ...] = ()
     """The config's other RobotModel displays (several robots, each its own Description Topic)."""
+    tool_topics: tuple[tuple[str, str], ...] = ()
+    """The topics the config's Tools section gives RViz's publishing tools (``2D Goal Pose`` → ``/goal_pose``)."""
 
 
 def orbit_eye(

@@ -39,8 +39,8 @@ def display_topics(bag: Bag) -> tuple[dict[str, str], dict[str, str]]:
     shown: dict[str, str] = {}
     other: dict[str, str] = {}
     for topic, info in sorted(bag.topics.items()):
-        if topic in OURS:
-            continue
+        if topic in OURS or topic.endswith("/robot_description"):
+            continue  # a robot's description (any namespace's) is its model, not a String to show
         (shown if info.msgtype in DECODERS or info.msgtype == GRID_UPDATE else other)[topic] = info.msgtype
     return shown, other
 

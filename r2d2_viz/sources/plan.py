@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -99,7 +99,6 @@ class RunPlan:
     """Display topics (topic → type) the run shows."""
     undisplayed: dict[str, str] = field(default_factory=dict)
     """The bag's other topics (no display draws their types)."""
-    mcap_files: tuple[Path, ...] = ()
     preview_joints: SampleChunk | None = None
     """The first joint states (the view is fitted to the robot in them)."""
     preview_messages: tuple[TopicMessage, ...] = ()
@@ -130,10 +129,10 @@ class RunPlan:
         self,
         max_samples: int,
         *,
-        predecode: Callable[[TopicMessage], TopicMessage] | None = None,
         max_bytes: int = WINDOW_BYTES,
+        **decoders: Any,
     ) -> Iterator[Window]:
-        """The run, stretch by stretch (a bag's one pass, a motion's chunks); ``predecode``: each display message's."""
+        """The run, stretch by stretch (a bag's one pass, a motion's chunks); ``decoders``: BagPass's keywords."""
         if self.replay is not None:
             r = self.replay
             actuated = self.tree.actuated if self.tree is not None else None
@@ -143,7 +142,7 @@ class RunPlan:
                 actuated=actuated,
                 displays=self.displays,
                 time=r.time,
-                predecode=predecode,
+                **decoders,
                 robots=[(x.joints_topic, x.tree.actuated) for x in self.robots],
                 tf_topics=dict(r.tf_topics),
                 shared=r.shared_frames,
@@ -259,7 +258,6 @@ def plan_bag(
         description=text,
         displays=shown,
         undisplayed={t: m for t, m in undisplayed.items() if t not in robots_read(robots)},
-        mcap_files=tuple(f for f in bag.files if f.suffix == ".mcap"),
         preview_joints=joints,
         preview_messages=messages,
         seek_messages=seek,

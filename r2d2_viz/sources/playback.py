@@ -23,6 +23,7 @@ from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bags.storage import Block
 from r2d2_viz.sources.base import SampleChunk, Source, TfRecords, last_per_time
+from r2d2_viz.sources.fields_pass import FieldsPass, TopicColumns
 from r2d2_viz.sources.robots import renamed
 
 JOINTS, TF = "/joint_states", "/tf"
@@ -44,6 +45,8 @@ class Window:
     """Bytes of bag messages in it (progress)."""
     more_joints: tuple[SampleChunk | None, ...] = ()
     """Several robots: the joint states of the second, third… (``joints`` holds the first's)."""
+    fields: tuple[TopicColumns, ...] = ()
+    """Other topics' fields (:mod:`r2d2_viz.sources.fields_pass`)."""
 
 
 def source_windows(source: Source, max_samples: int) -> Iterator[Window]:
@@ -80,8 +83,15 @@ class BagPass:
         robots: Sequence[tuple[str, Sequence[str] | None]] = (),
         tf_topics: Mapping[str, str] | None = None,
         shared: Sequence[str] = (),
+        fields: FieldsPass | None = None,
     ) -> None:
         self.bag, self.segments, self.displays, self.time = bag, tuple(segments), dict(displays), time
+        self.fields = fields
+        """Decodes the other topics' fields (read in the last segment: not in a seek's preroll)."""
+        if fields is not None and self.segments:
+            last = self.segments[-1]
+            topics = (*last.topics, *(t for t in fields.topics if t not in last.topics))
+            self.segments = (*self.segments[:-1], Segment(topics, last.start_ns, last.stop_ns))
         self.quiet = quiet
         """Say nothing of what was skipped (a look-ahead: the pass itself says it)."""
         self.predecode = predecode
@@ -151,7 +161,10 @@ class BagPass:
         records: list[TfRecords] = []
         messages: list[TopicMessage] = []
         others: list[list[SampleChunk]] = [[] for _ in self.others]
+        fields: list[TopicColumns] = []
         for block in pieces:
+            if self.fields is not None:
+                fields += self.fields.decode(block)
             if self.joints is not None and len(rows := block.rows(self.joints_topic)):
                 chunk = self.joints.decode_block(block.take(rows))
                 if chunk is not None:
@@ -177,11 +190,14 @@ class BagPass:
         self.read_ns = int(pieces[-1].times_ns[-1])
         tf = concatenate([r for r in records if len(r)])
         more = tuple(_joined(c) for c in others)
-        return Window(self.read_ns, _joined(chunks), tf, tuple(messages), sum(p.nbytes for p in pieces), more)
+        nbytes = sum(p.nbytes for p in pieces)
+        return Window(self.read_ns, _joined(chunks), tf, tuple(messages), nbytes, more, tuple(fields))
 
     def _finish(self) -> None:
         if self.quiet:
             return
+        if self.fields is not None:
+            self.fields.finish()
         warn, path = self.bag.warn, self.bag.path
         decoders = [(self.joints_topic, self.joints, self._moved)]
         decoders += [(t, d, last[1]) for (t, d), last in zip(self.others, self._others_last, strict=True)]

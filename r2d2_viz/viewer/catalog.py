@@ -69,6 +69,20 @@ def catalog_server(directory: Path, *, name: str, bind: str = "127.0.0.1", port:
         server.shutdown()
 
 
+def register_layout(server: Any, name: str, directory: Path) -> Path | None:
+    """Give the dataset ``name`` the layout its recordings were converted with (the ``.rbl`` a fleet conversion
+    writes beside each ``.rrd``; the first by name): the viewer opens every recording on it. The blueprint embedded
+    in an ``.rrd`` does not travel with the catalog's segments. None: no layout there (or the server refused it)."""
+    layouts = sorted(p for p in directory.glob("*.rbl") if p.with_suffix(".rrd").is_file())
+    if not layouts:
+        return None
+    try:
+        server.client().get_dataset(name).register_blueprint(layouts[0].resolve().as_uri())
+    except Exception:  # an older server, a torn file: the viewer's own layout then
+        return None
+    return layouts[0]
+
+
 def server_url(server: Any) -> str:
     return str(server.url())
 

@@ -4,21 +4,29 @@ recorded transforms): each message decoded (:mod:`r2d2_viz.msgs`) and logged in 
 An empty frame id is drawn in the fixed frame (said once per topic); a message that cannot be decoded is said once
 per topic and counted (the count is said at the end). Odometry keeps RViz's history (Keep, default 100): its poses
 go round ``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
+
+Cameras become Rerun ``VideoStream`` s (:class:`VideoFeed`): each raw 8-bit camera topic encoded as it is read
+(``--video``; a bag's reader thread or a live receiver: the encoders release the GIL), samples compressed already
+passed through. A stream's codec is logged statically once on its entity, its samples at their times on the same
+entity (the 2D view and the camera's pinhole in 3D show them as they showed images). A stream shows from its first
+keyframe: an encoded one starts with one (at a seek too); a passed-through one that starts without is skipped to
+its first keyframe (said once).
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections import deque
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import rerun as rr
 
 from r2d2_viz.errors import short
+from r2d2_viz.msgs.images import EncoderName, VideoEncoder
 from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp, MeshResource, is_plain
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, Image, MarkerOp, MeshResource, VideoSample, is_plain
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage
 from r2d2_viz.sources.base import Clock, TfRecords
@@ -54,6 +62,77 @@ class _TopicState:
     plain: PlainBook = field(default_factory=PlainBook)
 
 
+class VideoFeed:
+    """``encoder``: the codec raw images become (None: they stay lossless ``Image`` s); ``live``: low-latency
+    rate control and a keyframe a second (two in a recording)."""
+
+    def __init__(self, encoder: EncoderName | None, *, live: bool = False) -> None:
+        self.encoder, self.live = encoder, live
+        self._encoders: dict[str, VideoEncoder] = {}
+        self._codecs: dict[str, str] = {}
+        """Entity → the codec logged statically on it."""
+        self._skipped: dict[str, int] = {}
+        """Topic → samples skipped before its first keyframe (a topic is in ``_started`` from that keyframe)."""
+        self._started: set[str] = set()
+
+    def encode(
+        self, topic: str, time_ns: int, decoded: Decoded | list[MarkerOp] | MsgError
+    ) -> Decoded | list[MarkerOp] | MsgError:
+        """``decoded`` with a raw image replaced by its video sample(s) (with ``--video``; its topic's encoder
+        takes it), in time order per topic."""
+        if self.encoder is None or not isinstance(decoded, Decoded) or len(decoded.items) != 1:
+            return decoded
+        image = decoded.items[0]
+        if not isinstance(image, Image):
+            return decoded
+        encoder = self._encoders.get(topic)
+        if encoder is None:
+            keyint = 1.0 if self.live else 2.0
+            encoder = self._encoders[topic] = VideoEncoder(self.encoder, live=self.live, keyint_s=keyint)
+        if not encoder.takes(image):
+            return decoded
+        try:
+            samples = encoder.encode(image, time_ns)
+        except Exception as exc:  # PyAV's errors (av.error.FFmpegError): the encoder refuses this frame
+            raise MsgError(f"cannot encode as {self.encoder}: {exc}") from None
+        return dataclasses.replace(decoded, items=tuple(samples))
+
+    def notes(self, topic: str) -> Iterator[str]:
+        """What the topic's encoder has to say (a size change, a refused encoding), each once."""
+        encoder = self._encoders.get(topic)
+        while encoder is not None and encoder.notes:
+            yield encoder.notes.pop(0)
+
+    def ready(self, rec: rr.RecordingStream, topic: str, decoded: Decoded | list[MarkerOp]) -> bool:
+        """Whether ``decoded`` is to be logged: anything but a video sample before its stream's first keyframe.
+        A stream's codec is logged (statically) before its first sample."""
+        if not isinstance(decoded, Decoded) or not decoded.items or not isinstance(decoded.items[0], VideoSample):
+            return True
+        sample = decoded.items[0]
+        if topic not in self._started:
+            if not sample.keyframe:
+                self._skipped[topic] = self._skipped.get(topic, 0) + 1
+                return False
+            self._started.add(topic)
+        if self._codecs.get(topic) != sample.codec:
+            rec.log(topic, rr.VideoStream.from_fields(codec=sample.codec), static=True)
+            self._codecs[topic] = sample.codec
+        return True
+
+    def finish(self) -> Iterator[tuple[str, str]]:
+        """(topic, line) for each stream that started without a keyframe, or never had one."""
+        for topic, skipped in self._skipped.items():
+            if topic in self._started:
+                yield topic, f"the video starts without a keyframe: {skipped} samples skipped up to the first one"
+            else:
+                yield topic, f"the video has no keyframe: its {skipped} samples cannot be shown"
+        for topic, encoder in self._encoders.items():
+            held = encoder.close()
+            if held:
+                encoder.notes.append(f"the encoder held back the last {held} frames")
+            yield from ((topic, note) for note in encoder.notes)
+
+
 class DisplayFeed:
     """Decode and log display messages: a replay :meth:`push` es those of each stretch it reads and :meth:`until`
     logs what is due; a live source calls :meth:`log` as messages arrive."""
@@ -72,8 +151,11 @@ class DisplayFeed:
         topics: Mapping[str, str] | None = None,
         start_ns: int | None = None,
         tf: Sequence[TfRecords] = (),
+        video: VideoFeed | None = None,
     ) -> None:
         self.notices, self.rec = notices, notices.rec
+        self.video = video or VideoFeed(None)
+        """Cameras as video (``--video``: raw images encoded) and video samples passed through."""
         self._pending: deque[TopicMessage] = deque()
         self.clock, self.fixed_frame, self.header_time = clock, fixed_frame, header_time
         self.styles = dict(styles or {})
@@ -161,6 +243,10 @@ class DisplayFeed:
                 key=f"display problem {message.topic}",
             )
             return
+        for note in self.video.notes(message.topic):
+            self.notices.report(f"{self._where(message.topic)}: {note}", key=f"video {message.topic} {note}")
+        if not self.video.ready(self.rec, message.topic, decoded):
+            return
         placed = self._placed(message.topic, decoded)
         if style.decay and self._placer is not None and isinstance(placed, Decoded):
             placed = self._placer.place(placed, message.time_ns)
@@ -202,6 +288,7 @@ class DisplayFeed:
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
             decoded: Decoded | list[MarkerOp] | MsgError = decode(message.msgtype, message.data, style.options)
+            decoded = self.video.encode(message.topic, message.time_ns, decoded)
         except MsgError as exc:
             decoded = exc
         prepared = None
@@ -232,6 +319,8 @@ class DisplayFeed:
 
     def finish(self) -> None:
         """Say, per topic, how many messages could not be shown (when more than the one already said)."""
+        for topic, note in self.video.finish():
+            self.notices.report(f"{self._where(topic)}: {note}")
         for topic, state in self.topics.items():
             if state.problems > 1:
                 self.notices.report(

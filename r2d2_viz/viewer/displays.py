@@ -157,6 +157,8 @@ def archetypes(item: shapes.Shape, load: MeshLoader | None = None) -> list[rr.As
         return [rr.Image(item.pixels, color_model=item.color_model)]
     if isinstance(item, shapes.CompressedImage):
         return [rr.EncodedImage(contents=item.data, media_type=item.media_type)]
+    if isinstance(item, shapes.VideoSample):  # its codec is logged statically, once per entity (display_feed)
+        return [rr.VideoStream.from_fields(sample=item.data, is_keyframe=item.keyframe)]
     if isinstance(item, shapes.Pinhole):
         resolution = [item.width, item.height]
         return [rr.Pinhole(image_from_camera=item.K, resolution=resolution, camera_xyz=rr.ViewCoordinates.RDF)]
@@ -265,7 +267,7 @@ def _components(item: shapes.Shape, decoded: Decoded, entity: str, load: MeshLoa
             child_frame=plane,
         )
         return [rr.CoordinateFrame(plane), pinhole]
-    in_3d = not isinstance(item, (shapes.Image, shapes.CompressedImage))
+    in_3d = not isinstance(item, (shapes.Image, shapes.CompressedImage, shapes.VideoSample))
     frame: list[rr.AsComponents] = [rr.CoordinateFrame(decoded.frame_id)] if in_3d and decoded.frame_id else []
     return [*frame, *archetypes(item, load)]
 

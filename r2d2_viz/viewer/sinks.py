@@ -22,6 +22,8 @@ import rerun.blueprint as rrb
 
 from r2d2_viz.errors import DEBUG_ENV, SinkError, UsageError, one_line
 from r2d2_viz.viewer.entities import APP_ID
+from r2d2_viz.viewer.web.assets import viewer_static
+from r2d2_viz.viewer.web.server import PageServer
 
 DEFAULT_GRPC_PORT = 9876
 DEFAULT_WEB_PORT = 9090
@@ -48,6 +50,8 @@ class SinkConfig:
     """None: a random one (Rerun's default); fleet conversions give each bag its own stable id."""
     properties: tuple[tuple[str, str], ...] = ()
     """Recording properties, ``/__properties/<name>`` text values (what a fleet recording says of its bag)."""
+    layout_file: Path | None = None
+    """The blueprint also written to this ``.rbl`` (a fleet's: the catalog gives it to its dataset)."""
 
     @property
     def live(self) -> bool:
@@ -109,6 +113,7 @@ def open_recording(
         rec.send_property(name, rr.AnyValues(value=value))
     sinks: list[rr.FileSink | rr.GrpcSink] = []
     server: subprocess.Popen[bytes] | None = None
+    page: PageServer | None = None
     if config.spawn:
         if not has_display():
             raise SinkError("--spawn: no display to open the viewer on; use --save FILE.rrd or --serve instead")
@@ -117,19 +122,26 @@ def open_recording(
         _probe(config.connect)
         sinks.append(rr.GrpcSink(config.connect))
     if config.serve:
-        server, uri = _serve(config)
+        server, uri, page = serve(config)
         sinks.append(rr.GrpcSink(uri))
     if save_to is not None:
         sinks.append(rr.FileSink(save_to, write_footer=True))
     rec.set_sinks(*sinks, default_blueprint=blueprint)
+    if config.layout_file is not None and blueprint is not None:
+        blueprint.save(APP_ID, config.layout_file)
     if config.serve and on_ready is not None:
         host = "localhost" if config.bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else config.bind
         public = uri.replace("127.0.0.1", host)
-        on_ready(
-            f"serving: open http://{host}:{config.web_port}/?url={quote(public, safe='')} in a browser, "
-            f"or run: rerun {public}"
-        )
-    return Recording(rec, server, live=config.live)
+        url = page.url() if page is not None else f"http://{host}:{config.web_port}/?url={quote(public, safe='')}"
+        on_ready(f"serving: open {url} in a browser, or run: rerun {public}")
+    return Recording(rec, server, live=config.live, page=page)
+
+
+def serve_recording(rec: rr.RecordingStream, config: SinkConfig) -> Recording:
+    """``rec`` streamed to a served viewer (:func:`serve`) instead of its other sinks (the Python API's page)."""
+    server, uri, page = serve(config)
+    rec.set_sinks(rr.GrpcSink(uri))
+    return Recording(rec, server, live=True, page=page)
 
 
 def _spawn_viewer(port: int) -> str:
@@ -189,8 +201,9 @@ def _listening(host: str, port: int) -> bool:
         return probe.connect_ex((host, port)) == 0
 
 
-def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
-    """Rerun's own server (``rerun --serve-web``): a web viewer and a gRPC proxy, both on ``--bind``.
+def serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str, PageServer | None]:
+    """Rerun's gRPC proxy (``rerun --serve-grpc``) and r2d2-viz's page (the web viewer with RViz's tools, see
+    :mod:`r2d2_viz.viewer.web`), both on ``--bind``. Without rerun-notebook, Rerun's own page (``--serve-web``).
 
     (The SDK's in-process ``serve_web_viewer`` always listens on every address; this one does not.)
     """
@@ -199,15 +212,19 @@ def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
     executable = viewer_executable()
     if executable is None:
         raise SinkError("--serve: the 'rerun' binary that ships with rerun-sdk was not found; use --save FILE.rrd")
+    try:
+        viewer_static()
+        own_page = True
+    except SinkError:
+        own_page = False
     command = [
         executable,
-        "--serve-web",
+        "--serve-grpc" if own_page else "--serve-web",
         "--bind",
         config.bind,
         "--port",
         str(config.port),
-        "--web-viewer-port",
-        str(config.web_port),
+        *(() if own_page else ("--web-viewer-port", str(config.web_port))),
     ]
     output = _child_output()
     server = subprocess.Popen(command, stdout=output, stderr=output, start_new_session=True)
@@ -216,7 +233,12 @@ def _serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str]:
     while time.monotonic() < deadline and server.poll() is None:
         if _listening(local, config.port):
             host = f"[{local}]" if ":" in local else local
-            return server, f"rerun+http://{host}:{config.port}/proxy"
+            try:
+                page = PageServer(config.port, config.bind, config.web_port) if own_page else None
+            except SinkError:
+                _stop(server)
+                raise
+            return server, f"rerun+http://{host}:{config.port}/proxy", page
         time.sleep(0.05)
     _stop(server)
     raise SinkError(f"--serve: the Rerun server did not start on {config.bind}:{config.port}")
@@ -240,6 +262,8 @@ class Recording:
     server: subprocess.Popen[bytes] | None = None
     live: bool = False
     """A viewer takes the data (closing waits for it at most ``CLOSE_TIMEOUT_S``)."""
+    page: PageServer | None = None
+    """``--serve``'s page (the web viewer with RViz's tools), if any."""
 
 
 def close_recording(recording: Recording) -> None:
@@ -254,5 +278,7 @@ def close_recording(recording: Recording) -> None:
             recording.rec.flush()
         recording.rec.disconnect()
     finally:
+        if recording.page is not None:
+            recording.page.close()
         if recording.server is not None:
             _stop(recording.server)

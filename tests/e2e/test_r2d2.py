@@ -227,10 +227,20 @@ def test_native_viewer(case: str, recordings: dict[str, Path], x_display, artifa
         assert named == {"odom", "axis", "leg1", "leg2", "body", "head", "rod", "box"}
 
 
+def _served_url(log: Path, app: subprocess.Popen[bytes], timeout: float = 60) -> str:
+    """The URL ``r2d2-viz --serve`` printed (``serving: open URL in a browser``)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        found = re.search(r"serving: open (\S+) in a browser", log.read_text())
+        if found:
+            return found.group(1)
+        assert app.poll() is None, log.read_text()
+        time.sleep(0.2)
+    raise AssertionError(f"no URL printed: {log.read_text()}")
+
+
 def serve_in_browser(chromium_browser, artifacts_dir: Path, args: list[str], name: str) -> np.ndarray:
     """``r2d2-viz --serve ARGS`` opened in the browser; the screenshot once the robot shows on our layout."""
-    from urllib.parse import quote
-
     grpc_port, web_port = viewers.free_port(), viewers.free_port()
     exe = Path(sys.executable).parent / "r2d2-viz"
     log = artifacts_dir / f"{name}.log"
@@ -251,14 +261,21 @@ def serve_in_browser(chromium_browser, artifacts_dir: Path, args: list[str], nam
         context.set_default_timeout(150_000)  # bounded like the wait below, not by playwright's 30 s
         context.route("**/*", lambda route: route.continue_() if "127.0.0.1" in route.request.url else route.abort())
         page = context.new_page()
-        url = f"http://127.0.0.1:{web_port}/?url={quote(f'rerun+http://127.0.0.1:{grpc_port}/proxy', safe='')}"
+        url = _served_url(log, app).replace("//localhost:", "//127.0.0.1:")  # the page printed, with its token
         page.goto(url)
 
         def shows_the_robot(img: np.ndarray) -> bool:
             return not layout_problems(img) and not any("white" in p for p in robot_problems(img))
 
-        # live: the robot moves, so the page never stands still; readiness is the predicate
-        png = viewers.wait_until_viewer_ready(page, timeout=150, max_changed=0.2, ready=shows_the_robot)
+        # our page: ready once the viewer said so (window.r2d2.ready); live, the robot moves, so the page never
+        # stands still: then the predicate on screenshots, bounded like the wait above
+        page.wait_for_function("window.r2d2 && window.r2d2.ready", timeout=150_000)
+        deadline = time.monotonic() + 150
+        while not shows_the_robot(img := viewers._decode_png(png := page.screenshot())):
+            if time.monotonic() > deadline:
+                (artifacts_dir / f"{name}.png").write_bytes(png)
+                raise AssertionError(f"{artifacts_dir / name}.png: {layout_problems(img) + robot_problems(img)}")
+            time.sleep(1.0)
         (artifacts_dir / f"{name}.png").write_bytes(png)
         context.close()
     finally:

@@ -50,8 +50,9 @@ def test_each_bag_one_recording_with_a_stable_id_and_up_to_date_ones_skipped(tmp
     assert result.stderr.splitlines() == [result.stderr.strip()]  # off a terminal: the summary line alone
     assert "3 converted" in result.stderr
     names = sorted(p.name for p in out.iterdir())
-    assert names == sorted(["a.rrd", "b.rrd", f"{single.stem}.rrd"])
-    ids = {p.name: _recording_id(p) for p in out.iterdir()}
+    stems = ["a", "b", single.stem]
+    assert names == sorted([f"{s}.rrd" for s in stems] + [f"{s}.rbl" for s in stems])  # each with its layout
+    ids = {p.name: _recording_id(p) for p in out.glob("*.rrd")}
     assert ids == {"a.rrd": _expected_id(a), "b.rrd": _expected_id(b), f"{single.stem}.rrd": _expected_id(single)}
     assert len(set(ids.values())) == 3
     before = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
@@ -86,7 +87,7 @@ def test_bad_bags_are_one_line_each_and_the_rest_are_converted(tmp_path: Path) -
     assert any(f"{missing}: no such bag" in line for line in lines)
     assert "1 converted, 4 failed" in lines[-1]
     assert "Traceback" not in result.stderr
-    assert sorted(p.name for p in out.iterdir()) == ["good.rrd"]  # nothing half-written, no hidden leftovers
+    assert sorted(p.name for p in out.iterdir()) == ["good.rbl", "good.rrd"]  # nothing half-written or hidden
 
 
 def test_an_unusable_output_folder_is_one_line(tmp_path: Path) -> None:
@@ -137,7 +138,7 @@ def test_a_worker_that_dies_fails_its_bag_and_the_rest_finish(tmp_path: Path) ->
     assert result.returncode == 2
     assert f"error: {bags[1]}: its worker process died" in result.stderr
     assert "2 converted, 1 failed" in result.stderr
-    assert sorted(p.name for p in out.iterdir()) == ["one.rrd", "three.rrd"]
+    assert sorted(p.name for p in out.iterdir()) == ["one.rbl", "one.rrd", "three.rbl", "three.rrd"]
 
 
 @pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
@@ -179,6 +180,24 @@ def test_one_bag_still_works_as_before_and_several_need_a_folder(tmp_path: Path)
     assert result.returncode == 2 and "give --save-dir DIR" in result.stderr
     result = cli("--bag", str(bag), "--jobs", "2")
     assert result.returncode == 2 and "--jobs goes with --save-dir" in result.stderr
+
+
+def test_video_converts_every_bags_camera_and_a_plain_recording_is_not_up_to_date_for_it(tmp_path: Path) -> None:
+    from camerabag import write_camera_bag
+    from rrd import read_recording
+
+    bags = [tmp_path / name for name in ("front", "rear")]
+    for bag in bags:
+        write_camera_bag(bag, 8)
+    out = tmp_path / "out"
+    assert cli("--bag", *map(str, bags), "--save-dir", str(out)).returncode == 0  # lossless first
+    result = cli("--bag", *map(str, bags), "--save-dir", str(out), "--video")
+    assert result.returncode == 0, result.stderr
+    assert "2 converted" in result.stderr, result.stderr  # the lossless ones are not up to date for --video
+    for bag in bags:
+        camera = read_recording(out / f"{bag.name}.rrd")["/camera/image_raw"]
+        assert sum(s is not None for s in camera.temporal["VideoStream:sample"]) == 8
+        assert "Image:buffer" not in camera.temporal
 
 
 EXE = str(Path(sys.executable).parent / "r2d2-viz")
@@ -275,5 +294,5 @@ def test_the_same_bag_given_twice_is_converted_once(tmp_path: Path) -> None:
     result = cli("--bag", str(alpha), str(alpha), str(again), "--save-dir", str(out))
     assert result.returncode == 0, result.stderr
     assert "r2d2-viz: 1 converted →" in result.stderr
-    assert sorted(p.name for p in out.iterdir()) == ["alpha.rrd"]
+    assert sorted(p.name for p in out.iterdir()) == ["alpha.rbl", "alpha.rrd"]
     assert _recording_id(out / "alpha.rrd") == _expected_id(alpha)

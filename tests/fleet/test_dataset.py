@@ -72,10 +72,20 @@ def test_a_catalog_client_sees_one_segment_per_recording(fleet: Path) -> None:
         dataset = client.get_dataset("out")
         expected = {str(RrdReader(p).recordings()[0].recording_id) for p in fleet.glob("*.rrd")}
         assert set(dataset.segment_ids()) == expected and len(expected) == 2
+        # every recording opens on r2d2-viz's layout: the conversion's blueprint, registered as the default
+        assert dataset.default_blueprint() is not None and len(dataset.blueprints()) == 1
     finally:
         code = _stop(proc, signal.SIGTERM)
     assert code == 0
     assert not listening_addresses(port)
+
+
+def test_each_recording_has_its_layout_beside_it(fleet: Path) -> None:
+    from rrd import blueprint_components
+
+    for rrd in fleet.glob("*.rrd"):
+        layout = blueprint_components(rrd.with_suffix(".rbl"))
+        assert layout == blueprint_components(rrd) and any("View" in str(v) for v in layout.values())
 
 
 def test_serve_adds_a_web_viewer_and_ctrl_c_stops_both(fleet: Path) -> None:

@@ -51,7 +51,7 @@ def test_ray_tasks_write_what_the_processes_write_and_a_dead_worker_fails_its_ba
     errors = [line for line in result.stderr.splitlines() if line.startswith("error:")]
     assert len(errors) == 1 and errors[0].startswith(f"error: {bags[2]}: its Ray worker failed"), result.stderr
     assert "2 converted, 1 failed" in result.stderr
-    assert sorted(p.name for p in ray_out.iterdir()) == ["turn.rrd", "walk.rrd"]  # no partial file of 'dies'
+    assert sorted(p.name for p in ray_out.iterdir()) == ["turn.rbl", "turn.rrd", "walk.rbl", "walk.rrd"]  # none of dies
 
     result = cli(*args[:3], "--save-dir", str(jobs_out), "--jobs", "2")
     assert result.returncode == 0, result.stderr

@@ -116,7 +116,7 @@ class Bag:
 
     @property
     def files(self) -> tuple[Path, ...]:
-        """The storage files (``.mcap`` ones can go to :func:`r2d2_viz.viewer.bag_topics.log_other_topics`)."""
+        """The storage files."""
         return tuple(f.path for f in self._files)
 
     @property

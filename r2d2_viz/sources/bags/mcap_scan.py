@@ -66,10 +66,8 @@ class McapScan:
     def __init__(self, path: Path) -> None:
         self.path = path
         self.note = ""
-        self.problems: dict[str, int] = {}
-        """Damage met while reading (kind → chunks skipped); the bag says it and clears it."""
-        self._damaged: set[int] = set()
-        """File offsets of the chunks found damaged (not read again)."""
+        self.problems: dict[str, int] = {}  # damage met while reading (kind → chunks skipped); the bag says it
+        self._damaged: set[int] = set()  # file offsets of the chunks found damaged (not read again)
         self._found = Definitions()
         self.channels: dict[int, Channel] = self._found.channels
         self.schemas: dict[int, Schema] = self._found.schemas

@@ -8,7 +8,8 @@ built from rosbags' definitions because Cyclone validates incoming CDR against i
 QoS per topic, from what its writers offer (the built-in DCPSPublication topic): when a writer is reliable and
 transient-local (``/tf_static``, ``/robot_description``, ``/map``) the reader is reliable + transient-local with a
 deep history, so the latched samples of several publishers all arrive; otherwise it is best-effort + volatile,
-which matches every writer, sensor-data ones included. Subscribe only: nothing is ever written.
+which matches every writer, sensor-data ones included. Written: only what :meth:`LiveGraph.publish` is given (the
+web page's tools: reliable, volatile, depth 1, as RViz's tools publish).
 
 A drain thread moves samples from the readers into a bounded queue per topic (oldest dropped and counted);
 :meth:`LiveGraph.poll` never blocks.
@@ -29,6 +30,7 @@ from typing import Any, NamedTuple
 from r2d2_viz.msgs.typestore import MsgError, typestore
 from r2d2_viz.sources.live.idl_types import IdlTypes, RawSample
 from r2d2_viz.sources.live.names import LiveError, RosDiscovery, dds_topic, ros_topic, ros_type
+from r2d2_viz.sources.live.writers import Writers
 
 LATCHED_BY_NAME = frozenset({"/tf_static", "/robot_description", "/map", "/map_metadata", "/semantic_description"})
 """Topics taken as transient-local when no writer has been seen yet to tell."""
@@ -57,7 +59,7 @@ class Publication:
 
 def cyclonedds_modules() -> dict[str, ModuleType]:
     """cyclonedds' modules, imported on first use; LiveError naming ``pip install cyclonedds`` if missing."""
-    names = ("core", "domain", "topic", "sub", "builtin", "idl", "idl.types", "util")
+    names = ("core", "domain", "topic", "sub", "pub", "builtin", "idl", "idl.types", "util")
     try:
         return {name: importlib.import_module(f"cyclonedds.{name}") for name in names}
     except ImportError as exc:
@@ -93,6 +95,7 @@ class LiveGraph:
         latched_depth: int = 100,
     ) -> None:
         self._dds = cyclonedds_modules()
+        self.distro = distro
         self.discovery = RosDiscovery.from_env(env)
         config = self.discovery.cyclone_xml()
         uri = (os.environ if env is None else env).get("CYCLONEDDS_URI", "")
@@ -113,6 +116,7 @@ class LiveGraph:
             self._types = IdlTypes(typestore(distro), self._dds["idl"])
         except MsgError as exc:
             raise LiveError(str(exc)) from None
+        self._writers = Writers(self._dds, self._participant, self._types)
         self._queue = queue
         self._latched_depth = latched_depth
         self._readers: dict[str, tuple[str, Any]] = {}
@@ -185,6 +189,10 @@ class LiveGraph:
         self._waitset.attach(condition)
         self._wake.set(True)
         return Publication(topic, ros_type, durable, durable)
+
+    def publish(self, topic: str, ros_type: str, data: bytes) -> None:
+        """Write one message (CDR with its header) on ``topic``, as RViz's tools do (:class:`.writers.Writers`)."""
+        self._writers.publish(topic, ros_type, data)
 
     def wait(self, timeout: float) -> bool:
         """Block until samples have arrived since the last poll (True), or ``timeout`` seconds (False)."""

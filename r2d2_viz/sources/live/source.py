@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Container, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -86,6 +86,8 @@ class LiveBatch:
     tf: list[TfRecords] = field(default_factory=list)
     """Static records (``/tf_static``) before moving ones."""
     displays: list[TopicMessage] = field(default_factory=list)
+    fields: list[TopicMessage] = field(default_factory=list)
+    """Topics no display draws, of a type the graph's typestore knows (their fields are shown)."""
     notes: list[tuple[str, str]] = field(default_factory=list)
     """``(key, line)``: each key is worth saying once."""
 
@@ -106,8 +108,10 @@ class LiveSource:
         time: TimeSource = "receive",
         refresh: float = 1.0,
         shared_frames: Sequence[str] = SHARED_FRAMES,
+        known_types: Container[str] = (),
     ) -> None:
         self.graph, self.time, self.refresh_period = graph, time, refresh
+        self.known_types = known_types  # read for their fields though no display draws them
         self.wanted = None if topics is None else {*topics, *OURS}
         self.subscribed: dict[str, str] = {}
         self.received: dict[str, int] = {}
@@ -138,11 +142,12 @@ class LiveSource:
                 continue
             ours = robot_topic(topic)
             expected = EXPECTED[ours[1]] if ours is not None else None
-            if expected is None and self.wanted is None and rtype not in DECODERS:
-                continue  # a topic no display draws
+            shown = rtype in DECODERS or rtype in self.known_types
+            if expected is None and self.wanted is None and not shown:
+                continue  # a topic nothing can show
             if self.wanted is not None and topic not in self.wanted and ours is None:
                 continue
-            if (expected is not None and rtype != expected) or (expected is None and rtype not in DECODERS):
+            if (expected is not None and rtype != expected) or (expected is None and not shown):
                 self._refused.add((topic, rtype))
                 want = expected or "a type a display draws"
                 self._note(f"type {topic} {rtype}", f"{topic}: a publisher of {rtype}, not {want}: not read")
@@ -199,7 +204,8 @@ class LiveSource:
                 elif text is not None:
                     batch.descriptions.append(text)
             else:
-                batch.displays.append(TopicMessage(s.source_timestamp_ns, s.topic, s.ros_type, s.data))
+                shown = batch.displays if s.ros_type in DECODERS else batch.fields
+                shown.append(TopicMessage(s.source_timestamp_ns, s.topic, s.ros_type, s.data))
         batch.joints = self._decode_joints(joints)
         for namespace, messages in robot_joints.items():
             pending = self._robot_pending.setdefault(namespace, deque(maxlen=PENDING_JOINT_STATES))

@@ -70,6 +70,8 @@ class Layout:
     """NavSatFix topics: a map of their fixes."""
     plots: tuple[str, ...] = ()
     """Topics plotted (IMUs, batteries, scalar sensors, std_msgs numbers): a time-series view each, as tabs."""
+    field_plots: tuple[tuple[str, ...], ...] = ()
+    """``--plot`` paths: a time-series view per flag, of its paths (``/plot/<n>``)."""
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
@@ -134,6 +136,11 @@ def generate_blueprint(
         if topic.kind in ("Image", "Camera") and topic.enabled and topic.topic:
             side.append(rrb.Spatial2DView(name=f"{topic.kind}: {topic.topic}", origin=topic.topic))
             shares.append(2)
+    for n, texts in enumerate(layout.field_plots):
+        plot = rrb.TimeSeriesView(name=f"Plot: {', '.join(texts)}"[:120], origin=f"/plot/{n}")
+        parts[f"plot {n}"] = plot
+        side.append(plot)
+        shares.append(2)
     log = rrb.TextLogView(name="Warnings", origin=WARNINGS)
     parts["log"] = log
     side.append(log)

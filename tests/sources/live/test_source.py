@@ -140,3 +140,24 @@ def test_non_finite_transforms_skipped() -> None:
     batch = source.poll(now=0.0)
     assert batch.tf == []
     assert sorted(k for k, _ in batch.notes) == ["/tf bad", "/tf nonfinite"]
+
+
+def test_topics_no_display_draws_are_read_for_their_fields_when_their_type_is_known() -> None:
+    graph = FakeGraph()
+    store = typestore("jazzy")
+    source = LiveSource(graph, refresh=1.0, known_types=store.fielddefs)
+    graph.pubs = [
+        Publication("/joy", "sensor_msgs/msg/Joy", False, False),
+        Publication("/mine", "my_msgs/msg/Nobody", False, False),
+    ]
+    source.poll(now=0.0)
+    assert graph.subscribed == [("/joy", "sensor_msgs/msg/Joy")]  # my_msgs: no definition anywhere, not read
+    joy = store.types["sensor_msgs/msg/Joy"]
+    header = store.types["std_msgs/msg/Header"](store.types["builtin_interfaces/msg/Time"](1, 0), "joy")
+    data = bytes(
+        store.serialize_cdr(joy(header, np.array([0.5], np.float32), np.array([1], np.int32)), "sensor_msgs/msg/Joy")
+    )
+    graph.queue = [Sample("/joy", "sensor_msgs/msg/Joy", 7, data)]
+    batch = source.poll(now=0.5)
+    assert [(m.topic, m.time_ns, m.data) for m in batch.fields] == [("/joy", 7, data)] and not batch.displays
+    assert LiveSource(FakeGraph()).known_types == ()  # without known types: display topics only, as before

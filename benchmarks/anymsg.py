@@ -1,0 +1,215 @@
+#!/usr/bin/env python3
+"""Any message decoded (issue 30, item 8): every field of every topic of a bag of custom types, beside rosbags'
+own deserializer, in one run.
+
+    python benchmarks/anymsg.py                       # 20 custom-type topics at 100 Hz for 3 min (360,000 msgs)
+    python benchmarks/anymsg.py --data /work/bigdata  # keep the bag there (reused when present)
+    python benchmarks/anymsg.py --smoke               # 5 s of bag, one round: CI, no thresholds
+
+The bag is written by ``rosbags`` (its serializer and MCAP writer) with its twenty types registered from ``.msg``
+text (``bench_msgs/msg/Sensor00`` …), so their definitions are only in the bag: half of fixed size (a header,
+scalars of every width, fixed arrays), half variable (with a ``float64[]`` of six joints, a ``string`` mode and
+a ``bench_msgs/msg/Sample[]`` of three), as a robot's controllers and drivers publish them.
+
+The bag's messages are read into memory once (our reader's blocks); then, alternating, medians of ``--rounds``:
+
+* **rosbags**: ``Typestore.deserialize_cdr`` of every message, with each topic's own definition (the store
+  ``r2d2_viz.msgs.definitions.own_store`` builds from the bag; it only deserialises — no flattening to columns);
+* **ours**: :class:`r2d2_viz.sources.fields_pass.FieldsPass` ``.decode`` of every block: every field of every
+  message as named numpy columns (what the recording gets).
+
+Goal: ours ≤ 1.0× rosbags. Also the whole ``r2d2-viz --bag BAG --save out.rrd`` (decoding, logging every field
+to Rerun and writing the file) once, for scale. Printed, never asserted; the machine may be shared (2 cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+PY = sys.executable
+APP = str(Path(PY).parent / "r2d2-viz")
+T0 = 1_700_000_000_000_000_000
+TOPICS = 20
+SAMPLE = "float64 value\nint32 id\n"
+FIXED = """std_msgs/Header header
+float64 position
+float64 velocity
+float32 current
+int32 ticks
+uint8 status
+bool enabled
+float32[4] temperatures
+geometry_msgs/Vector3 force
+"""
+VARIABLE = """std_msgs/Header header
+string mode
+float64[] positions
+float64[] velocities
+bench_msgs/Sample[] samples
+uint16 errors
+"""
+
+
+def _types() -> dict[str, str]:
+    """Type name → .msg text of the twenty topics' types (and their sample type)."""
+    out = {"bench_msgs/msg/Sample": SAMPLE}
+    for k in range(TOPICS):
+        out[f"bench_msgs/msg/Sensor{k:02d}"] = FIXED if k % 2 == 0 else VARIABLE
+    return out
+
+
+def write_bag(path: Path, seconds: float, rate: float = 100.0) -> int:
+    """The benchmark bag (MCAP, rosbags' writer); returns the number of messages."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    for name, text in _types().items():
+        ts.register(get_types_from_msg(text, name))
+    T = ts.types
+    rng = np.random.default_rng(0)
+    n = int(seconds * rate)
+    count = 0
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        connections = [
+            writer.add_connection(f"/robot/sensor{k:02d}", f"bench_msgs/msg/Sensor{k:02d}", typestore=ts)
+            for k in range(TOPICS)
+        ]
+        for i in range(n):
+            t = T0 + int(i * 1e9 / rate)
+            header = T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](*divmod(t, 1_000_000_000)), "base_link")
+            for k, connection in enumerate(connections):
+                msgtype = f"bench_msgs/msg/Sensor{k:02d}"
+                x = rng.standard_normal(6)
+                if k % 2 == 0:
+                    force = T["geometry_msgs/msg/Vector3"](*x[:3])
+                    msg = T[msgtype](
+                        header, x[0], x[1], np.float32(x[2]), i, i % 4, bool(i % 2), x[:4].astype(np.float32), force
+                    )
+                else:
+                    samples = [T["bench_msgs/msg/Sample"](float(x[j]), j) for j in range(3)]
+                    msg = T[msgtype](header, "position", x, x * 0.5, samples, i % 7)
+                writer.write(connection, t + k, bytes(ts.serialize_cdr(msg, msgtype)))
+                count += 1
+    return count
+
+
+def _rosbags(bag: object, blocks: list, stores: dict) -> float:  # type: ignore[type-arg]
+    start = time.perf_counter()
+    for block in blocks:
+        for _, topic, data in block.messages():
+            store, msgtype = stores[topic]
+            store.deserialize_cdr(data, msgtype)
+    return time.perf_counter() - start
+
+
+def _ours(bag: object, blocks: list) -> tuple[float, int]:  # type: ignore[type-arg]
+    from r2d2_viz.sources.fields_pass import FieldsPass
+
+    start = time.perf_counter()
+    fields = FieldsPass(bag, {t: i.msgtype for t, i in bag.topics.items()})  # type: ignore[attr-defined]
+    rows = 0
+    for block in blocks:
+        rows += sum(len(c) for _, c in fields.decode(block))
+    return time.perf_counter() - start, rows
+
+
+NOTE = "std_msgs/Header header\nstring text\nfloat64 value\n"
+
+
+def varying(n: int, rounds: int) -> tuple[float, float]:
+    """The worst case, for the record: ``n`` messages whose every one has its own layout (a ``string`` of a new
+    length each time, as in a log), which the numpy matching cannot share — each is walked on its own. Medians of
+    ``rounds``: (rosbags, ours) seconds."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    from r2d2_viz.msgs.generic.decoder import FieldDecoder
+
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    ts.register(get_types_from_msg(NOTE, "bench_msgs/msg/Note"))
+    T = ts.types
+    data = []
+    for i in range(n):
+        header = T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](i, 0), "base_link")
+        msg = T["bench_msgs/msg/Note"](header, "x" * (i % 1000), float(i))
+        data.append(bytes(ts.serialize_cdr(msg, "bench_msgs/msg/Note")))
+    buf = np.frombuffer(b"".join(data), dtype=np.uint8)
+    lengths = np.array([len(d) for d in data], dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    theirs, ours = [], []
+    for _ in range(rounds):
+        t = time.perf_counter()
+        for d in data:
+            ts.deserialize_cdr(d, "bench_msgs/msg/Note")
+        theirs.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        FieldDecoder(ts, "bench_msgs/msg/Note").decode(buf, starts, lengths, np.arange(n, dtype=np.int64))
+        ours.append(time.perf_counter() - t)
+    return statistics.median(theirs), statistics.median(ours)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seconds", type=float, default=180.0, help="seconds of bag (default 180)")
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--data", type=Path, default=None, help="keep the bag in this folder (reused when present)")
+    parser.add_argument("--smoke", action="store_true", help="5 s of bag, one round, no thresholds")
+    args = parser.parse_args()
+    if args.smoke:
+        args.seconds, args.rounds = 5.0, 1
+    from r2d2_viz.sources.bags.bag import open_bag
+    from r2d2_viz.sources.fields_pass import store_of
+
+    tmp = Path(tempfile.mkdtemp(prefix="anymsg-"))
+    try:
+        folder = args.data if args.data is not None else tmp
+        path = folder / f"anymsg_{args.seconds:g}s"
+        if not path.exists():
+            t = time.perf_counter()
+            n = write_bag(path, args.seconds)
+            print(f"wrote {path}: {n:,} messages in {time.perf_counter() - t:.0f} s", file=sys.stderr)
+        with open_bag(path) as bag:
+            blocks = list(bag.blocks(list(bag.topics)))
+            stores = {t: (store_of(bag, t), i.msgtype) for t, i in bag.topics.items()}
+            n = sum(len(b) for b in blocks)
+            theirs, ours = [], []
+            for _ in range(args.rounds):
+                theirs.append(_rosbags(bag, blocks, stores))
+                took, rows = _ours(bag, blocks)
+                ours.append(took)
+                assert rows == n, (rows, n)
+        a, b = statistics.median(theirs), statistics.median(ours)
+        load = os.getloadavg()[0]
+        print(f"bag: {TOPICS} custom-type topics, {args.seconds:g} s at 100 Hz: {n:,} messages; load {load:.1f}")
+        print(f"rosbags deserialize_cdr, every message: {a:.2f} s ({a / n * 1e6:.1f} µs/message)")
+        print(f"r2d2-viz fields, every field as columns: {b:.2f} s ({b / n * 1e6:.1f} µs/message)")
+        goal = "" if args.smoke else (" met" if b <= a else " NOT met")
+        print(f"ratio ours / rosbags: {b / a:.2f}x (goal ≤ 1.0x){goal}")
+        va, vb = varying(2_000 if args.smoke else 20_000, args.rounds)
+        worst = "worst case, a new layout every message (a string of a new length each, 1,000 lengths)"
+        print(f"{worst}: {vb / va:.2f}x rosbags (not a goal)")
+        out = tmp / "out.rrd"
+        t = time.perf_counter()
+        run = subprocess.run([APP, "--bag", str(path), "--save", str(out)], capture_output=True, text=True)
+        wall = time.perf_counter() - t
+        if run.returncode:
+            print(run.stderr, file=sys.stderr)
+            return 1
+        print(f"whole CLI run (decode, log every field, write {out.stat().st_size / 1e6:.0f} MB): {wall:.1f} s")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

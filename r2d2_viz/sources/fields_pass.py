@@ -1,0 +1,101 @@
+"""Every other topic of a bag decoded in its one pass: the topics no display draws, all their fields, with the
+definitions the bag carries (:mod:`r2d2_viz.msgs.generic.decoder`); and the topics ``--plot`` paths name, just those
+fields. A topic that cannot be decoded (no usable definition) is known before the pass and named once; bad
+messages are counted per topic and said once, at the end. Pure: no rerun import.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from r2d2_viz.errors import BagError, listed
+from r2d2_viz.msgs.generic.decoder import FieldDecoder, topic_store
+from r2d2_viz.msgs.generic.fields import Columns
+from r2d2_viz.msgs.generic.message_path import MessagePath, check_field, field_names, parse_path
+from r2d2_viz.msgs.typestore import MsgError
+from r2d2_viz.sources.bags.bag import Bag
+from r2d2_viz.sources.bags.storage import Block
+
+TopicColumns = tuple[str, Columns]
+
+
+class FieldsPass:
+    """``shown``: topic → type of the topics whose every field is shown; ``plots``: the ``--plot`` paths (checked:
+    :func:`plot_paths`)."""
+
+    def __init__(self, bag: Bag, shown: Mapping[str, str], plots: Sequence[MessagePath] = ()) -> None:
+        self.bag = bag
+        self.decoders: dict[str, FieldDecoder] = {}
+        self.unusable: dict[str, str] = {}
+        """Topics that cannot be decoded → why."""
+        wanted: dict[str, set[str]] = {}
+        for p in plots:
+            wanted.setdefault(p.topic, set()).add(p.field)
+        for topic in sorted({*shown, *wanted}):
+            try:
+                store = store_of(bag, topic)
+            except MsgError as exc:
+                self.unusable[topic] = str(exc)
+                continue
+            names = None if topic in shown else frozenset(wanted[topic])
+            self.decoders[topic] = FieldDecoder(store, bag.topics[topic].msgtype, names)
+
+    @property
+    def topics(self) -> tuple[str, ...]:
+        return tuple(self.decoders)
+
+    def decode(self, block: Block) -> list[TopicColumns]:
+        """The fields of the messages of ``block`` on the decoded topics."""
+        out: list[TopicColumns] = []
+        buf: np.ndarray | None = None
+        for topic, decoder in self.decoders.items():
+            rows = block.rows(topic)
+            if not len(rows):
+                continue
+            if buf is None:
+                buf = np.frombuffer(block.buffer, dtype=np.uint8)
+            starts, lengths = block.starts[rows], block.lengths[rows]
+            out += [(topic, c) for c in decoder.decode(buf, starts, lengths, block.times_ns[rows]) if len(c)]
+        return out
+
+    def finish(self) -> None:
+        """Say each topic's problems, once; NaN and infinities (kept: gaps in a plot) in one line for all topics."""
+        for topic, decoder in self.decoders.items():
+            if lines := decoder.problems.lines(nonfinite=False):
+                self.bag.warn(f"{self.bag.path}: {topic}: {'; '.join(lines)}")
+        nan = {t: d.problems.nonfinite for t, d in self.decoders.items() if d.problems.nonfinite}
+        if nan:
+            said = listed(f"{t} ({n})" for t, n in nan.items())
+            self.bag.warn(f"{self.bag.path}: messages with NaN or infinity in a field (shown as they are): {said}")
+
+
+def store_of(bag: Bag, topic: str):  # type: ignore[no-untyped-def]  # rosbags' Typestore, imported lazily
+    info = bag.topics[topic]
+    return topic_store(info.msgtype, info.definition, info.encoding, humble=topic in bag.humble_topics)
+
+
+def plot_paths(bag: Bag, texts: Sequence[str]) -> tuple[MessagePath, ...]:
+    """``--plot`` paths checked against the bag's topics and their definitions; a ``BagError`` naming the topic's
+    fields when one names nothing."""
+    out = []
+    for text in texts:
+        try:
+            path = parse_path(text, set(bag.topics))
+        except MsgError as exc:
+            raise BagError(f"--plot {exc}") from None
+        if path.topic not in bag.topics:
+            raise BagError(
+                f"--plot {text}: {bag.path} has no topic {path.topic} (its topics: {listed(sorted(bag.topics))})"
+            )
+        try:
+            store = store_of(bag, path.topic)
+        except MsgError as exc:
+            raise BagError(f"--plot {text}: {exc}") from None
+        msgtype = bag.topics[path.topic].msgtype
+        if (why := check_field(store, msgtype, path.field)) is not None:
+            names = field_names(store, msgtype)
+            raise BagError(f"--plot {text}: {why}; {path.topic}'s fields: {listed(names, first=8)}")
+        out.append(path)
+    return tuple(out)

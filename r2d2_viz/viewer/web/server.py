@@ -1,0 +1,238 @@
+"""The page's HTTP server: the page, Rerun's web viewer (ES module + gzip-compressed wasm) and the tool event
+endpoint, every path under a per-run secret token (``http://HOST:PORT/<token>/``, as Jupyter puts its token in
+the URL) so that neither another local user nor a web page in the same browser can publish to the robot.
+
+Threaded and bounded: at most :data:`MAX_CONNECTIONS` requests at once (more are closed unanswered); the event
+endpoint takes JSON bodies of at most :data:`MAX_EVENT_BYTES`, at most :data:`EVENTS_PER_S` a second on average
+(a burst of :data:`EVENT_BURST`); anything else gets 4xx and changes nothing.
+"""
+
+from __future__ import annotations
+
+import json
+import secrets
+import socket
+import threading
+import time
+from collections.abc import Callable
+from http import HTTPStatus
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+from typing import Any
+
+from r2d2_viz.errors import R2d2VizError, SinkError
+from r2d2_viz.viewer.web.assets import HERE, PAGE_FILES, VIEWER_FILES, WASM, compressed_wasm, viewer_static
+
+MAX_CONNECTIONS = 16
+MAX_EVENT_BYTES = 4096
+EVENTS_PER_S = 30.0
+"""Teleop sends 10 a second while a key is held; clicks are far rarer."""
+EVENT_BURST = 60
+TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript", ".css": "text/css", ".wasm": "application/wasm"}
+
+EventHandler = Callable[[dict[str, Any]], str]
+"""Takes one tool event (the page's JSON), returns the line the page shows; raises R2d2VizError if refused."""
+
+
+class RateLimit:
+    """A token bucket: ``rate`` events a second, ``burst`` at once; ``clock`` injectable for tests."""
+
+    def __init__(self, rate: float, burst: int, clock: Callable[[], float] = time.monotonic) -> None:
+        self.rate, self.burst, self.clock = rate, float(burst), clock
+        self.tokens, self.last = float(burst), clock()
+        self._lock = threading.Lock()
+
+    def take(self) -> bool:
+        with self._lock:
+            now = self.clock()
+            self.tokens = min(self.burst, self.tokens + (now - self.last) * self.rate)
+            self.last = now
+            if self.tokens < 1.0:
+                return False
+            self.tokens -= 1.0
+            return True
+
+
+class _Server(ThreadingHTTPServer):
+    daemon_threads = True
+    page: PageServer
+
+    def __init__(self, address: tuple[str, int], family: socket.AddressFamily) -> None:
+        self.address_family = family
+        self.slots = threading.BoundedSemaphore(MAX_CONNECTIONS)
+        super().__init__(address, _Handler)
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        if not self.slots.acquire(blocking=False):  # bounded: a flood is dropped, not queued
+            self.shutdown_request(request)
+            return
+        super().process_request(request, client_address)
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self.slots.release()
+
+
+class _Handler(BaseHTTPRequestHandler):
+    server: _Server
+    protocol_version = "HTTP/1.1"
+
+    def log_message(self, format: str, *args: Any) -> None:  # quiet: the app prints its own lines
+        return
+
+    def _name(self) -> str | None:
+        """The file or endpoint asked for, once the token matched; None (and 404 sent) otherwise."""
+        path = self.path.split("?", 1)[0]
+        prefix = f"/{self.server.page.token}/"
+        if not secrets.compare_digest(path[: len(prefix)].encode(), prefix.encode()):
+            self._reply(HTTPStatus.NOT_FOUND, b"not found\n", "text/plain")
+            return None
+        return path[len(prefix) :] or "page.html"
+
+    def do_GET(self) -> None:
+        name = self._name()
+        if name is None:
+            return
+        page = self.server.page
+        if name == "page.html":
+            self._reply(HTTPStatus.OK, page.html(), TYPES[".html"])
+        elif name in PAGE_FILES:
+            self._reply(HTTPStatus.OK, (HERE / name).read_bytes(), TYPES[Path(name).suffix])
+        elif name in VIEWER_FILES:
+            self._reply(HTTPStatus.OK, (page.static / name).read_bytes(), TYPES[Path(name).suffix])
+        elif name == WASM:
+            self._send_file(page.wasm_gz(), TYPES[".wasm"], gzip=True)
+        else:
+            self._reply(HTTPStatus.NOT_FOUND, b"not found\n", "text/plain")
+
+    def do_POST(self) -> None:
+        name = self._name()
+        if name is None:
+            return
+        if name != "event":
+            self._reply(HTTPStatus.NOT_FOUND, b"not found\n", "text/plain")
+            return
+        try:
+            length = int(self.headers.get("Content-Length", "-1"))
+        except ValueError:
+            length = -1
+        if not 0 <= length <= MAX_EVENT_BYTES:
+            self.close_connection = True
+            self._reply(HTTPStatus.REQUEST_ENTITY_TOO_LARGE, b"too large\n", "text/plain")
+            return
+        body = self.rfile.read(length)
+        if not self.server.page.limit.take():
+            self._reply(HTTPStatus.TOO_MANY_REQUESTS, b"too many events\n", "text/plain")
+            return
+        try:
+            event = json.loads(body)
+            if not isinstance(event, dict):
+                raise ValueError("not a JSON object")
+        except ValueError as exc:
+            self._reply(HTTPStatus.BAD_REQUEST, f"bad event: {exc}\n".encode(), "text/plain")
+            return
+        try:
+            line = self.server.page.handle(event)
+        except R2d2VizError as exc:
+            self._reply(HTTPStatus.BAD_REQUEST, json.dumps({"error": str(exc)}).encode(), "application/json")
+            return
+        self._reply(HTTPStatus.OK, json.dumps({"line": line}).encode(), "application/json")
+
+    def _headers(self, status: HTTPStatus, content_type: str, length: int) -> None:
+        self.send_response(status)
+        self.send_header("Content-Type", content_type)
+        self.send_header("Content-Length", str(length))
+        self.send_header("Cache-Control", "no-store")
+        self.send_header("X-Content-Type-Options", "nosniff")
+        self.send_header("Referrer-Policy", "no-referrer")  # the token stays out of other sites' logs
+
+    def _reply(self, status: HTTPStatus, body: bytes, content_type: str) -> None:
+        self._headers(status, content_type, len(body))
+        self.end_headers()
+        self.wfile.write(body)
+
+    def _send_file(self, path: Path, content_type: str, *, gzip: bool) -> None:
+        size = path.stat().st_size
+        self._headers(HTTPStatus.OK, content_type, size)
+        if gzip:
+            self.send_header("Content-Encoding", "gzip")
+        self.end_headers()
+        with path.open("rb") as f:
+            while chunk := f.read(1 << 20):
+                self.wfile.write(chunk)
+
+
+class PageServer:
+    """r2d2-viz's page for the Rerun gRPC server on ``grpc_port`` (on the host the browser reached the page at),
+    served on ``bind:port`` in a thread of its own.
+
+    ``config`` goes into the page as JSON (fixed frame, tool topics); ``on_event`` handles each tool event
+    (:data:`EventHandler`; :meth:`set_handler` replaces it). ``port`` 0 picks a free port.
+    """
+
+    def __init__(
+        self,
+        grpc_port: int,
+        bind: str = "127.0.0.1",
+        port: int = 0,
+        *,
+        config: dict[str, Any] | None = None,
+        on_event: EventHandler | None = None,
+        token: str | None = None,
+        cache: Path | None = None,
+    ) -> None:
+        self.static = viewer_static()
+        self.token = token or secrets.token_urlsafe(24)
+        self.grpc_port = grpc_port
+        self.config: dict[str, Any] = dict(config or {})
+        self._handler = on_event
+        self.limit = RateLimit(EVENTS_PER_S, EVENT_BURST)
+        self._cache = cache
+        self._wasm: Path | None = None
+        self._wasm_lock = threading.Lock()
+        family = socket.AF_INET6 if ":" in bind else socket.AF_INET
+        try:
+            self._http = _Server((bind, port), family)
+        except OSError as exc:
+            raise SinkError(f"--serve: cannot listen on {bind}:{port} for the web page: {exc.strerror}") from None
+        self._http.page = self
+        self.port = int(self._http.server_address[1])
+        self.bind = bind
+        self._thread = threading.Thread(target=self._http.serve_forever, name="r2d2-viz-page", daemon=True)
+        self._thread.start()
+        threading.Thread(target=self.wasm_gz, name="r2d2-viz-wasm-gzip", daemon=True).start()
+
+    def url(self, host: str | None = None) -> str:
+        """The page's address (with its token): what the user opens."""
+        name = host or ("localhost" if self.bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else self.bind)
+        name = f"[{name}]" if ":" in name else name
+        return f"http://{name}:{self.port}/{self.token}/"
+
+    def set_handler(self, on_event: EventHandler | None) -> None:
+        self._handler = on_event
+
+    def handle(self, event: dict[str, Any]) -> str:
+        handler = self._handler
+        if handler is None:
+            raise SinkError("this page takes no tool events")
+        return handler(event)
+
+    def html(self) -> bytes:
+        """page.html with its configuration (the gRPC port, the tools' topics)."""
+        config = {"grpc_port": self.grpc_port, **self.config}
+        text = (HERE / "page.html").read_text().replace("__CONFIG__", json.dumps(config).replace("</", "<\\/"))
+        return text.encode()
+
+    def wasm_gz(self) -> Path:
+        """The compressed wasm (made on first use; a second caller waits for the first)."""
+        with self._wasm_lock:
+            if self._wasm is None:
+                self._wasm = compressed_wasm(self.static, self._cache)
+            return self._wasm
+
+    def close(self) -> None:
+        self._http.shutdown()
+        self._http.server_close()
+        self._thread.join(timeout=5)

@@ -1,0 +1,60 @@
+"""RViz's tools in r2d2-viz's page, end to end: a real ROS 2 node (PyPI's rclpy) receives what headless Chromium
+clicked in the page of ``r2d2-viz --ros --serve``, all inside a loopback-only network namespace
+(``web_tools_scenario.py``). The expected values come from the positions the viewer itself reported for each
+click (``selection_change`` events) and RViz's own constants, not from r2d2-viz's code."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import pytest
+from sources.live import ros_node
+
+from . import viewers
+
+pytestmark = [pytest.mark.e2e, pytest.mark.slow]
+RVIZ_COVARIANCE = {0: 0.25, 7: 0.25, 35: 0.06853891945200942}
+"""rviz_default_plugins/src/rviz_default_plugins/tools/pose_estimate/initial_pose_tool.cpp: x, y and yaw."""
+
+
+def _yaw(xyzw: list[float]) -> float:
+    x, y, z, w = xyzw
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def test_each_tool_reaches_a_real_node(artifacts_dir: Path) -> None:
+    missing = viewers.missing_web_prerequisites()
+    if missing:
+        ros_node.unavailable("; ".join(missing))
+    python = ros_node.require_live("jazzy")
+    script = Path(__file__).with_name("web_tools_scenario.py")
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    command = [sys.executable, str(script), "--ros-python", str(python), "--cli", str(exe), "--out", str(artifacts_dir)]
+    done = ros_node.in_netns(command, timeout=400)
+    assert done.returncode == 0, done.stderr[-3000:]
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    picks, received = result["picks"], result["received"]
+    assert [p["tool"] for p in picks] == ["Publish Point", "2D Goal Pose", "2D Goal Pose", "2D Pose Estimate",
+                                          "2D Pose Estimate"]  # fmt: skip
+    # Publish Point: the point the viewer reported, in the fixed frame — and nothing from the requests without
+    # the token (they asked for (9, 9, 0))
+    assert received["/clicked_point"] == [{"frame": "map", "point": picks[0]["position"]}]
+    assert result["no_token"] == [404, 404]
+    for topic, (first, second) in (("/goal_pose", picks[1:3]), ("/initialpose", picks[3:5])):
+        [pose] = received[topic]
+        x0, y0, _ = first["position"]
+        x1, y1, _ = second["position"]
+        assert pose["frame"] == "map" and pose["position"] == [x0, y0, 0.0]
+        assert math.isclose(_yaw(pose["xyzw"]), math.atan2(y1 - y0, x1 - x0), abs_tol=1e-9), topic
+    covariance = received["/initialpose"][0]["covariance"]
+    assert covariance == [RVIZ_COVARIANCE.get(i, 0.0) for i in range(36)]
+    twists = [(t["linear"], t["angular"]) for t in received["/cmd_vel"]]
+    assert len(twists) >= 3 and set(twists[:-1]) == {(0.5, 0.0)} and twists[-1] == (0.0, 0.0)  # stops on release
+    lines = result["stdout"].splitlines()
+    x, y, z = picks[0]["position"]
+    assert f"clicked: map ({x:.2f}, {y:.2f}, {z:.2f}) → /clicked_point" in lines
+    assert any(line.startswith("goal: map (") and line.endswith("→ /goal_pose") for line in lines)
+    assert lines[-1] == "teleop: stopped → /cmd_vel" and result["app_rc"] == 0

@@ -1,0 +1,60 @@
+"""A real ROS 2 node (rclpy, run by the cached venv's Python) listening to RViz's tools' topics, as a navigation
+stack would: ``/clicked_point``, ``/goal_pose``, ``/initialpose`` (reliable, volatile) and ``/cmd_vel``.
+
+Runs until SIGINT/SIGTERM (or ``--seconds``), then prints one JSON line: every message received, per topic, as
+plain numbers (the point, the pose's position and quaternion xyzw, the covariance, the twist), with the frame.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import sys
+import time
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--seconds", type=float, default=300.0)
+    args = parser.parse_args()
+    import rclpy
+    from geometry_msgs.msg import PointStamped, PoseStamped, PoseWithCovarianceStamped, Twist
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    rclpy.init()
+    node = rclpy.create_node("tool_listener")
+    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+    got: dict[str, list[dict[str, object]]] = {
+        "/clicked_point": [],
+        "/goal_pose": [],
+        "/initialpose": [],
+        "/cmd_vel": [],
+    }
+
+    def pose(p: object) -> dict[str, object]:
+        o = p.orientation  # type: ignore[attr-defined]
+        return {"position": [p.position.x, p.position.y, p.position.z], "xyzw": [o.x, o.y, o.z, o.w]}  # type: ignore[attr-defined]
+
+    node.create_subscription(PointStamped, "/clicked_point", lambda m: got["/clicked_point"].append(
+        {"frame": m.header.frame_id, "point": [m.point.x, m.point.y, m.point.z]}), qos)  # fmt: skip
+    node.create_subscription(PoseStamped, "/goal_pose", lambda m: got["/goal_pose"].append(
+        {"frame": m.header.frame_id, **pose(m.pose)}), qos)  # fmt: skip
+    node.create_subscription(PoseWithCovarianceStamped, "/initialpose", lambda m: got["/initialpose"].append(
+        {"frame": m.header.frame_id, **pose(m.pose.pose), "covariance": list(m.pose.covariance)}), qos)  # fmt: skip
+    node.create_subscription(Twist, "/cmd_vel", lambda m: got["/cmd_vel"].append(
+        {"linear": m.linear.x, "angular": m.angular.z, "t": time.monotonic()}), qos)  # fmt: skip
+    stop = []
+    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
+    signal.signal(signal.SIGINT, lambda *_: stop.append(1))
+    deadline = time.monotonic() + args.seconds
+    while not stop and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    print(json.dumps(got), flush=True)
+    node.destroy_node()
+    rclpy.shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

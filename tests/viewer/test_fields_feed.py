@@ -1,0 +1,183 @@
+"""Every other topic of a bag in the recording, as rosbags' deserializer reads it (the golden source): a lab's own
+type whose definition is only in the bag, a controller's state; and ``--plot`` series equal to the same field —
+through the real CLI, read back with Rerun's own reader (tests/rrd.py)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import cli
+from fieldbags import BATTERY, STATE, expected_fields, messages, store, write
+from rrd import read_recording
+
+N = 120
+PLOTS = ("/odom.twist.twist.linear.x", "/arm_controller/state.error.positions[0]")
+
+
+@pytest.fixture(scope="module", params=["mcap", "sqlite3"])
+def recorded(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, str]:
+    tmp = tmp_path_factory.mktemp(request.param)
+    bag = write(tmp / "bag", messages(N), storage=request.param)
+    out = tmp / "out.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), "--plot", *PLOTS, "--plot", "/battery.voltage", cwd=tmp)
+    assert result.returncode == 0, result.stderr
+    return read_recording(out), result.stderr
+
+
+def _golden(topic: str, msgtype: str) -> list[tuple[int, dict]]:
+    ts = store()
+    return [
+        (t, expected_fields(ts, ts.deserialize_cdr(d, msgtype), msgtype)) for top, t, d in messages(N) if top == topic
+    ]
+
+
+@pytest.mark.parametrize(("topic", "msgtype"), [("/battery", BATTERY), ("/arm_controller/state", STATE)])
+def test_the_recording_holds_every_field_of_every_message(recorded: tuple[dict, str], topic: str, msgtype: str) -> None:
+    recording, _ = recorded
+    rows = recording[f"/topics{topic}"]
+    assert len(rows.times) == N
+    for k, (t, want) in enumerate(_golden(topic, msgtype)):
+        at = rows.times.index(t)
+        got = {
+            name.split(":", 1)[1]: values[at][0]
+            for name, values in rows.temporal.items()
+            if name.startswith(msgtype + ":") and values[at] is not None
+        }
+        if want.get("blob.len") == 0:  # an empty blob: its length, no min or max
+            got = {n: v for n, v in got.items() if n not in ("blob.min", "blob.max")}
+        assert set(got) == set(want), (k, set(got) ^ set(want))
+        for name, value in want.items():
+            assert got[name] == (value.item() if isinstance(value, np.generic) else value), (k, name)
+
+
+def test_each_plot_is_the_field_rosbags_decodes(recorded: tuple[dict, str]) -> None:
+    recording, stderr = recorded
+    ts = store()
+    fields = [
+        ("/odom", "nav_msgs/msg/Odometry", "twist.twist.linear.x"),
+        ("/arm_controller/state", STATE, "error.positions[0]"),
+    ]
+    for view, (topic, msgtype, field) in [(0, f) for f in fields] + [(1, ("/battery", BATTERY, "voltage"))]:
+        text = f"{topic}.{field}"
+        [entity] = [
+            e
+            for e in recording
+            if e.startswith(f"/plot/{view}/")
+            and e.endswith(text.replace("/", "\\/").replace("[", "\\[").replace("]", "\\]"))
+        ]
+        rows = recording[entity]
+        want = [
+            (t, expected_fields(ts, ts.deserialize_cdr(d, msgtype), msgtype)[field])
+            for top, t, d in messages(N)
+            if top == topic
+        ]
+        assert rows.times == [t for t, _ in want]
+        assert [v[0] for v in rows.temporal["Scalars:scalars"]] == pytest.approx([float(v) for _, v in want])
+        assert rows.static["SeriesLines:names"] == [[text]]
+    assert "/topics/odom" not in recording  # a display draws odometry: its fields only where --plot asks
+    assert "cannot be decoded" not in stderr, stderr
+
+
+def test_a_plot_path_that_names_nothing_is_one_line_naming_the_fields(tmp_path: Path) -> None:
+    bag = write(tmp_path / "bag", messages(3))
+    out = tmp_path / "out.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), "--plot", "/battery.voltag", cwd=tmp_path)
+    assert result.returncode == 2 and not out.exists()
+    [line] = result.stderr.splitlines()
+    assert line.startswith(
+        "error: --plot /battery.voltag: my_msgs/msg/Battery has no field voltag there; "
+        "/battery's fields: header.stamp.sec, "
+    ), line
+    assert "voltage" in line and len(line) <= 300 and "Traceback" not in result.stderr
+    motion = cli("--motion", "circle", "--save", str(out), "--plot", "/odom.twist.twist.linear.x", cwd=tmp_path)
+    assert motion.returncode == 2 and not out.exists()
+    assert motion.stderr.startswith("error: --plot plots a bag's fields")
+
+
+def test_a_definition_that_does_not_parse_is_one_line_and_the_rest_is_shown(tmp_path: Path) -> None:
+    bag = write(tmp_path / "bag", messages(5))
+    [mcap] = bag.glob("*.mcap")
+    data = mcap.read_bytes()
+    assert data.count(b"float32 voltage") == 2  # the schema, in the data section and the summary
+    mcap.write_bytes(data.replace(b"float32 voltage", b"floatXX voltage"))
+    out = tmp_path / "out.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), cwd=tmp_path)
+    assert result.returncode == 0 and "Traceback" not in result.stderr, result.stderr
+    [line] = [x for x in result.stderr.splitlines() if "/battery" in x]
+    assert len(line) - len(str(tmp_path)) <= 300, line
+    assert (
+        "1 topic that cannot be decoded, not shown: /battery; my_msgs/msg/Battery: its message "
+        "definition cannot be used" in line
+    )
+    recording = read_recording(out)
+    assert "/topics/battery" not in recording and len(recording["/topics/arm_controller/state"].times) == 5
+
+
+def test_a_live_graphs_fields_are_logged_as_they_arrive(tmp_path: Path) -> None:
+    """LiveFields (what --ros does with a topic no display draws): sensor_msgs/Joy samples, read back against
+    rosbags' deserializer (Jazzy's types, as the graph's)."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.typestore import typestore
+    from r2d2_viz.sources.bag_displays import TopicMessage
+    from r2d2_viz.viewer.fields_feed import LiveFields
+
+    ts = typestore("jazzy")
+    T = ts.types
+    joy = "sensor_msgs/msg/Joy"
+    out = tmp_path / "live.rrd"
+    rec = rr.RecordingStream("test_live_fields")
+    rec.save(str(out))
+    fields = LiveFields(rec, ts)
+    sent = []
+    for batch in range(3):  # three polls of two samples each
+        messages = []
+        for i in range(2):
+            k = 2 * batch + i
+            header = T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](k, 0), "joy")
+            raw = bytes(
+                ts.serialize_cdr(T[joy](header, np.array([0.1 * k, -1.0], np.float32), np.array([k], np.int32)), joy)
+            )
+            messages.append(TopicMessage(1_000_000_000 * (k + 1), "/joy", joy, raw))
+            sent.append(raw)
+        fields.log(messages)
+    rec.flush()
+    rec.disconnect()
+    rows = read_recording(out)["/topics/joy"]
+    assert rows.times == [1_000_000_000 * (k + 1) for k in range(6)]
+    for k, raw in enumerate(sent):
+        want = expected_fields(ts, ts.deserialize_cdr(raw, joy), joy)
+        got = {n.split(":", 1)[1]: v[k][0] for n, v in rows.temporal.items() if v[k] is not None}
+        assert set(got) == set(want) and all(
+            got[n] == pytest.approx(float(want[n]) if not isinstance(want[n], str) else want[n]) for n in want
+        )
+
+
+def test_with_header_time_rows_go_to_their_header_stamps_in_order(tmp_path: Path) -> None:
+    """``--time header``: two messages received in one order, stamped in the other (values by hand)."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.generic.fields import Columns
+    from r2d2_viz.viewer.fields_feed import FieldsFeed
+
+    out = tmp_path / "header.rrd"
+    rec = rr.RecordingStream("test_header_time")
+    rec.save(str(out))
+    feed = FieldsFeed(rec, clock="timestamp", shown={"/x": "my_msgs/msg/X"}, header_time=True)
+    numbers = {
+        "header.stamp.sec": np.array([5, 3], dtype=np.int32),
+        "header.stamp.nanosec": np.array([7, 0], dtype=np.uint32),
+        "value": np.array([1.0, 2.0]),
+    }
+    feed.push([("/x", Columns(np.array([10, 20], dtype=np.int64), numbers))])
+    assert feed.next_time_ns == 3_000_000_000
+    feed.until(4_000_000_000)  # the earlier stamp only
+    assert feed.next_time_ns == 5_000_000_007
+    feed.until(None)
+    rec.flush()
+    rec.disconnect()
+    rows = read_recording(out)["/topics/x"]
+    assert rows.times == [3_000_000_000, 5_000_000_007]
+    assert rows.temporal["my_msgs/msg/X:value"] == [[2.0], [1.0]]

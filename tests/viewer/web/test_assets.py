@@ -1,0 +1,41 @@
+"""The page's files: Rerun's web viewer found in rerun-notebook without importing it, its wasm gzip-compressed
+once into the cache (read back with Python's gzip: the same bytes)."""
+
+from __future__ import annotations
+
+import gzip
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+from r2d2_viz.errors import SinkError
+from r2d2_viz.viewer.web import assets
+
+
+def test_the_viewer_is_rerun_notebooks_and_matches_the_sdk() -> None:
+    from importlib.metadata import version
+
+    static = assets.viewer_static()
+    assert (static / "widget.js").read_text().count("export {") == 1 and (static / assets.WASM).stat().st_size > 1e7
+    assert version("rerun-notebook") == version("rerun-sdk")  # pinned to the SDK's version
+    assert "rerun_notebook" not in sys.modules  # found, not imported (its package imports Jupyter)
+
+
+def test_missing_rerun_notebook_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name: None)
+    with pytest.raises(SinkError, match=r"pip install 'r2d2-viz\[web\]'"):
+        assets.viewer_static()
+
+
+def test_the_wasm_is_compressed_once(tmp_path: Path) -> None:
+    static = tmp_path / "static"
+    static.mkdir()
+    data = bytes(range(256)) * 4000 + b"\0" * 100_000
+    (static / assets.WASM).write_bytes(data)
+    made = assets.compressed_wasm(static, tmp_path / "cache")
+    assert gzip.decompress(made.read_bytes()) == data and made.stat().st_size < len(data) / 3
+    before = made.stat().st_mtime_ns
+    assert assets.compressed_wasm(static, tmp_path / "cache") == made and made.stat().st_mtime_ns == before
+    assert [p.name for p in (tmp_path / "cache").iterdir()] == [made.name]  # no temporary file left
