@@ -276,7 +276,7 @@ def test_a_bag_with_78_undrawn_topics_says_so_in_one_short_line(tmp_path: Path) 
     (bag / "metadata.yaml").write_text(
         (bag / "metadata.yaml").read_text().replace("std_msgs/msg/ColorRGBA", "gz_msgs/msg/Link")
     )
-    result = cli("--bag", str(bag), "--save", str(tmp_path / "gz.rrd"), cwd=tmp_path)
+    result = cli("--bag", bag.name, "--save", "gz.rrd", cwd=tmp_path)  # from the bag's folder, as a user types it
     assert result.returncode == 0, result.stderr
     [line] = [line for line in result.stderr.splitlines() if "not shown" in line]
     assert "78 topics that cannot be decoded, not shown: " in line and "and 75 more (--list shows every topic)" in line
@@ -334,32 +334,3 @@ def test_help_says_what_happens_without_a_sink_flag_and_keeps_list_out_of_the_ro
     # --list serves bags (like ros2 bag info) and the graph alike: it sits with the general options
     [group] = [block for block in blocks if "\n  --list " in block]
     assert group.startswith("options:"), group
-
-
-def test_a_bag_whose_topics_only_rerun_decodes_says_what_was_written(tmp_path: Path) -> None:
-    # a bag (written by rosbags) of a magnetometer and a joystick: no robot and no display of ours, but Rerun's own
-    # MCAP decoders write both. The summary used to say "0 transforms and display messages".
-    import numpy as np
-    from bagmaker import T0, BagSpec, write_bag
-    from msgs_build import T, cdr, header, vec
-    from rerun.chunk import RrdReader
-
-    spec = BagSpec(types={"/mag": "sensor_msgs/msg/MagneticField", "/joy": "sensor_msgs/msg/Joy"})
-    for k in range(3):
-        mag = T("sensor_msgs/msg/MagneticField")(
-            header=header("odom"), magnetic_field=vec(1.0, 2.0, 3.0), magnetic_field_covariance=np.zeros(9)
-        )
-        spec.add("/mag", T0 + k, cdr(mag))
-        joy = T("sensor_msgs/msg/Joy")(
-            header=header("odom"), axes=np.zeros(2, np.float32), buttons=np.zeros(2, np.int32)
-        )
-        spec.add("/joy", T0 + k, cdr(joy))
-    bag = write_bag(tmp_path / "sensors", spec)
-    out = tmp_path / "sensors.rrd"
-    result = cli("--bag", str(bag), "--save", str(out), cwd=tmp_path)
-    assert result.returncode == 0, result.stderr
-    reader = RrdReader(out)
-    entities = {chunk.entity_path for chunk in reader.stream(store=reader.recordings()[0]) if not chunk.is_empty}
-    assert {"/joy", "/mag"} <= entities  # what Rerun made of the bag, read back with Rerun's own reader
-    last = result.stderr.splitlines()[-1]
-    assert last == f"r2d2-viz: 2 topics decoded by Rerun (/joy, /mag) from {bag} to {out}", last
