@@ -70,8 +70,7 @@ class RunConfig:
     duration: float | None = None
     """Seconds of robot time; None: one lap (1,440 samples) for batch saves, forever for live runs."""
     sink: SinkConfig = field(default_factory=SinkConfig)
-    realtime: bool = False
-    """Pace to the wall clock even when only saving."""
+    realtime: bool = False  # pace to the wall clock even when only saving
     bag: Path | None = None
     """Replay this ROS 2 bag instead of a generated motion."""
     speed: float = 1.0
@@ -89,8 +88,7 @@ class RunConfig:
     """Seconds into the bag to start at (``ros2 bag play --start-offset``)."""
     topics: tuple[str, ...] | None = None
     """Only these topics of the bag (``ros2 bag play --topics``); None: all."""
-    progress: bool = False
-    """Show a progress bar on stderr (the CLI sets it on a terminal)."""
+    progress: bool = False  # a progress bar on stderr (the CLI sets it on a terminal)
     tool_topics: tuple[tuple[str, str], ...] = ()
     """``--tool-topic``: the page's tools' topics (``2D Goal Pose`` → ``/goal``), over the ``--rviz`` config's."""
     plots: tuple[tuple[str, ...], ...] = ()

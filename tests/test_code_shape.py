@@ -38,8 +38,8 @@ TOP = (
 )
 """The top: it may import every stage. ``fleet/`` (issue 25) is a subpackage that lives here, not a stage: it
 calls the runner once per bag, so it sits above everything (and the CLI calls it)."""
-TOP_PACKAGES = ("fleet",)
-"""Subpackages at the top (beside runner and cli), not stages of the pipeline."""
+TOP_PACKAGES = ("fleet", "cli")
+"""Subpackages at the top (beside runner and api), not stages of the pipeline: the fleet, and the command line."""
 RERUN_STAGES = ("viewer",)
 
 

@@ -13,23 +13,6 @@ from rrd import read_recording, tf_by_child
 from r2d2_viz.cli import main
 
 
-def test_help_lists_the_flags() -> None:
-    result = cli("--help")
-    assert result.returncode == 0
-    for flag in (
-        "--urdf",
-        "--motion",
-        "--duration",
-        "--rate",
-        "--spawn",
-        "--save",
-        "--connect",
-        "--serve",
-        "--headless",
-    ):
-        assert flag in result.stdout
-
-
 def test_python_dash_m_works_too(tmp_path: Path) -> None:
     import subprocess
     import sys
@@ -321,16 +304,3 @@ def test_the_web_viewer_fallback_says_why_when_it_fails(tmp_path: Path) -> None:
     [line] = result.stderr.strip().splitlines()
     assert line.startswith("error: no display for a viewer window, and the web viewer instead failed: "), line
     assert f"cannot listen on 127.0.0.1:{port}" in line
-
-
-def test_help_says_what_happens_without_a_sink_flag_and_keeps_list_out_of_the_ros_group() -> None:
-    out = cli("--help", env={"COLUMNS": "200"}).stdout
-    blocks = out.split("\n\n")
-    assert "--spawn is used" not in out  # untrue on a machine without a display (issue 29)
-    assert " ".join(blocks[-1].split()).startswith(
-        "Without a sink flag: the native viewer (--spawn), or on a machine without a display a web viewer on "
-        "127.0.0.1 (--serve)."
-    )
-    # --list serves bags (like ros2 bag info) and the graph alike: it sits with the general options
-    [group] = [block for block in blocks if "\n  --list " in block]
-    assert group.startswith("options:"), group

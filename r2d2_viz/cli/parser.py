@@ -1,0 +1,197 @@
+"""The command line's flags: ``build_parser()`` (argparse, one error line and exit 2 on bad flags), its exit
+codes and defaults. Imports nothing heavy: ``--help`` stays instant."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from r2d2_viz.sources.motion import MOTIONS
+
+EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+CONNECT_DEFAULT = "rerun+http://127.0.0.1:9876/proxy"
+SAVE_SUFFIXES = (".rrd", ".mcap")
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        """argparse's own errors: one line, exit 2 (argparse would print the whole usage)."""
+        self.exit(EXIT_BAD_INPUT, f"error: {message} (see r2d2-viz --help)\n")
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="r2d2-viz",
+        description="The ROS 2 'URDF with robot_state_publisher' tutorial robot, moving in the Rerun viewer.",
+        epilog="Without a sink flag: the native viewer (--spawn), or on a machine without a display a web viewer on "
+        "127.0.0.1 (--serve). Open a saved recording with: rerun out.rrd",
+    )
+    parser.add_argument(
+        "--urdf", type=Path, default=None, help="robot description, URDF or xacro (default: the tutorial's R2D2)"
+    )
+    parser.add_argument("xacro_args", nargs="*", metavar="NAME:=VALUE", help="xacro arguments")
+    parser.add_argument(
+        "--package-path",
+        action="append",
+        default=[],
+        metavar="DIR|NAME=DIR",
+        help="where ROS packages are (repeatable): a package, a folder of packages, or NAME=DIR for one package",
+    )
+    parser.add_argument(
+        "--motion",
+        default=None,
+        metavar="{" + ",".join(MOTIONS) + "}",
+        help="tutorial: state_publisher.py; sweep: every joint back and forth; still: all zeros "
+        "(default: tutorial if the robot has swivel, tilt and periscope, else sweep)",
+    )
+    parser.add_argument(
+        "--duration",
+        type=_number,
+        default=None,
+        metavar="SECONDS",
+        help="robot time to generate (default: one lap, 1,440 samples, for --save; until Ctrl-C for live sinks); "
+        "with --bag, the first SECONDS of the bag (from --start-offset)",
+    )
+    parser.add_argument("--rate", type=_number, default=30.0, metavar="HZ", help="samples per second (default 30)")
+    bags = parser.add_argument_group(
+        "replaying a bag (a rosbag2 directory, a .mcap or .db3 file, or a ROS 1 .bag file)"
+    )
+    bags.add_argument(
+        "--bag",
+        type=Path,
+        nargs="+",
+        default=None,
+        metavar="PATH",
+        help="replay this bag instead of a motion; several with --save-dir",
+    )
+    bags.add_argument(
+        "--speed", type=_number, default=1.0, metavar="FACTOR", help="replay speed, like ros2 bag play --rate"
+    )
+    bags.add_argument(
+        "--time",
+        choices=("receive", "header"),
+        default="receive",
+        help="a bag's times: when messages were recorded (default) or their header stamps",
+    )
+    bags.add_argument(
+        "--start-offset",
+        type=_number,
+        default=0.0,
+        metavar="SECONDS",
+        help="start this many seconds into the bag, like ros2 bag play --start-offset",
+    )
+    bags.add_argument(
+        "--topics",
+        nargs="+",
+        default=None,
+        metavar="TOPIC",
+        help="replay only these topics of the bag, like ros2 bag play --topics (transforms: name /tf and "
+        "/tf_static too; the robot's model is still read from /robot_description)",
+    )
+    bags.add_argument(
+        "--plot",
+        nargs="+",
+        action="append",
+        default=[],
+        metavar="PATH",
+        help="plot these fields in one view, Foxglove's message paths: /odom.twist.twist.linear.x, "
+        "/joint_states.effort[2] (repeat the flag for more views)",
+    )
+    bags.add_argument(
+        "--fixed-frame",
+        default=None,
+        metavar="FRAME",
+        help="the 3D view's frame (default: the TF tree's root, or odom)",
+    )
+    bags.add_argument(
+        "--shared-frames",
+        default=None,
+        metavar="FRAMES",
+        help="several robots (every namespace with a robot_description): the frames they share, comma-separated, "
+        "never prefixed with a robot's namespace (default: map,world,earth)",
+    )
+    fleet = parser.add_argument_group("fleets: many bags, one Rerun dataset")
+    fleet.add_argument(
+        "--save-dir", type=Path, default=None, metavar="DIR", help="convert every --bag to DIR/<bag name>.rrd"
+    )
+    fleet.add_argument("--jobs", type=int, default=None, metavar="N", help="bags converted at once (default: cores)")
+    fleet.add_argument("--force", action="store_true", help="convert again the bags whose output is up to date")
+    fleet.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="convert as Ray tasks: a running cluster (auto, HOST:PORT) or, without ADDRESS, a local Ray",
+    )
+    fleet.add_argument(
+        "--dataset", type=Path, default=None, metavar="DIR", help="serve DIR's recordings as one dataset"
+    )
+    fleet.add_argument(
+        "--summary",
+        nargs="?",
+        const="-",
+        default=None,
+        metavar="OUT",
+        help="with --dataset: print one row per recording, or write it to OUT (.csv, .parquet)",
+    )
+    ros = parser.add_argument_group("joining a running ROS 2 graph (Cyclone DDS; ROS_DOMAIN_ID and friends apply)")
+    ros.add_argument(
+        "--ros",
+        action="store_true",
+        help="show the live graph: /robot_description (or --urdf), /joint_states, /tf, /tf_static and display "
+        "topics; --duration is then seconds of wall time",
+    )
+    parser.add_argument(
+        "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
+    )
+    parser.add_argument(
+        "--list",
+        action="store_true",
+        help="print the topics and exit: with --bag every topic, type and message count (like ros2 bag info); "
+        "with --ros the graph's topics, types and publishers (like ros2 topic list -t)",
+    )
+    parser.add_argument(
+        "--video",
+        nargs="?",
+        const="av1",
+        default=None,
+        choices=("av1", "h264"),
+        help="a bag's or live graph's 8-bit camera images as video (default av1; needs r2d2-viz[video])",
+    )
+    sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
+    sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
+    sinks.add_argument(
+        "--save", type=Path, default=None, metavar="PATH", help="write a recording (.rrd), or a ROS 2 bag (.mcap)"
+    )
+    sinks.add_argument(
+        "--connect",
+        nargs="?",
+        const=CONNECT_DEFAULT,
+        default=None,
+        metavar="URL",
+        help=f"stream live to a running viewer (default {CONNECT_DEFAULT})",
+    )
+    sinks.add_argument("--serve", action="store_true", help="serve a web viewer and stream live to it")
+    sinks.add_argument("--headless", action="store_true", help="compute everything, show nothing (checks a URDF)")
+    sinks.add_argument("--realtime", action="store_true", help="pace --save to the wall clock like a live run")
+    sinks.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address --serve listens on")
+    sinks.add_argument(
+        "--port", type=int, default=None, help="gRPC port for --spawn / --serve (default 9876; --dataset: 51234)"
+    )
+    sinks.add_argument("--web-port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
+    sinks.add_argument(
+        "--tool-topic",
+        action="append",
+        default=[],
+        metavar="TOOL=TOPIC",
+        help="--serve's toolbar: publish a tool (goal, pose_estimate, point, teleop) on TOPIC instead",
+    )
+    return parser
