@@ -61,6 +61,12 @@ VIEWS: dict[str, str] = {
 plotted too)."""
 
 
+def in_3d(msgtype: str) -> bool:
+    """Whether a display type draws in the 3D view, in a frame: not a log line, a state or a plot (an Imu's axes
+    are drawn in its frame beside its plots)."""
+    return msgtype not in VIEWS or msgtype == "sensor_msgs/msg/Imu"
+
+
 SHOWN_AS: dict[str, tuple[str, str]] = {
     "sensor_msgs/msg/LaserScan": (
         "LaserScan",

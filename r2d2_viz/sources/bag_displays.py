@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from r2d2_viz.msgs.registry import DECODERS, decode
+from r2d2_viz.msgs.registry import DECODERS, decode, in_3d
 from r2d2_viz.msgs.shapes import Decoded, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.bag import Bag
@@ -61,11 +61,13 @@ def frames_of(messages: Iterable[TopicMessage]) -> set[str]:
 def first_messages(
     bag: Bag, shown: dict[str, str], start: int, stop: int, wanted: int, max_bytes: int = 64 << 20
 ) -> tuple[TopicMessage, ...]:
-    """The first ``wanted`` messages of the display topics ``shown`` in ``[start, stop)``, reading no more than
-    about ``max_bytes`` of them (a bag whose displays start late: what the view is fitted to)."""
+    """The first ``wanted`` messages of the display topics ``shown`` that draw in 3D (:func:`in_3d`) in ``[start,
+    stop)``, reading no more than about ``max_bytes`` of them (a bag whose displays start late: what the view is
+    fitted to)."""
     found: list[TopicMessage] = []
     seen = 0
-    for block in bag.blocks(tuple(shown), start_ns=start, stop_ns=stop):
+    drawn = tuple(topic for topic, msgtype in shown.items() if in_3d(msgtype))
+    for block in bag.blocks(drawn, start_ns=start, stop_ns=stop) if drawn else ():
         for t, topic, data in block.messages():
             found.append(TopicMessage(t, topic, shown[topic], bytes(data)))
             if len(found) >= wanted:

@@ -18,6 +18,7 @@ import numpy as np
 
 from r2d2_viz.errors import BagError, listed
 from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
+from r2d2_viz.msgs.registry import in_3d
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.sources.bag_displays import TopicMessage, display_topics, first_messages, frames_of
@@ -352,7 +353,7 @@ def _preview(
         for i, chunk in enumerate(window.more_joints):
             if chunk is not None:
                 more[i].append(chunk)
-        for message in window.displays:
+        for message in (m for m in window.displays if in_3d(m.msgtype)):  # a log line or a plot frames nothing
             per_topic[message.topic] = per_topic.get(message.topic, 0) + 1
             if len(messages) < PREVIEW_MESSAGES or per_topic[message.topic] <= 2:
                 messages.append(message)

@@ -293,3 +293,22 @@ def test_topics_replays_exactly_the_topics_named_as_ros2_bag_play_does(tmp_path:
     assert seen == {1: (set(), False), 2: ({"axis"}, False), 3: ({"axis"}, True)}
     help_text = cli("--help").stdout
     assert "name /tf and /tf_static too" in " ".join(help_text.split())
+
+
+def test_a_bag_whose_plots_start_first_opens_in_its_scans_frame(tmp_path: Path) -> None:
+    """The cdrr rehab bag's shape (found on it after logs and plots joined the displays): no TF, no robot, numbers
+    (std_msgs Int32, plotted) at 100 Hz from the start and a scan in ``world`` only after 3 s. The view opens in
+    ``world`` (RViz would need Fixed Frame set to it): plots and log lines frame nothing, so they neither fill the
+    preview nor stop it looking past the look-ahead. On the merged code before this fix it opened in ``odom``."""
+    from bagmaker import TS
+    from displaybags import laser_scan
+
+    spec = BagSpec(types={"/mes_force": "std_msgs/msg/Int32", "/scan": "sensor_msgs/msg/LaserScan"})
+    int32 = TS.types["std_msgs/msg/Int32"]
+    for k in range(600):  # 6 s of numbers at 100 Hz
+        spec.add("/mes_force", T0 + k * 10 * MS, bytes(TS.serialize_cdr(int32(data=k), "std_msgs/msg/Int32")))
+    for k in range(5):  # scans from 3 s on
+        t = T0 + (3000 + 200 * k) * MS
+        spec.add("/scan", t, laser_scan(t // 1_000_000_000, t % 1_000_000_000, frame="world"))
+    with open_bag(write_bag(tmp_path / "rehab", spec)) as bag:
+        assert plan_bag(bag).fixed_frame == "world"
