@@ -27,6 +27,10 @@ from r2d2_viz.rviz.spec import (
     orbit_view,
     short_class,
 )
+from r2d2_viz.rviz.tools import RVIZ_CLASSES
+
+PAGE_TOOLS = frozenset({*RVIZ_CLASSES, "Measure"})
+"""RViz's tool classes that r2d2-viz's page has (``--serve``): not noted as missing."""
 
 
 class Reader:
@@ -141,13 +145,17 @@ class Reader:
         return ViewSpec(self.source, fixed, background, grid, tf, robot, camera, shown, notes, tuple(more_robots))
 
     def tools_and_panels(self, tools: Any, panels: Any) -> None:
-        """One note naming every tool and panel (none has a counterpart: Rerun's viewer has its own camera,
-        selection, blueprint and selection panels), rather than a line each."""
+        """One note naming every tool and panel without a counterpart (Rerun's viewer has its own camera,
+        selection, blueprint and selection panels), rather than a line each. The tools that talk back (pose
+        estimate, goal, point) and Measure have theirs on ``--serve``'s page (:mod:`r2d2_viz.rviz.tools`)."""
         named: dict[str, list[str]] = {"tools": [], "panels": []}
         for kind, items in (("tools", tools), ("panels", panels)):
             for item in items if isinstance(items, list) else []:
-                if isinstance(item, dict) and item.get("Class") and str(item["Class"]) not in named[kind]:
-                    named[kind].append(str(item["Class"]))
+                if not isinstance(item, dict) or not item.get("Class") or str(item["Class"]) in named[kind]:
+                    continue
+                if kind == "tools" and str(item["Class"]).rsplit("/", 1)[-1] in PAGE_TOOLS:
+                    continue
+                named[kind].append(str(item["Class"]))
         parts = [f"{len(names)} {kind} ({', '.join(names)})" for kind, names in named.items() if names]
         if parts:
             self.note(
