@@ -129,6 +129,8 @@ def run_on(
         recording = output.open(view, on_ready)
         tools = attach_view_tools(recording, view, dict(config.tool_topics), publisher=graph)
         scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
+        if tools is not None and tools.drawing is not None:
+            scene.feed.on_map = tools.drawing.cover  # the ground covers the maps
         latest = max((k for k, b in enumerate(batches) if b.descriptions), default=-1)
         for k, batch in enumerate(batches):
             if k < latest:  # a description the settle's latest one replaced: not worth a word

@@ -243,6 +243,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     video=VideoFeed(config.video, live=config.live),
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
+                displays.on_map = tools.drawing.cover if tools and tools.drawing else None  # the ground: over maps
                 displays.push(plan.seek_messages)
             feeds = Feeds(
                 TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None

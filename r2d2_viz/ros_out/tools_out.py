@@ -214,8 +214,8 @@ def attach_tools(
     page = recording.page
     if page is None:
         return None
-    drawing = ToolDrawing(recording.rec, fixed_frame)
-    drawing.ground(background=background)
+    drawing = ToolDrawing(recording.rec, fixed_frame, background)
+    drawing.ground()
     output = ToolOutput(
         fixed_frame, topics=tool_topics(config_topics, overrides), publisher=publisher, drawing=drawing, say=say
     )

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections import deque
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import rerun as rr
@@ -26,7 +26,16 @@ from r2d2_viz.errors import short
 from r2d2_viz.msgs.images import EncoderName, VideoEncoder
 from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, Image, MarkerOp, MeshResource, VideoSample, is_plain
+from r2d2_viz.msgs.shapes import (
+    Decoded,
+    DecodeOptions,
+    GridMap,
+    Image,
+    MarkerOp,
+    MeshResource,
+    VideoSample,
+    is_plain,
+)
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage
 from r2d2_viz.sources.base import Clock, TfRecords
@@ -171,6 +180,8 @@ class DisplayFeed:
         self._anchored: tuple[int, str] | None = None
         decayed = any(style.decay for style in self.styles.values())
         self._placer = FixedFramePlacer(tf, fixed_frame) if decayed else None
+        self.on_map: Callable[[str, GridMap], object] | None = None
+        """Called with each map drawn and its frame (the tools' ground grows to cover it)."""
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -248,6 +259,10 @@ class DisplayFeed:
         if not self.video.ready(self.rec, message.topic, decoded):
             return
         placed = self._placed(message.topic, decoded)
+        if self.on_map is not None and isinstance(placed, Decoded):
+            for item in placed.items:
+                if isinstance(item, GridMap):
+                    self.on_map(placed.frame_id, item)
         if style.decay and self._placer is not None and isinstance(placed, Decoded):
             placed = self._placer.place(placed, message.time_ns)
         prepared = message.prepared if placed is decoded else None  # built for the frames it had

@@ -1,17 +1,22 @@
 """RViz's tools in r2d2-viz's page, end to end: a real ROS 2 node (PyPI's rclpy) receives what headless Chromium
 clicked in the page of ``r2d2-viz --ros --serve``, all inside a loopback-only network namespace
-(``web_tools_scenario.py``). The expected values come from the positions the viewer itself reported for each
-click (``selection_change`` events) and RViz's own constants, not from r2d2-viz's code."""
+(``web_tools_scenario.py``), on a graph with ``/tf`` and a map (the node's, transient local as map_server's). The
+expected values come from the positions the viewer itself reported for each click (``selection_change`` events),
+RViz's own constants and the map the node sent (its origin, resolution and size), not from r2d2-viz's code."""
 
 from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+from rrd import read_recording
 from sources.live import ros_node
+from sources.live.nodes.tool_listener import MAP_ORIGIN, MAP_RESOLUTION, MAP_SIZE
 
 from . import viewers
 
@@ -58,3 +63,13 @@ def test_each_tool_reaches_a_real_node(artifacts_dir: Path) -> None:
     assert f"clicked: map ({x:.2f}, {y:.2f}, {z:.2f}) → /clicked_point" in lines
     assert any(line.startswith("goal: map (") and line.endswith("→ /goal_pose") for line in lines)
     assert lines[-1] == "teleop: stopped → /cmd_vel" and result["app_rc"] == 0
+    # the node's map arrived (its frame, map, the TF root, is the fixed frame) and the pickable ground covers it
+    # (a 600 x 400 map of 0.1 m cells from (-30, -20): to (30, 20)), not the 50 m default
+    [received] = [line for line in result["stderr"] if line.startswith("r2d2-viz: received ")]
+    assert re.search(r"/map [1-9]", received), received
+    rows = read_recording(artifacts_dir / "app.rrd")
+    assert "/map" in rows
+    ground = next(v for k, v in rows["/tools/ground"].static.items() if "vertex_positions" in k)[-1]
+    (x0, y0), (width, height) = MAP_ORIGIN, MAP_SIZE
+    x1, y1 = x0 + width * MAP_RESOLUTION, y0 + height * MAP_RESOLUTION
+    assert np.allclose(ground, [[x0, y0, 0], [x1, y0, 0], [x1, y1, 0], [x0, y1, 0]])

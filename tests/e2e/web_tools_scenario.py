@@ -1,6 +1,8 @@
 """RViz's tools in r2d2-viz's page against a real ROS 2 node, run INSIDE a loopback-only network namespace.
 
-``nodes/tool_listener.py`` (rclpy) listens; ``r2d2-viz --ros --serve --fixed-frame map`` serves the page;
+``nodes/tool_listener.py`` (rclpy) listens and publishes a map (transient local, in ``map``); ``nodes/tf_peer.py``
+publishes ``/tf`` map → odom → base_link; ``r2d2-viz --ros --serve --save app.rrd`` (its fixed frame: the TF root)
+serves the page;
 headless Chromium (Debian's, playwright) uses each tool once in one session: Publish Point, 2D Goal Pose,
 2D Pose Estimate (each click moved to, frames waited for, then clicked), Teleop (ArrowUp held, released);
 then an event without the token. Prints one JSON: the picks the viewer reported, the page's lines, the app's
@@ -32,6 +34,11 @@ TOOLS = (("Publish Point", 1), ("2D Goal Pose", 2), ("2D Pose Estimate", 2))
 SPOTS = ((0.42, 0.78), (0.55, 0.72), (0.35, 0.70), (0.60, 0.85), (0.48, 0.66), (0.30, 0.84))
 """Where the 3D view shows the ground (lower middle), as fractions of the viewport; each click a new spot (a click
 on the pixel already selected changes no selection, so the viewer reports nothing)."""
+TF = [
+    ["map", "odom", [0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+    ["odom", "base_link", [1.0, 2.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+]
+"""What ``tf_peer.py`` publishes: a robot at (1, 2) in ``map``."""
 
 
 def _url(log: Path, app: subprocess.Popen[str], timeout: float = 90) -> str:
@@ -91,11 +98,13 @@ def main() -> int:
     listener = subprocess.Popen(
         [args.ros_python, str(NODES / "tool_listener.py")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
+    tf = subprocess.Popen([sys.executable, str(NODES / "tf_peer.py"), "300", "/tf", json.dumps(TF)])
+    time.sleep(3.0)  # /tf flowing before the app settles: its root is the fixed frame
     log = out / "app.log"
     stdout = out / "app.stdout"
     with log.open("w") as err, stdout.open("w") as sink:
         app = subprocess.Popen(
-            [args.cli, "--ros", "--serve", "--fixed-frame", "map", "--duration", "240", "--port", "19876",
+            [args.cli, "--ros", "--serve", "--save", str(out / "app.rrd"), "--duration", "240", "--port", "19876",
              "--web-port", "19090"],
             stdout=sink, stderr=err, text=True, start_new_session=True,
         )  # fmt: skip
@@ -150,11 +159,14 @@ def main() -> int:
         except subprocess.TimeoutExpired:
             app.kill()
         print(f"app stopped at {time.monotonic():.1f}", file=sys.stderr, flush=True)
+        tf.terminate()
+        tf.wait(timeout=30)
         listener.send_signal(signal.SIGINT)
         got, errors = listener.communicate(timeout=30)
     result["received"] = json.loads(got.strip().splitlines()[-1]) if got.strip() else {"error": errors[-2000:]}
     result["stdout"] = stdout.read_text()
     result["app_rc"] = app.returncode
+    result["stderr"] = log.read_text().splitlines()
     print(json.dumps(result))
     return 0
 

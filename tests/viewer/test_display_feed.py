@@ -190,3 +190,21 @@ def test_a_cameras_images_get_its_pinhole_and_a_2d_view(tmp_path: Path) -> None:
     k = next(v for v in pinned.temporal["Pinhole:image_from_camera"] if v is not None)
     assert np.allclose(np.reshape(k, (3, 3)).T, np.reshape(K, (3, 3)))  # Rerun stores the matrix column-major
     assert any(v is not None for v in pinned.temporal["Image:buffer"])
+
+
+def test_each_map_drawn_is_handed_on_with_its_frame() -> None:
+    """The tools' ground is told of each map (tests/displaybags.py: 4 x 2 cells of 0.5 m from (-1, -0.5) in odom,
+    so (-1, -0.5) to (1, 0.5) by hand)."""
+    import rerun as rr
+    from displaybags import occupancy_grid
+
+    from r2d2_viz.viewer.notices import Notices
+    from r2d2_viz.viewer.web.draw import ToolDrawing
+
+    rec = rr.RecordingStream("test_display_feed")
+    feed = DisplayFeed(Notices(rec), clock="timestamp", fixed_frame="odom")
+    drawing = ToolDrawing(rec, "odom")
+    seen: list[str] = []
+    feed.on_map = lambda frame, grid: seen.append(frame) or drawing.cover(frame, grid)
+    feed.log(TopicMessage(MAP_TIME, "/map", "nav_msgs/msg/OccupancyGrid", occupancy_grid()))
+    assert seen == ["odom"] and drawing.extent == (-1.0, -0.5, 1.0, 0.5)

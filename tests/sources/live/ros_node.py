@@ -1,8 +1,9 @@
 """Real ROS 2 nodes for the live tests: PyPI's ``ros-rclpy[fastrtps]`` wheels in a cached venv of their own.
 
 The wheels' ``.pth`` re-executes Python with ``LD_LIBRARY_PATH`` set, so they never go into the project's venv:
-each distro gets ``${XDG_CACHE_HOME:-~/.cache}/r2d2-viz-test/rclpy-<distro>``, created once (about 20 s) and
-validated by a marker holding the pinned requirements plus an import check. Everything that talks DDS runs in
+each distro gets ``${XDG_CACHE_HOME:-~/.cache}/r2d2-viz-test/rclpy-<distro>-<hash of its requirements>``, created
+once (about 20 s) and validated by a marker holding the pinned requirements plus an import check (new requirements:
+a new folder, so a run of older code never finds its venv rebuilt under it). Everything that talks DDS runs in
 a network namespace with only loopback (``unshare -n``, root), so nothing leaves the machine; without root or
 ``unshare`` the tests skip — or fail under CI (``CI`` set).
 """
@@ -10,6 +11,7 @@ a network namespace with only loopback (``unshare -n``, root), so nothing leaves
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import os
 import shutil
 import subprocess
@@ -22,10 +24,10 @@ HERE = Path(__file__).resolve().parent
 NODES = HERE / "nodes"
 DISTROS: dict[str, tuple[str, ...]] = {
     # rclpy 7.1.6 is Jazzy (Fast DDS 2.14), 9.1.2 is Kilted (Fast DDS 3); the message wheels of the same distro.
-    "jazzy": ("ros-rclpy[fastrtps]==7.1.6", "ros-std-msgs==5.3.6", "ros-sensor-msgs==5.3.6"),
-    "kilted": ("ros-rclpy[fastrtps]==9.1.2", "ros-std-msgs==5.5.1", "ros-sensor-msgs==5.5.1"),
+    "jazzy": ("ros-rclpy[fastrtps]==7.1.6", "ros-std-msgs==5.3.6", "ros-sensor-msgs==5.3.6", "ros-nav-msgs==5.3.6"),
+    "kilted": ("ros-rclpy[fastrtps]==9.1.2", "ros-std-msgs==5.5.1", "ros-sensor-msgs==5.5.1", "ros-nav-msgs==5.5.1"),
 }
-CHECK = "import rclpy, std_msgs.msg, sensor_msgs.msg, rmw_fastrtps_cpp"
+CHECK = "import rclpy, std_msgs.msg, sensor_msgs.msg, nav_msgs.msg, rmw_fastrtps_cpp"
 
 
 def unavailable(reason: str) -> None:
@@ -78,10 +80,10 @@ def ensure_venv(distro: str) -> Path:
 def _ensure_venv(distro: str) -> Path:
     requirements = DISTROS[distro]
     spec = "\n".join(requirements) + "\n"
-    root = cache_root() / f"rclpy-{distro}"
+    root = cache_root() / f"rclpy-{distro}-{hashlib.sha256(spec.encode()).hexdigest()[:8]}"
     python, marker = root / "bin" / "python", root / "r2d2-viz-requirements.txt"
     cache_root().mkdir(parents=True, exist_ok=True)
-    with open(cache_root() / f"rclpy-{distro}.lock", "w") as lock:
+    with open(root.with_name(root.name + ".lock"), "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         if _valid(python, marker, spec):
             return python
