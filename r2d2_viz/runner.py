@@ -47,8 +47,7 @@ BATCH_CHUNK_SAMPLES = 20_000
 BATCH_CHUNK_CELLS = 100_000
 """…and at most this many moving-joint values per chunk, so a robot with thousands of joints stays flat too."""
 LIVE_BLOCK_SECONDS = 5.0
-"""Live runs compute and encode this much robot time at once (about 1.5 ms of work plus 3 µs a sample), then
-send each sample when it is due; the sinks are waited for once a block (backpressure)…"""
+"""Live runs compute this much robot time at once, then send each sample when due; sinks waited for once a block…"""
 LIVE_BLOCK_SAMPLES = 1000
 """…and a block has at most this many samples, so at high rates computing one makes only a sample or two late."""
 FLUSH_BYTES = 64 << 20
