@@ -57,7 +57,9 @@ def test_each_tool_reaches_a_real_node(artifacts_dir: Path) -> None:
     covariance = received["/initialpose"][0]["covariance"]
     assert covariance == [RVIZ_COVARIANCE.get(i, 0.0) for i in range(36)]
     twists = [(t["linear"], t["angular"]) for t in received["/cmd_vel"]]
-    assert len(twists) >= 3 and set(twists[:-1]) == {(0.5, 0.0)} and twists[-1] == (0.0, 0.0)  # stops on release
+    # forward while held, stopped on release: how many forward commands a 0.8 s hold sends is the browser's timers'
+    # business (a starved page sends fewer, and the app's 0.5 s guard may stop it in between), so not counted
+    assert (0.5, 0.0) in twists and set(twists) <= {(0.5, 0.0), (0.0, 0.0)} and twists[-1] == (0.0, 0.0), twists
     lines = result["stdout"].splitlines()
     x, y, z = picks[0]["position"]
     assert f"clicked: map ({x:.2f}, {y:.2f}, {z:.2f}) → /clicked_point" in lines
