@@ -8,19 +8,16 @@ fail on damaged data). Pure: no rerun import.
 from __future__ import annotations
 
 import mmap
-import struct
 
 import numpy as np
 
 from r2d2_viz.sources.bags.mcap_records import (
-    OP_CHUNK,
     OP_MESSAGE_INDEX,
     U32,
-    U64,
     BrokenError,
     ChunkIndex,
     _zstd,
-    string_at,
+    chunk_record,
 )
 
 
@@ -52,17 +49,9 @@ def wanted_end(buf: mmap.mmap, c: ChunkIndex, wanted: dict[int, int], lo: int, h
 def chunk_prefix(buf: mmap.mmap, start: int, end: int, upto: int) -> memoryview | None:
     """The first ``upto`` bytes of a compressed chunk record's messages (None: the chunk is not compressed, or
     ``upto`` is not less than its size — read it whole)."""
-    if end > len(buf) or start + 9 > end or buf[start] != OP_CHUNK:
-        raise BrokenError("a chunk index points past the end or at no chunk")
-    at = start + 9
-    _, _, uncompressed_size, _ = struct.unpack_from("<QQQI", buf, at)
-    compression, at = string_at(buf, at + 28)
-    (size,) = U64.unpack_from(buf, at)
-    if at + 8 + size > end:
-        raise BrokenError("a chunk runs past its record")
+    uncompressed_size, _, compression, raw = chunk_record(buf, start, end)
     if not compression or upto >= uncompressed_size:
         return None
-    raw = memoryview(buf)[at + 8 : at + 8 + size]
     if compression == "zstd":
         data: bytes = _zstd().ZstdDecompressor().decompress(raw, max_length=upto)
     elif compression == "lz4":

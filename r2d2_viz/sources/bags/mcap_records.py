@@ -226,8 +226,9 @@ def statistics(buf: mmap.mmap, at: int, stop: int) -> tuple[tuple[int, int] | No
     return ((first, last) if message_count else None), counts
 
 
-def chunk_data(buf: mmap.mmap, start: int, end: int) -> memoryview:
-    """A chunk record's messages, decompressed and checked."""
+def chunk_record(buf: mmap.mmap, start: int, end: int) -> tuple[int, int, str, memoryview]:
+    """A chunk record's uncompressed size, CRC, compression and its (compressed) records' bytes, checked to lie
+    within the record."""
     if end > len(buf) or start + 9 > end or buf[start] != OP_CHUNK:
         raise BrokenError("a chunk index points past the end or at no chunk")
     at = start + 9
@@ -236,7 +237,12 @@ def chunk_data(buf: mmap.mmap, start: int, end: int) -> memoryview:
     (size,) = U64.unpack_from(buf, at)
     if at + 8 + size > end:
         raise BrokenError("a chunk runs past its record")
-    raw = memoryview(buf)[at + 8 : at + 8 + size]
+    return uncompressed_size, crc, compression, memoryview(buf)[at + 8 : at + 8 + size]
+
+
+def chunk_data(buf: mmap.mmap, start: int, end: int) -> memoryview:
+    """A chunk record's messages, decompressed and checked."""
+    uncompressed_size, crc, compression, raw = chunk_record(buf, start, end)
     if compression == "lz4":
         from lz4.frame import decompress as lz4_decompress
 
