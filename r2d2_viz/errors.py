@@ -6,6 +6,8 @@ else is unexpected and exits 1.
 
 from __future__ import annotations
 
+import sys
+import threading
 from collections.abc import Iterable
 
 DEBUG_ENV = "R2D2_VIZ_DEBUG"
@@ -89,3 +91,16 @@ def stderr_line(text: str, limit: int = LINE_LIMIT) -> str:
 def one_line(exc: BaseException) -> str:
     """A third-party exception as part of one message line: whitespace collapsed, at most 200 characters."""
     return " ".join(str(exc).split())[:200] or type(exc).__name__
+
+
+_STDERR = threading.Lock()
+
+
+def warn(message: str) -> None:
+    """``warning: message`` as one whole line on stderr (at most :data:`LINE_LIMIT` characters): a bag's reader
+    thread and the run warn at once, and ``print`` writes a line and its newline apart, so two lines could run
+    into one."""
+    line = stderr_line(f"warning: {message}") + "\n"
+    with _STDERR:
+        sys.stderr.write(line)
+        sys.stderr.flush()

@@ -47,7 +47,7 @@ from r2d2_viz.viewer.fields_feed import LiveFields
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
-from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
+from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording, update_blueprint
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.tf_recorded import RecordedTf
 
@@ -120,7 +120,7 @@ def run_on(
     model = _Model(config)
     batches = _settle(source, model, deadline)
     plan, view = _plan(config, model.robot, batches)
-    # the graph's log, diagnostics, fixes and sensors when the view is planned: their views (later ones: none)
+    # the graph's log, diagnostics, fixes and sensors when the view is planned: their views (later ones: below)
     view = dataclasses.replace(view, layout=with_telemetry(view.layout, source.display_topics))
     output = _Output(config.sink)
     lateness = LatenessLog.from_env()
@@ -140,6 +140,9 @@ def run_on(
         flushed = time.monotonic()
         while not deadline.done():
             scene.handle(source.poll(), output.bag)
+            if (layout := with_telemetry(view.layout, source.display_topics)) != view.layout:  # a new log, …: its view
+                view = dataclasses.replace(view, layout=layout)
+                update_blueprint(recording, generate_blueprint(view.spec, layout=layout))
             if time.monotonic() - flushed > FLUSH_SECONDS:
                 recording.rec.flush()
                 flushed = time.monotonic()

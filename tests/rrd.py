@@ -53,11 +53,12 @@ def read_recording(path: str | Path) -> dict[str, Rows]:
     return dict(entities)
 
 
-def blueprint_components(path: str | Path) -> dict[str, dict[str, Any]]:
-    """Entity path → {component: value} of the (first) blueprint store in an .rrd or .rbl file."""
+def blueprint_components(path: str | Path, which: int = 0) -> dict[str, dict[str, Any]]:
+    """Entity path → {component: value} of the first blueprint store in an .rrd or .rbl file (``which=-1``: the
+    last, e.g. a live run's layout after a topic that needs a view appeared)."""
     reader = RrdReader(path)
     out: dict[str, dict[str, Any]] = defaultdict(dict)
-    for chunk in reader.stream(store=reader.blueprints()[0]):
+    for chunk in reader.stream(store=reader.blueprints()[which]):
         batch = chunk.to_record_batch()
         for i, f in enumerate(batch.schema):
             if f.name not in IGNORED and f.name != "blueprint":

@@ -54,3 +54,23 @@ def test_a_stderr_line_is_at_most_300_characters_and_keeps_its_end() -> None:
     assert short.endswith(" (further problems on this topic are counted)")
     assert errors.stderr_line("a\n" + "b" * 400).split("\n")[0] == "a"  # line by line
     assert errors.stderr_line("short") == "short"
+
+
+def test_warnings_from_two_threads_stay_whole_lines(capsys: pytest.CaptureFixture[str]) -> None:
+    """A bag's reader thread and the run warn at once: every line whole (a CI run once showed two warnings run
+    into one line, 'and 39 morewarning: …', when each was print()ed)."""
+    import threading
+
+    from r2d2_viz.errors import warn
+
+    def many(who: str) -> None:
+        for k in range(300):
+            warn(f"{who} {k} " + "x" * 200)
+
+    threads = [threading.Thread(target=many, args=(who,)) for who in ("reader", "run")]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 600 and all(line.startswith("warning: ") and line.endswith("x" * 200) for line in lines)

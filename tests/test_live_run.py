@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import yourdfpy
 from conftest import cli, example_robots
-from rrd import frame_edges_at, pose_in, read_recording, tf_by_child
+from rrd import blueprint_components, frame_edges_at, pose_in, read_recording, tf_by_child
 from sources.live import ros_node
 from sources.live.nodes.publish_robot import joint_names, joint_state_values
 
@@ -160,7 +160,6 @@ def test_kilted_node_recorded_at_source_timestamps_and_streamed_to_a_viewer(tmp_
 def test_a_nodes_log_arrives_with_its_levels_in_a_log_view(tmp_path: Path) -> None:
     """A real Jazzy node logs a line at each level: /rosout (rcl_interfaces/msg/Log, which every node publishes)
     is read like a bag's, each line a TextLog with its level and rqt_console's text, in a log view."""
-    from rrd import blueprint_components
     from sources.live.nodes.publish_robot import LOG_LINES
 
     rrd = tmp_path / "log.rrd"
@@ -176,7 +175,8 @@ def test_a_nodes_log_arrives_with_its_levels_in_a_log_view(tmp_path: Path) -> No
     assert [level for level, _ in lines] == [level for level, _ in LOG_LINES]
     for (level, text), (_, method) in zip(lines, LOG_LINES, strict=True):
         assert text.startswith(f"[r2d2_viz_test_robot] {level} line (") and "publish_robot.py:main:" in text, method
-    names = [c.get("ViewBlueprint:display_name") for c in blueprint_components(rrd).values()]
+    # the log view: planned with the view when /rosout was there in time, else sent when it appeared
+    names = [c.get("ViewBlueprint:display_name") for c in blueprint_components(rrd, which=-1).values()]
     assert ["Log: /rosout"] in names
 
 
@@ -243,6 +243,57 @@ def test_a_description_that_does_not_parse_then_one_that_does(
     assert samples == 3, err
     recording = read_recording(tmp_path / "out.rrd")
     assert len(recording["/joints/limited"].times) == 3  # the reloaded robot's joint moved
+
+
+def test_a_log_that_appears_after_the_view_was_planned_gets_its_view(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No DDS: a stand-in graph offers /rosout only after the settle (a node started after the viewer, as RViz
+    users do). Its lines are logged, and a layout with its log view is sent when it appears: the recording's last
+    blueprint has the view, its first (planned before) has none."""
+    import threading
+
+    from sources.live.test_source import FakeGraph
+    from test_live_run_lateness import Config
+
+    import r2d2_viz.live_run as live_run
+    from r2d2_viz.sources.live.dds import Publication, Sample
+    from r2d2_viz.viewer.sinks import SinkConfig
+
+    store = typestore("jazzy")
+    log = "rcl_interfaces/msg/Log"
+    t = 1_700_000_000_000_000_000
+
+    def line(k: int) -> bytes:
+        stamp = store.types["builtin_interfaces/msg/Time"](sec=1_700_000_000, nanosec=k)
+        msg = store.types[log](stamp=stamp, level=30, name="late_node", msg=f"line {k}", file="f.py", function="g",
+                               line=k)  # fmt: skip
+        return bytes(store.serialize_cdr(msg, log))
+
+    class Late(FakeGraph):  # nothing while the view is planned, then /rosout
+        def __init__(self) -> None:
+            super().__init__()
+            self.polls = 0
+
+        def poll(self) -> list[Sample]:
+            self.polls += 1
+            if self.polls == 20:
+                self.pubs = [Publication("/rosout", log, True, True)]
+            return [Sample("/rosout", log, t + self.polls, line(self.polls))] if 25 <= self.polls < 28 else []
+
+    monkeypatch.setattr(live_run, "SETTLE_SECONDS", 0.1)
+    out = tmp_path / "late.rrd"
+    config = Config(None, SinkConfig(save=out), duration=2.0)
+    live_run.run_on(config, Late(), threading.Event())  # type: ignore[arg-type]
+    rows = read_recording(out)["/rosout"]
+    assert [text[0] for text in rows.temporal["TextLog:text"] if text is not None] == [
+        f"[late_node] line {k} (f.py:g:{k})" for k in (25, 26, 27)
+    ]
+
+    def views(which: int) -> list[object]:
+        return [c.get("ViewBlueprint:display_name") for c in blueprint_components(out, which=which).values()]
+
+    assert ["Log: /rosout"] not in views(0) and ["Log: /rosout"] in views(-1)
 
 
 def test_an_empty_graph_says_what_was_searched_and_how_to_check(tmp_path: Path) -> None:

@@ -137,31 +137,13 @@ class Reader:
                 topics.append(TopicDisplay(kind, str(display.get("Name", kind)), topic, enabled, style))
             else:
                 self.note(f"display {display.get('Class')}: no counterpart in Rerun; skipped")
-        self.tools_and_panels(manager.get("Tools"), data.get("Panels"))
+        if note := tools_and_panels(manager.get("Tools"), data.get("Panels")):
+            self.note(note)
         views = manager.get("Views") or {}
         current = views.get("Current") if isinstance(views, dict) else None
         camera = read_camera(self, current, fixed) if isinstance(current, dict) else None
         shown, notes = tuple(topics), tuple(self.notes)
         return ViewSpec(self.source, fixed, background, grid, tf, robot, camera, shown, notes, tuple(more_robots))
-
-    def tools_and_panels(self, tools: Any, panels: Any) -> None:
-        """One note naming every tool and panel without a counterpart (Rerun's viewer has its own camera,
-        selection, blueprint and selection panels), rather than a line each. The tools that talk back (pose
-        estimate, goal, point) and Measure have theirs on ``--serve``'s page (:mod:`r2d2_viz.rviz.tools`)."""
-        named: dict[str, list[str]] = {"tools": [], "panels": []}
-        for kind, items in (("tools", tools), ("panels", panels)):
-            for item in items if isinstance(items, list) else []:
-                if not isinstance(item, dict) or not item.get("Class") or str(item["Class"]) in named[kind]:
-                    continue
-                if kind == "tools" and str(item["Class"]).rsplit("/", 1)[-1] in PAGE_TOOLS:
-                    continue
-                named[kind].append(str(item["Class"]))
-        parts = [f"{len(names)} {kind} ({', '.join(names)})" for kind, names in named.items() if names]
-        if parts:
-            self.note(
-                f"{' and '.join(parts)}: no counterpart (Rerun's viewer has its own camera and selection tools, "
-                "blueprint and selection panels)"
-            )
 
     def displays(self, items: Any, where: str) -> Iterator[tuple[Mapping[str, Any], str]]:
         """Every display, those inside Groups included (a disabled group disables what it holds)."""
@@ -303,3 +285,24 @@ def read_camera(self: Reader, v: Mapping[str, Any], fixed: str) -> Camera:
         return Camera(kind, (x, y, height), (x, y, 0.0), up, orthographic=True, target_frame=follow)
     self.note(f"Views / Current {v.get('Class')}: no counterpart; the default orbit is used")
     return Camera(kind, orbit_eye((0.0, 0.0, 0.0), 10.0, 0.785398, 0.785398), (0.0, 0.0, 0.0))
+
+
+def tools_and_panels(tools: Any, panels: Any) -> str | None:
+    """One note naming every tool and panel without a counterpart (Rerun's viewer has its own camera,
+    selection, blueprint and selection panels), rather than a line each. The tools that talk back (pose
+    estimate, goal, point) and Measure have theirs on ``--serve``'s page (:mod:`r2d2_viz.rviz.tools`)."""
+    named: dict[str, list[str]] = {"tools": [], "panels": []}
+    for kind, items in (("tools", tools), ("panels", panels)):
+        for item in items if isinstance(items, list) else []:
+            if not isinstance(item, dict) or not item.get("Class") or str(item["Class"]) in named[kind]:
+                continue
+            if kind == "tools" and str(item["Class"]).rsplit("/", 1)[-1] in PAGE_TOOLS:
+                continue
+            named[kind].append(str(item["Class"]))
+    parts = [f"{len(names)} {kind} ({', '.join(names)})" for kind, names in named.items() if names]
+    if not parts:
+        return None
+    return (
+        f"{' and '.join(parts)}: no counterpart (Rerun's viewer has its own camera and selection tools, "
+        "blueprint and selection panels)"
+    )

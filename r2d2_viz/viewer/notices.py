@@ -3,21 +3,18 @@
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 
 import numpy as np
 import rerun as rr
 
-from r2d2_viz.errors import stderr_line
+from r2d2_viz.errors import warn
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.viewer.entities import TIMELINE, WARNINGS
 
 Warn = Callable[[str], None]
-
-
-def to_stderr(message: str) -> None:
-    print(stderr_line(f"warning: {message}"), file=sys.stderr, flush=True)
+to_stderr: Warn = warn
+"""The default: a whole ``warning:`` line on stderr."""
 
 
 class Notices:

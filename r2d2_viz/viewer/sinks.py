@@ -137,6 +137,12 @@ def open_recording(
     return Recording(rec, server, live=config.live, page=page)
 
 
+def update_blueprint(recording: Recording, blueprint: rrb.Blueprint) -> None:
+    """A running recording's new layout (a live graph offered a topic that needs a view after the first was
+    planned): the viewer makes it active and the default; a saved ``.rrd`` holds it after the first."""
+    recording.rec.send_blueprint(blueprint, make_active=True, make_default=True)
+
+
 def serve_recording(rec: rr.RecordingStream, config: SinkConfig) -> Recording:
     """``rec`` streamed to a served viewer (:func:`serve`) instead of its other sinks (the Python API's page)."""
     server, uri, page = serve(config)

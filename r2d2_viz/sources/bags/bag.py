@@ -14,13 +14,12 @@ from __future__ import annotations
 
 import dataclasses
 import re
-import sys
 from collections.abc import Callable, Collection, Iterator
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from r2d2_viz.errors import BagError, listed, stderr_line
+from r2d2_viz.errors import BagError, listed, warn
 from r2d2_viz.msgs.definitions import Convert
 from r2d2_viz.msgs.typestore import MsgError, deserialize
 from r2d2_viz.sources.bags.mcap_scan import McapScan
@@ -28,10 +27,8 @@ from r2d2_viz.sources.bags.merge import merged, overlapping_files
 from r2d2_viz.sources.bags.storage import Block, Storage, TopicInfo, block_of, renamed, topic_name, topic_tuple
 
 Warn = Callable[[str], None]
-
-
-def to_stderr(message: str) -> None:
-    print(stderr_line(f"warning: {message}"), file=sys.stderr, flush=True)
+to_stderr: Warn = warn
+"""The default: a whole ``warning:`` line on stderr."""
 
 
 STORAGES = (".db3", ".mcap", ".bag")
