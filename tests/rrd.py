@@ -54,8 +54,8 @@ def read_recording(path: str | Path) -> dict[str, Rows]:
 
 
 def blueprint_components(path: str | Path, which: int = 0) -> dict[str, dict[str, Any]]:
-    """Entity path → {component: value} of the first blueprint store in an .rrd or .rbl file (``which=-1``: the
-    last, e.g. a live run's layout after a topic that needs a view appeared)."""
+    """Entity path → {component: value} of the (first) blueprint store in an .rrd or .rbl file (``which``: another
+    of them, in the reader's order — not the order they were sent: see :func:`blueprint_count`)."""
     reader = RrdReader(path)
     out: dict[str, dict[str, Any]] = defaultdict(dict)
     for chunk in reader.stream(store=reader.blueprints()[which]):
@@ -64,6 +64,11 @@ def blueprint_components(path: str | Path, which: int = 0) -> dict[str, dict[str
             if f.name not in IGNORED and f.name != "blueprint":
                 out[chunk.entity_path][f.name] = batch.column(i).to_pylist()[-1]
     return dict(out)
+
+
+def blueprint_count(path: str | Path) -> int:
+    """How many blueprint stores an .rrd file holds (a live run sends a new layout when a topic needs a view)."""
+    return len(RrdReader(path).blueprints())
 
 
 def tf_by_child(recording: dict[str, Rows], entity: str = "/tf") -> dict[str, Rows]:

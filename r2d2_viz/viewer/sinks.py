@@ -140,6 +140,8 @@ def open_recording(
 def update_blueprint(recording: Recording, blueprint: rrb.Blueprint) -> None:
     """A running recording's new layout (a live graph offered a topic that needs a view after the first was
     planned): the viewer makes it active and the default; a saved ``.rrd`` holds it after the first."""
+    if rr.get_application_id(recording=recording.rec) is None:
+        return  # a recording that goes nowhere (a live run saved as a bag, --headless): no viewer to lay out
     recording.rec.send_blueprint(blueprint, make_active=True, make_default=True)
 
 
