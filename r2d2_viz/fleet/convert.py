@@ -14,6 +14,7 @@ import json
 import multiprocessing
 import os
 import signal
+import sys
 import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -27,6 +28,8 @@ from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.viewer.catalog import MARKER_PROPERTY, TOPICS_PROPERTY, recording_marker
 
+TASKS_PER_WORKER = 32
+"""Bags a worker converts before a fresh one takes its place (see :func:`convert_all`'s pool)."""
 KILL_ENV = "R2D2_VIZ_FLEET_KILL"
 """Fault injection for the tests: a worker converting the bag of this name kills itself (SIGKILL)."""
 
@@ -210,9 +213,15 @@ def _pool(jobs: list[Job], workers: int, on_done: Progress) -> list[Job]:
     workers stopped and awaited, the conversions that finished meanwhile reported, and KeyboardInterrupt raised."""
     broken: list[Job] = []
     context = multiprocessing.get_context("spawn")  # no fork of a process holding Rerun's threads
-    pool = ProcessPoolExecutor(
-        max_workers=max(1, min(workers, len(jobs) or 1)), mp_context=context, initializer=_ignore_sigint
-    )
+    # a fresh worker every 32 bags: Rerun keeps each recording stream's two threads (one ticking) for the life of
+    # the process, so a worker converting a thousand bags would carry two thousand (Python 3.11's option)
+    size = max(1, min(workers, len(jobs) or 1))
+    if sys.version_info >= (3, 11):
+        pool = ProcessPoolExecutor(
+            size, mp_context=context, initializer=_ignore_sigint, max_tasks_per_child=TASKS_PER_WORKER
+        )
+    else:
+        pool = ProcessPoolExecutor(size, mp_context=context, initializer=_ignore_sigint)
     pending: dict[Future[Outcome], Job] = {pool.submit(_convert_in_pool, job): job for job in jobs}
     try:
         while pending:
