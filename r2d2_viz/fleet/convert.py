@@ -9,6 +9,7 @@ alone, since a dying worker also takes down the other conversions in flight in i
 
 from __future__ import annotations
 
+import dataclasses
 import glob
 import json
 import multiprocessing
@@ -52,6 +53,8 @@ class Outcome:
     error: str | None = None
     """None: converted; else one line saying why not."""
     seconds: float = 0.0
+    worker: int = 0
+    """The process id of the worker that converted it (0: the calling process)."""
 
 
 @dataclass
@@ -203,7 +206,7 @@ def _convert_in_pool(job: Job) -> Outcome:
     worker, so the pool cannot hand it the next bag."""
     try:
         with sigterm_raises():
-            return convert_one(job)
+            return dataclasses.replace(convert_one(job), worker=os.getpid())
     except KeyboardInterrupt:
         os._exit(130)
 

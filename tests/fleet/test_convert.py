@@ -296,3 +296,18 @@ def test_the_same_bag_given_twice_is_converted_once(tmp_path: Path) -> None:
     assert "r2d2-viz: 1 converted →" in result.stderr
     assert sorted(p.name for p in out.iterdir()) == ["alpha.rbl", "alpha.rrd"]
     assert _recording_id(out / "alpha.rrd") == _expected_id(alpha)
+
+
+def test_a_worker_is_renewed_after_its_share_of_bags(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rerun keeps each recording stream's threads for its process's life: a worker hands over to a fresh one after
+    ``TASKS_PER_WORKER`` bags (here 1: three bags, one worker at a time, three processes), and every bag is still
+    converted."""
+    from r2d2_viz.fleet import convert
+
+    monkeypatch.setattr(convert, "TASKS_PER_WORKER", 1)
+    bags = [still_bag(tmp_path / name, samples=3) for name in ("a", "b", "c")]
+    jobs = convert.plan_jobs(bags, tmp_path / "out", force=False, report=convert.FleetReport())
+    done: list[convert.Outcome] = []
+    assert convert.run_local(jobs, workers=1, on_done=done.append)
+    assert sorted(o.job.name for o in done if o.error is None) == ["a", "b", "c"]
+    assert len({o.worker for o in done}) == 3 and os.getpid() not in {o.worker for o in done}
