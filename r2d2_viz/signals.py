@@ -3,6 +3,7 @@ interrupts a batch run like Ctrl-C (its partial file is removed)."""
 
 from __future__ import annotations
 
+import os
 import signal
 import threading
 from collections.abc import Callable, Iterator
@@ -28,6 +29,9 @@ def signals_set(stop: threading.Event) -> Iterator[None]:
 @contextmanager
 def sigterm_raises() -> Iterator[None]:
     def handler(signum: int, frame: FrameType | None) -> None:
+        if _in_finaliser(frame):  # raised there, Python prints it and drops it: the stop would be lost
+            threading.Timer(RESEND_S, os.kill, (os.getpid(), signum)).start()
+            return
         raise StopRequested
 
     with _handlers(handler, signals=(signal.SIGTERM,)):
@@ -48,3 +52,19 @@ def _handlers(
     finally:
         for s, h in previous.items():
             signal.signal(s, h)
+
+
+RESEND_S = 0.05
+"""A stop that came during a finaliser is sent again this much later (once the finaliser has returned)."""
+
+
+def _in_finaliser(frame: FrameType | None) -> bool:
+    """Whether the signal came while a ``__del__`` ran (Rerun's ``RecordingStream.__del__`` flushes, wherever the
+    garbage collector happens to drop a stream: an exception raised there never reaches the run)."""
+    for _ in range(16):
+        if frame is None:
+            return False
+        if frame.f_code.co_name == "__del__":
+            return True
+        frame = frame.f_back
+    return False

@@ -28,3 +28,24 @@ def test_sigterm_interrupts_a_batch_run_like_ctrl_c() -> None:
         signal.sigtimedwait([], 0.1)  # the handler runs at the next bytecode boundary
     assert issubclass(StopRequested, KeyboardInterrupt)  # the CLI's Ctrl-C path: exit 130, partial file removed
     assert signal.getsignal(signal.SIGTERM) == before
+
+
+def test_a_stop_that_comes_during_a_finaliser_is_not_lost() -> None:
+    """SIGTERM while an object's ``__del__`` runs (a fleet worker's Rerun stream dropped by the garbage collector
+    as the stop came, seen in CI): raised there, Python would print 'Exception ignored in …' with a traceback and
+    drop it. It is sent again and stops the run after the finaliser."""
+    import os
+    import signal as signals
+    import time
+
+    from r2d2_viz.signals import StopRequested, sigterm_raises
+
+    class Dropped:
+        def __del__(self) -> None:
+            os.kill(os.getpid(), signals.SIGTERM)
+            sum(range(100_000))  # the handler runs here, inside __del__
+
+    with pytest.raises(StopRequested), sigterm_raises():
+        Dropped()
+        for _ in range(200):  # up to 10 s: the re-sent signal stops it well before
+            time.sleep(0.05)
