@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import sys
 from pathlib import Path
@@ -30,6 +31,11 @@ def _yaw(xyzw: list[float]) -> float:
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
+@pytest.mark.skipif(
+    not os.environ.get("R2D2_VIZ_TOOLS_E2E"),
+    reason="the browser clicking each tool for a real ROS 2 node takes 2-7 minutes on 2 cores and under load may get "
+    "no pick: run it with R2D2_VIZ_TOOLS_E2E=1 (the tools' messages are tested without a browser in tests/ros_out)",
+)
 def test_each_tool_reaches_a_real_node(artifacts_dir: Path) -> None:
     missing = viewers.missing_web_prerequisites()
     if missing:
