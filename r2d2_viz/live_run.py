@@ -148,6 +148,7 @@ def run_on(
                 flushed = time.monotonic()
             if source.graph.wait(POLL_SECONDS):
                 time.sleep(GATHER_SECONDS)
+        scene.handle(source.poll(), output.bag)  # what came last, and joint states held until the robot was known
         scene.finish()
         _say_received(source, time.monotonic() - started)
         detach_tools(recording, tools)
