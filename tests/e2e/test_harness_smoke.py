@@ -97,7 +97,7 @@ def shoot(request: pytest.FixtureRequest, artifacts_dir: Path) -> Shooter:
         browser = request.getfixturevalue("chromium_browser")
 
         def web(rrd: Path, png: Path) -> Path:
-            shot = viewers.screenshot_web(rrd, png, browser=browser, timeout=90, log_dir=artifacts_dir)
+            shot = viewers.screenshot_web(rrd, png, browser=browser, source="http", timeout=90, log_dir=artifacts_dir)
             print(f"web {png.name}: {shot.seconds:.1f}s stages={shot.stages} renderer={shot.renderer}")
             return shot.path
 

@@ -83,11 +83,11 @@ def main() -> int:
     try:
         with LiveGraph() as graph:
             topics: list[tuple[str, str, int]] = []
-            while not any(t[0] == "/joint_states" for t in topics) and time.monotonic() < end:
-                topics = graph.topics(0.25)  # the node came first: we are the late joiner
-            if args.tf_peer:
-                while not any(t[0] == "/tf" for t in topics) and time.monotonic() < end:
-                    topics = graph.topics(0.25)
+            # the node came first: we are the late joiner. Each writer is discovered on its own (seen: /joint_states
+            # listed before /robot_description on a busy machine), so wait for all of them
+            wanted = {"/joint_states", "/robot_description"} | ({"/tf"} if args.tf_peer else set())
+            while not wanted <= {t[0] for t in topics} and time.monotonic() < end:
+                topics = graph.topics(0.25)
             result["topics"] = topics
             qos = [graph.subscribe("/robot_description", "std_msgs/msg/String")]
             qos.append(graph.subscribe("/joint_states", "sensor_msgs/msg/JointState"))
