@@ -83,7 +83,8 @@ def _check_poses(path: Path, *, header_time: bool) -> int:
 @pytest.mark.slow
 def test_jazzy_node_recorded_bagged_and_malformed_samples_survived(tmp_path: Path) -> None:
     rrd, bag = tmp_path / "out.rrd", tmp_path / "out.mcap"
-    runs = [["--save", str(rrd), "--duration", "9", "--time", "header"], ["--save", str(bag), "--duration", "9"]]
+    # each run: a Ctrl-C once the node has sent everything (cli_scenario.py); --duration only bounds it
+    runs = [["--save", str(rrd), "--duration", "30", "--time", "header"], ["--save", str(bag), "--duration", "30"]]
     result = _scenario("jazzy", runs, node=["--bad"], wrong_type=True)
     assert result["list_rc"] == 0
     assert "/joint_states [sensor_msgs/msg/JointState] 1 publisher" in result["list"]
@@ -142,8 +143,8 @@ def test_jazzy_node_recorded_bagged_and_malformed_samples_survived(tmp_path: Pat
 def test_kilted_node_recorded_at_source_timestamps_and_streamed_to_a_viewer(tmp_path: Path) -> None:
     rrd, received = tmp_path / "out.rrd", tmp_path / "received.rrd"
     runs = [
-        ["--save", str(rrd), "--duration", "8"],
-        ["--connect", "rerun+http://127.0.0.1:9877/proxy", "--duration", "8"],
+        ["--save", str(rrd), "--duration", "30"],
+        ["--connect", "rerun+http://127.0.0.1:9877/proxy", "--duration", "30"],
     ]
     result = _scenario("kilted", runs, server=received)
     assert "/joint_states [sensor_msgs/msg/JointState] 1 publisher" in result["list"]
@@ -163,7 +164,7 @@ def test_a_nodes_log_arrives_with_its_levels_in_a_log_view(tmp_path: Path) -> No
     from sources.live.nodes.publish_robot import LOG_LINES
 
     rrd = tmp_path / "log.rrd"
-    result = _scenario("jazzy", [["--save", str(rrd), "--duration", "8"]], node=["--log"])
+    result = _scenario("jazzy", [["--save", str(rrd), "--duration", "30"]], node=["--log"])
     [run] = result["runs"]
     assert run["rc"] == 0, run["stderr"][-3000:]
     rows = read_recording(rrd)["/rosout"]

@@ -3,7 +3,9 @@
 A real ROS 2 node (``nodes/publish_robot.py``) publishes a latched ``/robot_description`` first; optionally a
 cyclonedds peer puts the wrong type on ``/joint_states``. Then ``r2d2-viz --ros --list`` runs, and the CLI runs
 given as JSON lists of arguments run at the same time (late joiners; the node streams once all have subscribed).
-Prints one JSON: the list's output, each run's exit code and stderr, the node's report.
+Once the node has sent everything (its JSON line) and a grace period has passed, each run still going gets SIGINT,
+as a user stops a live run (each run's ``--duration`` is only the bound). Prints one JSON: the list's output, each
+run's exit code and stderr, the node's report.
 """
 
 from __future__ import annotations
@@ -15,8 +17,10 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
+from typing import Any
 
 NODES = Path(__file__).resolve().parent / "nodes"
 
@@ -29,6 +33,18 @@ def _wait_for_port(port: int, timeout: float = 30.0) -> None:
                 return
         time.sleep(0.1)
     raise SystemExit(f"cli_scenario: the rerun server did not listen on {port}")
+
+
+GRACE = 1.5
+"""Seconds between the node's last message and the runs' SIGINT: loopback delivers in milliseconds; a run polls
+every few ms and drains its reader once more when stopped."""
+
+
+def _lines(stream: Any, into: list[str], sent: threading.Event) -> None:
+    for line in stream:
+        into.append(line)
+        if line.startswith("{"):
+            sent.set()
 
 
 def main() -> int:
@@ -56,6 +72,15 @@ def main() -> int:
          *json.loads(args.node)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
+    node_out: list[str] = []
+    sent = threading.Event()
+    node_err: list[str] = []
+    readers = [
+        threading.Thread(target=_lines, args=(node.stdout, node_out, sent), daemon=True),
+        threading.Thread(target=_lines, args=(node.stderr, node_err, threading.Event()), daemon=True),
+    ]
+    for reader in readers:
+        reader.start()
     peer = None
     if args.wrong_type_peer:
         peer = subprocess.Popen([sys.executable, str(NODES / "wrong_type_peer.py"), "30"])
@@ -74,8 +99,13 @@ def main() -> int:
             for run in runs
         ]
         out["runs"] = []
+        if sent.wait(timeout=60):
+            time.sleep(GRACE)
+            for proc in procs:
+                if proc.poll() is None:
+                    proc.send_signal(signal.SIGINT)
         for proc in procs:
-            stdout, stderr = proc.communicate(timeout=60)
+            _, stderr = proc.communicate(timeout=60)
             out["runs"].append({"rc": proc.returncode, "stderr": stderr})  # type: ignore[union-attr]
         if server is not None:  # the server writes what it received when interrupted
             time.sleep(1.0)
@@ -87,8 +117,11 @@ def main() -> int:
         for p in (node, peer):
             if p is not None and p.poll() is None:
                 p.kill()
-    stdout, stderr = node.communicate(timeout=10)
-    lines = stdout.strip().splitlines()
+    node.wait(timeout=10)
+    for reader in readers:
+        reader.join(timeout=10)
+    stderr = "".join(node_err)
+    lines = [line for line in node_out if line.strip()]
     out["node"] = json.loads(lines[-1]) if lines else {"stderr": stderr[-2000:]}
     print(json.dumps(out))
     return 0
