@@ -136,8 +136,7 @@ def shoot(rrd: Path, png: Path, log: Path, display: str) -> list[str]:
             assert time.monotonic() < deadline, f"no 'time' timeline: {state}"
             time.sleep(0.5)
         client.set_time("time", timestamp=np.datetime64(T0 + round(SHOT_S * S), "ns"), play_state="paused")
-        time.sleep(3.0)
-        client.save_screenshot(str(png))
+        viewers.still_screenshot(client, png)
         return [r.summary for v in client.get_state().views for r in v.reports if r.severity == "error"]
 
 

@@ -234,8 +234,7 @@ def test_native_viewer(case: str, recordings: dict[str, Path], x_display, artifa
             time.sleep(0.5)
         assert timeline.time_type == "timestamp"  # a bag's receive times
         client.set_time("time", timestamp=np.datetime64(T0 + round(SHOT_S * S), "ns"), play_state="paused")
-        time.sleep(3.0)
-        client.save_screenshot(str(png))
+        viewers.still_screenshot(client, png)
         reports = [r.summary for v in client.get_state().views for r in v.reports if r.severity == "error"]
     _assert_shot(png, case)
     assert reports == [], f"the viewer reports errors at {SHOT_S} s: {reports[:5]}"

@@ -724,6 +724,20 @@ class Report:
     summary: str
 
 
+def still_screenshot(client: ViewerClient, png: Path, *, timeout: float = 10.0, interval: float = 0.5) -> np.ndarray:
+    """Screenshots of a running native viewer into ``png``, ``interval`` apart, until two are alike (at most 0.1 %
+    of the pixels changed: the viewer has drawn what it has) or ``timeout`` has passed; the last one's pixels."""
+    deadline = time.monotonic() + timeout
+    previous: np.ndarray | None = None
+    while True:
+        client.save_screenshot(str(png))  # type: ignore[attr-defined]
+        img = load_png(png)
+        if (previous is not None and changed_fraction(img, previous) <= 0.001) or time.monotonic() > deadline:
+            return img
+        previous = img
+        time.sleep(interval)
+
+
 def view_reports(
     client: ViewerClient, rrd: Path, *, samples: int = 9, timeline: str = "time", since_ns: int | None = None
 ) -> list[Report]:
