@@ -208,7 +208,7 @@ def test_a_description_that_does_not_parse_then_one_that_does(
     import threading
 
     from sources.live.test_source import JS, FakeGraph, _js
-    from test_live_run_lateness import URDF, Config
+    from test_live_run_stand_in import URDF, Config
 
     import r2d2_viz.live_run as live_run
     from r2d2_viz.sources.live.dds import Publication, Sample
@@ -255,7 +255,7 @@ def test_a_log_that_appears_after_the_view_was_planned_gets_its_view(
     import threading
 
     from sources.live.test_source import FakeGraph
-    from test_live_run_lateness import Config
+    from test_live_run_stand_in import Config
 
     import r2d2_viz.live_run as live_run
     from r2d2_viz.sources.live.dds import Publication, Sample

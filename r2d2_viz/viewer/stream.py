@@ -305,6 +305,8 @@ class LiveRobots:
     ) -> None:
         self.scene, self.packages, self.sent = scene, packages, sent
         self.several = bool(robot_namespaces(batches))
+        self.main: set[str] = set()
+        """``{""}`` once ``/robot_description`` (the robot without a namespace) has been described."""
         self.frames = {f for b in batches for r in b.tf for f in (*r.parents, *r.children)}
         self.parents: dict[str, str] = {}
         """Child frame → parent of the transforms received (:meth:`check`)."""
@@ -316,14 +318,24 @@ class LiveRobots:
 
     def describe(self, batch: LiveBatch) -> None:
         """The batch's new namespaced descriptions, each robot (re)loaded."""
+        self.main |= {""} if batch.descriptions else set()
         for namespace, text in batch.robot_descriptions:
             if self.texts.get(namespace) != text:
                 self._load(namespace, text)
 
     def _load(self, namespace: str, text: str) -> None:
-        """A (new) description of the robot in ``namespace``: (re)loaded, or one line when it does not parse."""
+        """A (new) description of the robot in ``namespace``: (re)loaded, or one line when it does not parse. A second
+        robot the settle did not see (a busy machine, a node started later) makes the run one of several robots:
+        the robots loaded before it are loaded again under their names."""
         first = namespace not in self.texts
         self.texts[namespace] = text
+        if not self.several and len({*self.texts, *self.main}) > 1:
+            self.several = True
+            for other in [n for n in self.streams if n != namespace]:
+                self._build(other, self.texts[other], announce=False)
+        self._build(namespace, text, announce=not first)
+
+    def _build(self, namespace: str, text: str, *, announce: bool) -> None:
         scene, topic = self.scene, f"{namespace}/robot_description"
         try:
             robot = parse_urdf(text, source=topic, packages=self.packages)
@@ -335,7 +347,7 @@ class LiveRobots:
         tree = compile_tree(prefixed_robot(robot, prefix))
         if (old := self.streams.pop(namespace, None)) is not None:
             old.finish()
-        if not first:
+        if announce:
             scene.notices.report(f"{topic} changed: robot {robot.name!r} reloaded", key=f"loaded {hash(text)}")
         stream = RobotStream(
             scene.rec,

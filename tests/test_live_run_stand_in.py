@@ -1,5 +1,6 @@
-"""The live run's benchmark hook (``R2D2_VIZ_PACING_LOG``): one ``topic lateness_seconds`` line per message handed
-to Rerun — joint states and a display message from a stand-in graph (no DDS) — and nothing at all when unset."""
+"""A live run on a stand-in graph (no DDS): the benchmark hook (``R2D2_VIZ_PACING_LOG``: one ``topic
+lateness_seconds`` line per message handed to Rerun, nothing at all when unset), and what comes before the robot is
+known or after the settle — joint states held until then, robots described late."""
 
 from __future__ import annotations
 
@@ -100,3 +101,34 @@ def test_joint_states_received_while_settling_are_shown_when_the_run_ends_there(
     samples, interrupted, _ = live_run.run_on(config, graph, stop)  # type: ignore[arg-type]
     assert interrupted
     assert samples == 3
+
+
+def test_robots_described_after_the_settle_are_several_robots(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Two namespaced robots whose descriptions come only after the settle (a busy machine, nodes started later):
+    still a run of several robots, each named when no transform places it (seen in a loaded run: one robot's
+    line was missing, the settle having seen none of them)."""
+    monkeypatch.setattr(live_run, "SETTLE_SECONDS", 0.1)
+
+    class LateGraph(FakeGraph):
+        waited = False
+
+        def poll(self) -> list[Sample]:
+            return super().poll() if self.waited else []  # nothing during the settle (it never waits)
+
+        def wait(self, timeout: float) -> bool:
+            self.waited = True
+            return super().wait(timeout)
+
+    graph = LateGraph()
+    string = "std_msgs/msg/String"
+    store = typestore("jazzy")
+    text = bytes(store.serialize_cdr(store.types[string](data=URDF), string))
+    graph.pubs = [Publication(f"/{ns}/robot_description", string, True, True) for ns in ("robot1", "robot2")]
+    graph.queue = [Sample(f"/{ns}/robot_description", string, 10**9, text) for ns in ("robot1", "robot2")]
+    config = Config(None, SinkConfig(save=tmp_path / "out.rrd"), duration=1.0)
+    live_run.run_on(config, graph, threading.Event())  # type: ignore[arg-type]
+    err = capsys.readouterr().err
+    assert err.count("robot /robot1: no recorded transform places its root") == 1, err
+    assert err.count("robot /robot2: no recorded transform places its root") == 1, err
