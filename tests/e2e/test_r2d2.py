@@ -215,7 +215,7 @@ def native_shot(
         previous: np.ndarray | None = None
         while True:
             time.sleep(0.5)
-            client.save_screenshot(str(png))  # type: ignore[attr-defined]
+            viewers.save_screenshot(client, png)  # type: ignore[arg-type]
             img = viewers.load_png(png)
             if time.monotonic() > deadline or (settled or _still)(img, previous):
                 return client.get_transform_graph()  # type: ignore[attr-defined]
@@ -349,7 +349,7 @@ def test_spawn_opens_the_native_viewer_and_streams_live(x_display, artifacts_dir
         png = artifacts_dir / "spawn.png"
         deadline = time.monotonic() + 30  # start-up notifications cover the plots for a few seconds, then fade
         while True:
-            client.save_screenshot(str(png))
+            viewers.save_screenshot(client, png)
             img = viewers.load_png(png)
             if _settled("r2d2", img, None) or time.monotonic() > deadline:
                 break

@@ -724,13 +724,25 @@ class Report:
     summary: str
 
 
+def save_screenshot(client: ViewerClient, png: Path, tries: int = 3) -> None:
+    """``client.save_screenshot(png)``, asked again (``tries`` times in all) when Rerun's control call runs out of
+    time: a 4-megapixel frame drawn by lavapipe beside other work has taken longer than its fixed deadline."""
+    for attempt in range(tries):
+        try:
+            client.save_screenshot(str(png))  # type: ignore[attr-defined]
+            return
+        except TimeoutError:
+            if attempt == tries - 1:
+                raise
+
+
 def still_screenshot(client: ViewerClient, png: Path, *, timeout: float = 10.0, interval: float = 0.5) -> np.ndarray:
     """Screenshots of a running native viewer into ``png``, ``interval`` apart, until two are alike (at most 0.1 %
     of the pixels changed: the viewer has drawn what it has) or ``timeout`` has passed; the last one's pixels."""
     deadline = time.monotonic() + timeout
     previous: np.ndarray | None = None
     while True:
-        client.save_screenshot(str(png))  # type: ignore[attr-defined]
+        save_screenshot(client, png)
         img = load_png(png)
         if (previous is not None and changed_fraction(img, previous) <= 0.001) or time.monotonic() > deadline:
             return img
