@@ -1,0 +1,100 @@
+"""Headless Chromium (Debian's, playwright) using RViz's tools in r2d2-viz's page, for ``--browser`` of
+``tests/sources/live/tools_scenario.py`` (inside its network namespace): each tool once in one session — Publish
+Point, 2D Goal Pose, 2D Pose Estimate (each click moved to, frames waited for, then clicked), Teleop (ArrowUp held
+until the app answered a forward twist, released, until it answered the stop).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from viewers import CHROMIUM_ARGS, CHROMIUM_PATH
+
+VIEWPORT = (1280, 800)
+TOOLS = (("Publish Point", 1), ("2D Goal Pose", 2), ("2D Pose Estimate", 2))
+"""The tools that publish (Measure's line and distance: tests/ros_out/test_tools_out.py, without a browser)."""
+SPOTS = ((0.42, 0.78), (0.55, 0.72), (0.35, 0.70), (0.60, 0.85), (0.48, 0.66), (0.30, 0.84))
+"""Where the 3D view shows the ground (lower middle), as fractions of the viewport; each click a new spot (a click
+on the pixel already selected changes no selection, so the viewer reports nothing)."""
+
+
+class Driver:
+    def __init__(self, page: Any) -> None:
+        self.page, self.spot = page, 0
+
+    def count(self, what: str) -> int:
+        return int(self.page.evaluate(f"window.r2d2.{what}.length"))
+
+    def click_ground(self) -> None:
+        """One click that the viewer reports with a position (a new spot each try, five tries: under load a click
+        now and then lands on a frame that has no pick yet)."""
+        picks = self.count("picks")
+        for _ in range(5):
+            fx, fy = SPOTS[self.spot % len(SPOTS)]
+            self.spot += 1
+            x, y = fx * VIEWPORT[0], fy * VIEWPORT[1]
+            self.page.mouse.move(x - 15, y - 10)
+            time.sleep(1.0)
+            self.page.mouse.move(x, y)
+            time.sleep(3.0)  # SwiftShader: 0.6-3 s a frame; the pick uses the frame before the click
+            self.page.mouse.click(x, y)
+            deadline = time.monotonic() + 15
+            while time.monotonic() < deadline:
+                if self.count("picks") > picks:
+                    return
+                time.sleep(0.25)
+        raise RuntimeError("the viewer reported no picked position")
+
+    def use(self, tool: str, clicks: int) -> None:
+        lines = self.count("lines")
+        self.page.click(f"button[data-tool='{tool}']")
+        for _ in range(clicks):
+            self.click_ground()
+        self.page.wait_for_function(f"window.r2d2.lines.length > {lines}", timeout=20_000)
+
+    def teleop(self) -> None:
+        """ArrowUp held until the app answered a forward twist, then released until it answered the stop."""
+        lines = self.count("lines")
+        self.page.keyboard.down("ArrowUp")
+        self.page.wait_for_function(
+            f"window.r2d2.lines.slice({lines}).some((l) => l.startsWith('teleop: 0.50 m/s'))", timeout=30_000
+        )
+        self.page.keyboard.up("ArrowUp")
+        self.page.wait_for_function(
+            "window.r2d2.lines.length && window.r2d2.lines.at(-1).startsWith('teleop: stopped')", timeout=30_000
+        )
+
+
+def use_tools(url: str, out: Path) -> dict[str, Any]:
+    """Open ``url``, use each tool; the picks the viewer reported, the page's lines, seconds until it was ready."""
+    from playwright.sync_api import sync_playwright
+
+    result: dict[str, Any] = {}
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=CHROMIUM_PATH, args=list(CHROMIUM_ARGS))
+        page = browser.new_page(viewport={"width": VIEWPORT[0], "height": VIEWPORT[1]})
+        started = time.monotonic()
+        page.goto(url)
+        page.wait_for_function("window.r2d2 && window.r2d2.ready", timeout=120_000)
+        result["ready_s"] = time.monotonic() - started
+        print(f"ready after {result['ready_s']:.1f} s", file=sys.stderr, flush=True)
+        time.sleep(4)  # the first frames with the ground
+        drive = Driver(page)
+        try:
+            for tool, clicks in TOOLS:
+                print(f"{time.monotonic() - started:.1f} s: {tool}", file=sys.stderr, flush=True)
+                drive.use(tool, clicks)
+            drive.teleop()
+        except BaseException:
+            page.screenshot(path=str(out / "failed.png"))
+            print(json.dumps(page.evaluate("window.r2d2")), file=sys.stderr, flush=True)
+            raise
+        page.screenshot(path=str(out / "toolbar.png"))
+        result["picks"] = page.evaluate("window.r2d2.picks")
+        result["lines"] = page.evaluate("window.r2d2.lines")
+        browser.close()
+    return result
