@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -70,21 +71,26 @@ class Driver:
             self.click_ground()
         self.page.wait_for_function(f"window.r2d2.lines.length > {lines}", timeout=20_000)
 
-    def teleop(self) -> None:
-        """ArrowUp held until the app answered a forward twist, then released until it answered the stop."""
+    def teleop(self, moving: Callable[[], bool]) -> None:
+        """ArrowUp held until the app answered a forward twist and the node has one (``moving()``), as a person
+        holds it until the robot moves, then released until the app answered the stop."""
         lines = self.count("lines")
         self.page.keyboard.down("ArrowUp")
         self.page.wait_for_function(
             f"window.r2d2.lines.slice({lines}).some((l) => l.startsWith('teleop: 0.50 m/s'))", timeout=30_000
         )
+        deadline = time.monotonic() + 30
+        while not moving() and time.monotonic() < deadline:
+            time.sleep(0.05)  # the page goes on sending at 10 Hz
         self.page.keyboard.up("ArrowUp")
         self.page.wait_for_function(
             "window.r2d2.lines.length && window.r2d2.lines.at(-1).startsWith('teleop: stopped')", timeout=30_000
         )
 
 
-def use_tools(url: str, out: Path) -> dict[str, Any]:
-    """Open ``url``, use each tool; the picks the viewer reported, the page's lines, seconds until it was ready."""
+def use_tools(url: str, out: Path, moving: Callable[[], bool]) -> dict[str, Any]:
+    """Open ``url``, use each tool (``moving()``: the node has a forward twist); the picks the viewer reported,
+    the page's lines, seconds until it was ready."""
     from playwright.sync_api import sync_playwright
 
     result: dict[str, Any] = {}
@@ -102,7 +108,7 @@ def use_tools(url: str, out: Path) -> dict[str, Any]:
             for tool, clicks in TOOLS:
                 print(f"{time.monotonic() - started:.1f} s: {tool}", file=sys.stderr, flush=True)
                 drive.use(tool, clicks)
-            drive.teleop()
+            drive.teleop(moving)
         except BaseException:
             page.screenshot(path=str(out / "failed.png"))
             print(json.dumps(page.evaluate("window.r2d2")), file=sys.stderr, flush=True)

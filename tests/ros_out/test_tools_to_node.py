@@ -16,7 +16,6 @@ from pathlib import Path
 
 import pytest
 from sources.live import ros_node
-from sources.live.tools_scenario import EVENTS
 
 pytestmark = pytest.mark.slow
 RVIZ_COVARIANCE = {0: 0.25, 7: 0.25, 35: 0.06853891945200942}
@@ -47,9 +46,9 @@ def test_each_tool_reaches_a_real_node(tmp_path: Path) -> None:
         assert got["frame"] == expected["frame"] and got["position"] == expected["position"]
         assert got["xyzw"] == pytest.approx(expected["xyzw"], abs=1e-12)
     assert estimate["covariance"] == [RVIZ_COVARIANCE.get(i, 0.0) for i in range(36)]
-    # forward while held, stopped on release; how many of the three forward twists a reader gets is DDS's business
-    # (a reliable writer of depth 1, as RViz's: a newer one may replace one not yet acknowledged), and the app's
-    # 0.5 s guard may stop a teleop in between on a starved machine
+    # forward while held, stopped on release; how many forward twists the node gets is DDS's business (a reliable
+    # writer of depth 1, as RViz's: a newer one may replace one not yet acknowledged), and the app's 0.5 s guard may
+    # stop a teleop in between on a starved machine
     twists = [(t["linear"], t["angular"]) for t in received["/cmd_vel"]]
     assert (0.5, 0.0) in twists and set(twists) <= {(0.5, 0.0), (0.0, 0.0)} and twists[-1] == (0.0, 0.0), twists
     # each event answered with its line, which the app also printed; the run ended cleanly
@@ -61,10 +60,12 @@ def test_each_tool_reaches_a_real_node(tmp_path: Path) -> None:
         "forward": "teleop: 0.50 m/s, 0.00 rad/s → /cmd_vel",
         "stop": "teleop: stopped → /cmd_vel",
     }
-    answers = [answer for _, answer in result["answers"]]
-    assert [status for status, _ in result["answers"]] == [200] * len(EVENTS)
-    assert answers == [{"line": said[k]} for k in ("clicked", "goal", "estimate", "forward", "forward", "forward",
-                                                   "stop")]  # fmt: skip
+    statuses, answers = zip(*result["answers"], strict=True)
+    assert set(statuses) == {200}
+    forward = len(answers) - 4  # held until the node had a forward twist: at least one
+    assert forward >= 1 and list(answers) == [{"line": said[k]} for k in ("clicked", "goal", "estimate")] + [
+        {"line": said["forward"]}
+    ] * forward + [{"line": said["stop"]}]
     assert lines[:4] == [said[k] for k in ("clicked", "goal", "estimate", "forward")], lines
     assert lines[-1] == said["stop"] and set(lines[3:]) <= {said["forward"], said["stop"]}, lines
     assert result["app_rc"] == 0, result["stderr"][-5:]

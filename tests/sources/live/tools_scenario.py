@@ -3,11 +3,11 @@
 ``nodes/tool_listener.py`` (rclpy) listens to the tools' topics and publishes a map (transient local, in ``map``);
 ``nodes/tf_peer.py`` publishes ``/tf`` map → odom → base_link; ``r2d2-viz --ros --serve --save app.rrd`` (its fixed
 frame: the TF root) serves the page. First two events without the token (they must change nothing), then the tools:
-by default :data:`EVENTS` POSTed to the page's event endpoint exactly as the page's JavaScript sends them
-(``r2d2_viz/viewer/web/page.js``: ``post()``, the teleop's 10 Hz while held and its zero on release); with
-``--browser`` headless Chromium clicks them in the page (``tests/e2e/web_tools_browser.py``). Waits until the node
-has what it should, stops the app and the node, prints one JSON: the answers, the app's stdout and stderr, what the
-node received (and, with ``--browser``, the picks the viewer reported and the page's lines).
+by default :data:`PICKS` and the teleop's events POSTed to the page's event endpoint exactly as the page's
+JavaScript sends them (``r2d2_viz/viewer/web/page.js``: ``post()``, the teleop's 10 Hz while held and its zero on
+release); with ``--browser`` headless Chromium clicks them in the page (``tests/e2e/web_tools_browser.py``). Waits
+until the node has what it should, stops the app and the node, prints one JSON: the answers, the app's stdout and
+stderr, what the node received (and, with ``--browser``, the picks the viewer reported and the page's lines).
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ import threading
 import time
 import urllib.error
 import urllib.request
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -37,17 +38,15 @@ FORWARD = {"tool": "Teleop", "linear": 0.5, "angular": 0.0}
 """ArrowUp held at the page's default speeds (page.html: 0.5 m/s)."""
 STOP = {"tool": "Teleop", "linear": 0, "angular": 0}
 """What the page sends on release (integers: JavaScript's ``0``)."""
-EVENTS: list[dict[str, Any]] = [
+PICKS: list[dict[str, Any]] = [
     {"tool": "Publish Point", "points": [[2.5, -1.25, 0.3]], "entity": "/tools/ground"},
     {"tool": "2D Goal Pose", "points": [[1.0, 2.0, 0.01], [2.0, 3.0, 0.02]], "entity": "/tools/ground"},
     {"tool": "2D Pose Estimate", "points": [[-1.5, 0.5, 0.0], [-1.5, -2.5, 0.0]], "entity": None},
-    FORWARD,
-    FORWARD,
-    FORWARD,
-    STOP,
 ]
 """What the page POSTs for Publish Point, 2D Goal Pose, 2D Pose Estimate (``{tool, points, entity}``: the clicks in
-the fixed frame as the viewer reported them) and Teleop (``{tool, linear, angular}``, every 0.1 s while held)."""
+the fixed frame as the viewer reported them); then Teleop (``{tool, linear, angular}``): :data:`FORWARD` every 0.1 s
+while held — until the node has a forward twist, as a person holds the key until the robot moves (the first
+twist opens the writer, and the node may match it only after a later one replaced it) — then :data:`STOP`."""
 FORGED = {"tool": "Publish Point", "points": [[9.0, 9.0, 0.0]], "entity": None}
 TELEOP_PERIOD_S = 0.1
 """page.js's TELEOP_PERIOD_MS."""
@@ -101,23 +100,29 @@ def post(url: str, event: dict[str, Any]) -> tuple[int, Any]:
         return exc.code, exc.read().decode(errors="replace")
 
 
-def post_events(page_url: str) -> list[tuple[int, Any]]:
-    """:data:`EVENTS` in order, the teleop's at the page's period (a slow answer only makes the next one later)."""
-    answers = []
-    for event in EVENTS:
+def post_events(page_url: str, moving: Callable[[], bool], timeout: float = 60) -> list[tuple[int, Any]]:
+    """:data:`PICKS`, then :data:`FORWARD` at the page's period (a slow answer only makes the next one later) until
+    ``moving()`` (at most ``timeout`` seconds), then :data:`STOP`."""
+    answers = [post(page_url + "event", event) for event in PICKS]
+    deadline = time.monotonic() + timeout
+    while not answers[3:] or (not moving() and time.monotonic() < deadline):
         sent = time.monotonic()
-        answers.append(post(page_url + "event", event))
-        if event["tool"] == "Teleop" and event is not STOP:
-            time.sleep(max(0.0, TELEOP_PERIOD_S - (time.monotonic() - sent)))
+        answers.append(post(page_url + "event", FORWARD))
+        time.sleep(max(0.0, TELEOP_PERIOD_S - (time.monotonic() - sent)))
+    answers.append(post(page_url + "event", STOP))
     return answers
+
+
+def _twists(lines: list[str]) -> list[dict[str, float]]:
+    return [json.loads(line.split(" ", 2)[2]) for line in lines if line.startswith("got /cmd_vel ")]
 
 
 def _received_all(lines: list[str]) -> bool:
     """Each tool's message arrived, and the teleop's last one (the stop: the reader gets a writer's in order)."""
-    got = [line.split(" ", 2)[1:] for line in lines if line.startswith("got ")]
-    twists = [json.loads(item) for topic, item in got if topic == "/cmd_vel"]
+    twists = _twists(lines)
     stopped = bool(twists) and twists[-1]["linear"] == 0 and twists[-1]["angular"] == 0
-    return stopped and {"/clicked_point", "/goal_pose", "/initialpose"} <= {topic for topic, _ in got}
+    topics = {line.split()[1] for line in lines if line.startswith("got ")}
+    return stopped and {"/clicked_point", "/goal_pose", "/initialpose"} <= topics
 
 
 def main() -> int:
@@ -147,6 +152,10 @@ def main() -> int:
                 stdout=sink, stderr=err, text=True, start_new_session=True,
             )  # fmt: skip
         url = _url(log, app)
+
+        def moving() -> bool:
+            return any(t["linear"] != 0 or t["angular"] != 0 for t in _twists(list(heard.lines)))
+
         token = url.rstrip("/").rsplit("/", 1)[1]
         result["no_token"] = [
             post(f"http://127.0.0.1:{WEB_PORT}{path}", FORGED)[0] for path in ("/event", f"/{token[:-2]}xx/event")
@@ -155,9 +164,9 @@ def main() -> int:
             sys.path.insert(0, str(E2E))
             from web_tools_browser import use_tools
 
-            result.update(use_tools(url, out))
+            result.update(use_tools(url, out, moving))
         else:
-            result["answers"] = post_events(url)
+            result["answers"] = post_events(url, moving)
         heard.wait(_received_all, 60, "the node did not receive every tool's message")
     finally:
         print(f"stopping the app at {time.monotonic():.1f}", file=sys.stderr, flush=True)
