@@ -1,8 +1,10 @@
 """RViz's tools in r2d2-viz's page, end to end: a real ROS 2 node (PyPI's rclpy) receives what headless Chromium
 clicked in the page of ``r2d2-viz --ros --serve``, all inside a loopback-only network namespace
-(``web_tools_scenario.py``), on a graph with ``/tf`` and a map (the node's, transient local as map_server's). The
-expected values come from the positions the viewer itself reported for each click (``selection_change`` events),
-RViz's own constants and the map the node sent (its origin, resolution and size), not from r2d2-viz's code."""
+(``tests/sources/live/tools_scenario.py --browser``, the browser's part: ``web_tools_browser.py``), on a graph with
+``/tf`` and a map (the node's, transient local as map_server's). The expected values come from the positions the
+viewer itself reported for each click (``selection_change`` events), RViz's own constants and the map the node sent
+(its origin, resolution and size), not from r2d2-viz's code. Opt-in (minutes); the same chain without the browser
+(the page's events POSTed as its JavaScript sends them) runs by default: tests/ros_out/test_tools_to_node.py."""
 
 from __future__ import annotations
 
@@ -34,16 +36,18 @@ def _yaw(xyzw: list[float]) -> float:
 @pytest.mark.skipif(
     not os.environ.get("R2D2_VIZ_TOOLS_E2E"),
     reason="the browser clicking each tool for a real ROS 2 node takes 2-7 minutes on 2 cores and under load may get "
-    "no pick: run it with R2D2_VIZ_TOOLS_E2E=1 (the tools' messages are tested without a browser in tests/ros_out)",
+    "no pick: run it with R2D2_VIZ_TOOLS_E2E=1 (a real node receiving the page's events without a browser: "
+    "tests/ros_out/test_tools_to_node.py)",
 )
 def test_each_tool_reaches_a_real_node(artifacts_dir: Path) -> None:
     missing = viewers.missing_web_prerequisites()
     if missing:
         ros_node.unavailable("; ".join(missing))
     python = ros_node.require_live("jazzy")
-    script = Path(__file__).with_name("web_tools_scenario.py")
+    script = Path(ros_node.__file__).with_name("tools_scenario.py")
     exe = Path(sys.executable).parent / "r2d2-viz"
-    command = [sys.executable, str(script), "--ros-python", str(python), "--cli", str(exe), "--out", str(artifacts_dir)]
+    command = [sys.executable, str(script), "--ros-python", str(python), "--cli", str(exe), "--out", str(artifacts_dir),
+               "--browser"]  # fmt: skip
     done = ros_node.in_netns(command, timeout=400)
     assert done.returncode == 0, done.stderr[-3000:]
     result = json.loads(done.stdout.strip().splitlines()[-1])
@@ -63,7 +67,7 @@ def test_each_tool_reaches_a_real_node(artifacts_dir: Path) -> None:
     covariance = received["/initialpose"][0]["covariance"]
     assert covariance == [RVIZ_COVARIANCE.get(i, 0.0) for i in range(36)]
     twists = [(t["linear"], t["angular"]) for t in received["/cmd_vel"]]
-    # forward while held, stopped on release: how many forward commands a 0.8 s hold sends is the browser's timers'
+    # forward while held, stopped on release: how many forward commands the hold sends is the browser's timers'
     # business (a starved page sends fewer, and the app's 0.5 s guard may stop it in between), so not counted
     assert (0.5, 0.0) in twists and set(twists) <= {(0.5, 0.0), (0.0, 0.0)} and twists[-1] == (0.0, 0.0), twists
     lines = result["stdout"].splitlines()

@@ -1,6 +1,6 @@
 """Writing to the graph (the page's tools): what is written is what rosbags serialised, byte for byte, read back
 by a reader of the same participant — inside a loopback-only network namespace. (A real rclpy node receiving
-each tool's message: tests/e2e/test_web_tools.py.)"""
+each tool's message: tests/ros_out/test_tools_to_node.py; through the browser: tests/e2e/test_web_tools.py.)"""
 
 from __future__ import annotations
 
