@@ -35,8 +35,8 @@ def _yaw(xyzw: list[float]) -> float:
 
 @pytest.mark.skipif(
     not os.environ.get("R2D2_VIZ_TOOLS_E2E"),
-    reason="the browser clicking each tool for a real ROS 2 node takes 2-7 minutes on 2 cores and under load may get "
-    "no pick: run it with R2D2_VIZ_TOOLS_E2E=1 (a real node receiving the page's events without a browser: "
+    reason="the browser clicking each tool for a real ROS 2 node takes 1.6-4 minutes on 2 cores (SwiftShader draws "
+    "each frame): run it with R2D2_VIZ_TOOLS_E2E=1 (a real node receiving the page's events without a browser: "
     "tests/ros_out/test_tools_to_node.py)",
 )
 def test_each_tool_reaches_a_real_node(artifacts_dir: Path) -> None:
