@@ -243,6 +243,8 @@ def test_ctrl_c_while_two_convert_starts_no_other_and_counts_what_finished(tmp_p
     )
     try:
         converting = set(_wait_converting(proc, out, 2, written=1 << 20))  # both writing their samples
+        # on a busy machine the first bag may be done before the second worker has started: done before the signal
+        done_before = {p.stem for p in out.glob("*.rrd")}
         proc.send_signal(signal.SIGINT)  # to the app alone, as in the finding
         _, err = proc.communicate(timeout=180)
     finally:
@@ -251,7 +253,7 @@ def test_ctrl_c_while_two_convert_starts_no_other_and_counts_what_finished(tmp_p
     assert proc.returncode == 130, err
     assert "Traceback" not in err
     finished = {p.stem for p in out.glob("*.rrd")}
-    assert finished <= converting  # nothing started after the signal
+    assert finished <= converting | done_before  # nothing started after the signal
     assert f"{len(finished)} converted, {4 - len(finished)} not done (interrupted)" in err
     assert not _hidden(out)
     result = cli(*["--bag", *map(str, bags)], "--save-dir", str(out), "--jobs", "2")
@@ -263,7 +265,7 @@ def test_ctrl_c_while_two_convert_starts_no_other_and_counts_what_finished(tmp_p
 
 def test_a_worker_killed_on_a_bag_named_with_glob_characters_leaves_no_partial_file(tmp_path: Path) -> None:
     """Issue 33, finding 3: the clean-up of what a killed worker left takes the bag's name literally."""
-    bag = still_bag(tmp_path / "run[4]", samples=20000)
+    bag = still_bag(tmp_path / "run[4]", samples=200_000)  # seconds of conversion: seen, however busy the machine
     out = tmp_path / "out"
     proc = subprocess.Popen(
         [EXE, "--bag", str(bag), str(still_bag(tmp_path / "b1")), "--save-dir", str(out), "--jobs", "2"],
