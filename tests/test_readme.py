@@ -22,6 +22,10 @@ def test_two_commands_install_and_run() -> None:
 def test_ci_runs_the_readme_test_command_verbatim() -> None:
     ci = (REPO / ".ci" / "run").read_text().splitlines()
     assert _commands()[1] in ci
+    # and fails when it fails: `set -e` lets an && list that fails short of its last command go on (a lint error
+    # once skipped the tests and CI went on to the benchmarks, exit 0)
+    after = [line for line in ci[ci.index(_commands()[1]) + 1 :] if not line.startswith("#")]
+    assert after[0].startswith("status=$?;") and "exit 1" in after[0]
 
 
 def test_the_test_command_lints_before_testing() -> None:

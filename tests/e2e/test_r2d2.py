@@ -11,10 +11,10 @@ would: the same recording with ``generate_blueprint(hidden_links=["head"])``.
 
 The recording lasts 41 frames: playback ends on frame 40 (periscope at 0.2 m, its highest); the native
 viewer is set to that frame through its control API; the web page is judged on the first screenshot that shows
-a positive case (the robot is whole at every frame), a negative one once the page stands still. Two negative cases must FAIL the same checks: a
-recording without the robot (the tutorial URDF with its <visual>s removed; both viewers) and the same recording
-with the viewer's default blueprint instead of ours (the native viewer: the web page applies the same checks to the
-same regions, and each page costs 12-30 s of SwiftShader).
+a positive case (the robot is whole at every frame), a negative one once the page stands still. Two negative
+cases must FAIL the same checks: a recording without the robot (the tutorial URDF with its <visual>s removed;
+both viewers) and the same recording with the viewer's default blueprint instead of ours (the native viewer: the
+web page applies the same checks to the same regions, and each page costs 12-30 s of SwiftShader).
 """
 
 from __future__ import annotations
