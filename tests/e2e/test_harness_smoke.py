@@ -120,8 +120,8 @@ CASES = {
 
 @pytest.mark.e2e
 @pytest.mark.slow
-# the negative cases in the native viewer only: the web viewer's are tests/e2e/test_r2d2.py's (no robot, Rerun's
-# own blueprint), each page load costing 12-30 s of SwiftShader
+# the negative cases in the native viewer only: the web viewer's is tests/e2e/test_r2d2.py's (no robot), each page
+# load costing 12-30 s of SwiftShader
 @pytest.mark.parametrize(("viewer", "case"), [*(("native", case) for case in CASES), ("web", "toy")])
 def test_viewer_shows_toy_scene(
     viewer: str, case: str, request: pytest.FixtureRequest, tmp_path: Path, artifacts_dir: Path
