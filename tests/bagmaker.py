@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import sqlite3
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -112,6 +113,16 @@ def write_bag(path: Path, spec: BagSpec, *, storage: str = "mcap", version: int 
 
 def storage_file(bag_dir: Path) -> Path:
     return next(p for p in bag_dir.iterdir() if p.suffix in (".mcap", ".db3"))
+
+
+def unknown_type(bag_dir: Path, ros_type: str, unknown: str = "gz_msgs/msg/Link") -> None:
+    """A db3 bag's topics of ``ros_type`` given a type nobody defines (``unknown``): the bag's definitions dropped,
+    as a Gazebo bridge's bag without them, so nothing can decode those topics."""
+    with sqlite3.connect(storage_file(bag_dir)) as db:
+        db.execute("UPDATE topics SET type = ? WHERE type = ?", (unknown, ros_type))
+        db.execute("DELETE FROM message_definitions")
+    metadata = bag_dir / "metadata.yaml"
+    metadata.write_text(metadata.read_text().replace(ros_type, unknown))
 
 
 def write_split_bag(path: Path, parts: Sequence[BagSpec], *, storage: str = "mcap", metadata: bool = True) -> Path:

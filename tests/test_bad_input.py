@@ -129,9 +129,7 @@ def test_no_stderr_line_is_longer_than_300_characters(tmp_path: Path, tutorial_u
     """Names are input too (issue 29: a Gazebo bag's undrawn topics made a 486-character line): 400-character topic
     names, a scan on such a topic that cannot be decoded, 40 unknown 80-character joint names, 70 undrawn topics —
     every line the run prints stays within 300 characters, and still names what it is about."""
-    import sqlite3
-
-    from bagmaker import T0, BagSpec, joint_state, storage_file, write_bag
+    from bagmaker import T0, BagSpec, joint_state, unknown_type, write_bag
     from msgs_build import T, cdr
 
     undrawn = [f"/{'u' * 390}_{k:02d}" for k in range(70)]
@@ -145,12 +143,7 @@ def test_no_stderr_line_is_longer_than_300_characters(tmp_path: Path, tutorial_u
     spec.add("/joint_states", T0 + 200, joint_state(T0 + 200, ["swivel", *unknown], [0.1] * 41))
     bag = write_bag(tmp_path / "names", spec, storage="sqlite3")
     # the undrawn topics' type made unknown (no definition in the bag, not a Humble type), so nothing decodes them
-    with sqlite3.connect(storage_file(bag)) as db:
-        db.execute("UPDATE topics SET type = 'gz_msgs/msg/Link' WHERE type = 'std_msgs/msg/ColorRGBA'")
-        db.execute("DELETE FROM message_definitions")
-    (bag / "metadata.yaml").write_text(
-        (bag / "metadata.yaml").read_text().replace("std_msgs/msg/ColorRGBA", "gz_msgs/msg/Link")
-    )
+    unknown_type(bag, "std_msgs/msg/ColorRGBA")
     for args in (["--save", str(tmp_path / "n.rrd")], ["--list"]):  # the bag's full path (xdist makes it longer)
         result = cli("--bag", str(bag), "--urdf", str(tutorial_urdf), *args, cwd=tmp_path)
         assert result.returncode == 0, result.stderr

@@ -243,9 +243,7 @@ def test_a_bag_with_78_undrawn_topics_says_so_in_one_short_line(tmp_path: Path) 
     """A Gazebo bag's 78 topics nothing can decode used to be one 6,000-character line: now the count, the first
     few names and why, once (the bag written by rosbags; .db3, its types then renamed to one neither Humble nor the
     bag defines)."""
-    import sqlite3
-
-    from bagmaker import T0, BagSpec, storage_file, write_bag
+    from bagmaker import T0, BagSpec, unknown_type, write_bag
     from msgs_build import cdr, color
 
     topics = [f"/gazebo/link_{k:02d}/diagnostics_with_a_long_name" for k in range(78)]
@@ -253,12 +251,7 @@ def test_a_bag_with_78_undrawn_topics_says_so_in_one_short_line(tmp_path: Path) 
     for k, topic in enumerate(topics):
         spec.add(topic, T0 + k, cdr(color(1.0, 0.0, 0.0)))
     bag = write_bag(tmp_path / "gz", spec, storage="sqlite3")
-    with sqlite3.connect(storage_file(bag)) as db:
-        db.execute("UPDATE topics SET type = 'gz_msgs/msg/Link'")
-        db.execute("DELETE FROM message_definitions")
-    (bag / "metadata.yaml").write_text(
-        (bag / "metadata.yaml").read_text().replace("std_msgs/msg/ColorRGBA", "gz_msgs/msg/Link")
-    )
+    unknown_type(bag, "std_msgs/msg/ColorRGBA")
     result = cli("--bag", bag.name, "--save", "gz.rrd", cwd=tmp_path)  # from the bag's folder, as a user types it
     assert result.returncode == 0, result.stderr
     [line] = [line for line in result.stderr.splitlines() if "not shown" in line]

@@ -128,11 +128,6 @@ def _plots_drawn(img: np.ndarray) -> bool:
     return not any("joint plot" in p for p in layout_problems(img))
 
 
-def _still(img: np.ndarray, previous: np.ndarray | None) -> bool:
-    """Two screenshots half a second apart alike: the viewer has stopped drawing."""
-    return previous is not None and viewers.changed_fraction(img, previous) <= 0.001
-
-
 def _settled(case: str, img: np.ndarray, previous: np.ndarray | None) -> bool:
     """When a native screenshot of ``case`` can be judged: a positive case once it shows what
     :func:`_assert_case` requires; a negative one once the viewer has stopped drawing (two screenshots half a
@@ -143,7 +138,7 @@ def _settled(case: str, img: np.ndarray, previous: np.ndarray | None) -> bool:
         return layout == [] and not any("white" in p for p in robot)
     if case == "head_hidden":
         return layout == [] and robot == []
-    return _still(img, previous) and (case != "no_robot" or layout == [])
+    return viewers.alike(img, previous) and (case != "no_robot" or layout == [])
 
 
 def _assert_case(case: str, png: Path) -> None:
@@ -220,7 +215,7 @@ def native_shot(
             time.sleep(0.5)
             viewers.save_screenshot(client, png)  # type: ignore[arg-type]
             img = viewers.load_png(png)
-            if time.monotonic() > deadline or (settled or _still)(img, previous):
+            if time.monotonic() > deadline or (settled or viewers.alike)(img, previous):
                 return client.get_transform_graph()  # type: ignore[attr-defined]
             previous = img
 

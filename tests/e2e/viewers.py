@@ -724,6 +724,11 @@ class Report:
     summary: str
 
 
+def alike(img: np.ndarray, previous: np.ndarray | None) -> bool:
+    """Two screenshots taken apart alike (at most 0.1 % of the pixels changed): the viewer has stopped drawing."""
+    return previous is not None and changed_fraction(img, previous) <= 0.001
+
+
 def save_screenshot(client: ViewerClient, png: Path, tries: int = 3) -> None:
     """``client.save_screenshot(png)``, asked again (``tries`` times in all) when Rerun's control call runs out of
     time: a 4-megapixel frame drawn by lavapipe beside other work has taken longer than its fixed deadline."""
@@ -738,13 +743,13 @@ def save_screenshot(client: ViewerClient, png: Path, tries: int = 3) -> None:
 
 def still_screenshot(client: ViewerClient, png: Path, *, timeout: float = 10.0, interval: float = 0.5) -> np.ndarray:
     """Screenshots of a running native viewer into ``png``, ``interval`` apart, until two are alike (at most 0.1 %
-    of the pixels changed: the viewer has drawn what it has) or ``timeout`` has passed; the last one's pixels."""
+    of the pixels changed: :func:`alike`) or ``timeout`` has passed; the last one's pixels."""
     deadline = time.monotonic() + timeout
     previous: np.ndarray | None = None
     while True:
         save_screenshot(client, png)
         img = load_png(png)
-        if (previous is not None and changed_fraction(img, previous) <= 0.001) or time.monotonic() > deadline:
+        if alike(img, previous) or time.monotonic() > deadline:
             return img
         previous = img
         time.sleep(interval)
