@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import ast
 import re
+import tomllib
 from pathlib import Path
 
 import pytest
-import tomllib
 from conftest import REPO
 
 PACKAGE = REPO / "r2d2_viz"

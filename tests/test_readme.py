@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import tomllib
 
 from conftest import REPO
 
@@ -87,3 +88,24 @@ def test_skip_reasons_speak_of_what_a_clone_has() -> None:
     for test in (REPO / "tests").rglob("*.py"):
         for call in re.findall(r"pytest\.skip\((.*?)\)\n", test.read_text(), flags=re.DOTALL):
             assert "shared" not in call and "SHARED" not in call, (test.name, call)
+
+
+def test_the_usage_lines_run_after_the_install_line() -> None:
+    # issue 36: a newcomer typed `r2d2-viz` after the install line and got "command not found" (and
+    # `python -m r2d2_viz` the system Python's ModuleNotFoundError): the venv is not active. Said once, right after
+    # the install command, before the first usage line.
+    text = (REPO / "README.md").read_text()
+    after_install = text.split(_commands()[0], 1)[1]
+    assert after_install.index(". .venv/bin/activate") < after_install.index("## Usage")
+
+
+def test_requires_python_is_rerun_sdks() -> None:
+    # issue 36: requires-python said >=3.10 and `pip install .` failed on 3.10; the truth is rerun-sdk's metadata
+    from importlib.metadata import metadata
+
+    rerun = metadata("rerun-sdk")["Requires-Python"]
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())
+    assert project["project"]["requires-python"] == rerun
+    version = rerun.removeprefix(">=")
+    assert project["tool"]["ruff"]["target-version"] == "py" + version.replace(".", "")
+    assert f"Python ≥ {version}," in (REPO / "README.md").read_text()

@@ -15,7 +15,6 @@ import json
 import multiprocessing
 import os
 import signal
-import sys
 import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -217,14 +216,11 @@ def _pool(jobs: list[Job], workers: int, on_done: Progress) -> list[Job]:
     broken: list[Job] = []
     context = multiprocessing.get_context("spawn")  # no fork of a process holding Rerun's threads
     # a fresh worker every 32 bags: Rerun keeps each recording stream's two threads (one ticking) for the life of
-    # the process, so a worker converting a thousand bags would carry two thousand (Python 3.11's option)
+    # the process, so a worker converting a thousand bags would carry two thousand (max_tasks_per_child)
     size = max(1, min(workers, len(jobs) or 1))
-    if sys.version_info >= (3, 11):
-        pool = ProcessPoolExecutor(
-            size, mp_context=context, initializer=_ignore_sigint, max_tasks_per_child=TASKS_PER_WORKER
-        )
-    else:
-        pool = ProcessPoolExecutor(size, mp_context=context, initializer=_ignore_sigint)
+    pool = ProcessPoolExecutor(
+        size, mp_context=context, initializer=_ignore_sigint, max_tasks_per_child=TASKS_PER_WORKER
+    )
     pending: dict[Future[Outcome], Job] = {pool.submit(_convert_in_pool, job): job for job in jobs}
     try:
         while pending:
