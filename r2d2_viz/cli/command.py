@@ -1,7 +1,7 @@
 """Command line: ``r2d2-viz [--urdf PATH] [--motion …] [--duration S] [--rate HZ] [sink]``.
 
 Exit codes: 0 done, 2 bad usage or bad input (one line on stderr, no traceback), 1 unexpected,
-130 a batch run interrupted by Ctrl-C (its partial file removed).
+130 a batch run interrupted by Ctrl-C (its partial file removed), 141 stdout closed early (``| head``), quietly.
 """
 
 from __future__ import annotations
@@ -24,12 +24,30 @@ from r2d2_viz.cli.parser import (
 )
 from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, stderr_line
 
+EXIT_STDOUT_CLOSED = 141
+"""stdout closed early (``r2d2-viz --bag b --list | head``): quiet, with the status a shell gives ``seq`` or ``cat``
+killed by SIGPIPE (128 + 13), so ``set -o pipefail`` sees it as it sees theirs."""
+
 
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _checked_main(argv)
+    except BrokenPipeError:
+        # the reader is gone: nothing more to say. Python would still flush stdout at exit and print "Exception
+        # ignored … BrokenPipeError" (exit 120): stdout goes to /dev/null instead (Python's docs, "Note on SIGPIPE")
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return EXIT_STDOUT_CLOSED
+
+
+def _checked_main(argv: list[str] | None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv)  # --help prints here
     try:
         return _main(args, parser)
+    except BrokenPipeError:
+        raise
     except R2d2VizError as exc:
         print(stderr_line(f"error: {exc}"), file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -297,3 +297,33 @@ def test_the_web_viewer_fallback_says_why_when_it_fails(tmp_path: Path) -> None:
     [line] = result.stderr.strip().splitlines()
     assert line.startswith("error: no display for a viewer window, and the web viewer instead failed: "), line
     assert f"cannot listen on 127.0.0.1:{port}" in line
+
+
+@pytest.mark.parametrize("args", [["--bag", "talker_mcap", "--list"], ["--help"]], ids=["bag-list", "help"])
+def test_a_reader_that_stops_early_ends_it_quietly(args: list[str]) -> None:
+    """``r2d2-viz --bag b --list | head`` sometimes ended in "unexpected BrokenPipeError", exit 1 (issue 36): the
+    reader had gone before the output was flushed. A real pipe whose reading end is closed before the program
+    writes (the worst case of ``| head``): nothing on stderr, and 141, what a shell reports for ``seq 1 100000 | head``
+    (killed by SIGPIPE, 128 + 13), so ``set -o pipefail`` sees it as it sees coreutils'."""
+    import os
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader is gone before the first byte
+    try:
+        done = subprocess.run(
+            [str(exe), *args],
+            stdout=write_end,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=120,
+            cwd=REPO / "tests" / "data" / "bags",
+        )
+    finally:
+        os.close(write_end)
+    # --help is argparse's, which drops a write error itself: exit 0 (checked, so that it stays quiet)
+    assert done.stderr == "" and done.returncode == (0 if args == ["--help"] else 141), (done.returncode, done.stderr)
