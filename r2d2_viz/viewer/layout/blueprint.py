@@ -11,6 +11,7 @@ Save it with ``python -m r2d2_viz.blueprint [PATH]`` (default ``blueprints/r2d2.
 
 from __future__ import annotations
 
+import os
 import sys
 import uuid
 from collections.abc import Sequence
@@ -313,10 +314,37 @@ def _decay(spec: ViewSpec) -> dict[str, rrb.VisibleTimeRanges]:
 
 
 def save_blueprint(path: Path = DEFAULT_BLUEPRINT_PATH, spec: ViewSpec | None = None) -> Path:
-    """Write :func:`generate_blueprint` as an ``.rbl`` file for ``rerun FILE.rrd PATH.rbl``."""
+    """Write :func:`generate_blueprint` as an ``.rbl`` file for ``rerun FILE.rrd PATH.rbl``.
+
+    Rerun mints a new store id, chunk ids and row ids and stamps ``log_time`` on every save (0.41's API lets none
+    be chosen), so two saves of one layout never match byte for byte: a file already holding the same layout is
+    left untouched, and the committed ``blueprints/r2d2.rbl`` stays unmodified until the layout changes."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    generate_blueprint(spec).save(APP_ID, path)
+    fresh = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    try:
+        generate_blueprint(spec).save(APP_ID, fresh)
+        if not path.is_file() or (old := _layout(path)) is None or old != _layout(fresh):
+            os.replace(fresh, path)
+    finally:
+        fresh.unlink(missing_ok=True)
     return path
+
+
+def _layout(rbl: Path) -> dict[str, list[object]] | None:
+    """What a blueprint file lays out, per entity, without the ids and log times of the save (None: unreadable)."""
+    from rerun.chunk import RrdReader
+
+    try:
+        reader = RrdReader(rbl)
+        out: dict[str, list[object]] = {}
+        for store in reader.blueprints():
+            for chunk in reader.store(store=store).stream().to_chunks():
+                batch = chunk.to_record_batch()
+                keep = [name for name in batch.schema.names if name not in ("log_time", "rerun.controls.RowId")]
+                out.setdefault(chunk.entity_path, []).extend(batch.select(keep).to_pylist())
+        return out
+    except Exception:  # not a blueprint Rerun can read: written anew
+        return None
 
 
 def main(argv: Sequence[str] | None = None) -> int:

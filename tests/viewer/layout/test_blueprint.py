@@ -233,3 +233,28 @@ def test_a_log_diagnostics_a_map_and_plots_each_get_a_view_below_only_when_there
     log = _view(components, "TextLog", "Log: /rosout")
     columns = components[f"{log}/TextLogColumns"]["TextLogColumns:text_log_columns"]
     assert [c["kind"] for c in columns] == [2, 3, 1]  # LogLevel, Body, EntityPath (TextLogColumnKind)
+
+
+def test_regenerating_leaves_the_committed_file_as_it_is(tmp_path) -> None:
+    """``python -m r2d2_viz.blueprint`` wrote new bytes on every run, so ``git status`` always showed the committed
+    ``blueprints/r2d2.rbl`` as modified (issue 36; Rerun mints new ids on every save). As the README runs it, from
+    a checkout (here a copy of the committed file): twice, and the bytes stay the committed ones; a layout that
+    changed (an RViz config converted over it) is still written."""
+    import shutil
+    import subprocess
+    import sys
+
+    (tmp_path / "blueprints").mkdir()
+    committed = tmp_path / "blueprints" / "r2d2.rbl"
+    shutil.copy(CHECKED_IN, committed)
+    for _ in range(2):
+        done = subprocess.run(
+            [sys.executable, "-m", "r2d2_viz.blueprint"], cwd=tmp_path, capture_output=True, timeout=120
+        )
+        assert done.returncode == 0, done.stderr
+        assert committed.read_bytes() == CHECKED_IN.read_bytes()
+    assert sorted(p.name for p in committed.parent.iterdir()) == ["r2d2.rbl"]  # no partial file left
+    rviz = REPO / "tests" / "data" / "rviz" / "turtlebot3_model.rviz"
+    args = [sys.executable, "-m", "r2d2_viz.blueprint", "--rviz", str(rviz), str(committed)]
+    assert subprocess.run(args, cwd=tmp_path, capture_output=True, timeout=120).returncode == 0
+    assert blueprint_components(committed) != blueprint_components(CHECKED_IN)
