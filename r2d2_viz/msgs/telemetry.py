@@ -41,11 +41,23 @@ def log_level(level: int, levels: tuple[tuple[int, str], ...] = ROS2_LEVELS) -> 
     return next((name for threshold, name in levels if level >= threshold), "DEBUG")
 
 
+def shown(text: str) -> str:
+    """Text from a bag as a log view should show it: a terminal's colour codes (``ESC[94m…ESC[0m``, which
+    ros2_control's spawner writes into ``/rosout``, as the Webots e-puck bag holds them) dropped — the viewer
+    printed them as they are —, and every other control character shown as an escape (``\\x1b``), never passed
+    on; line breaks and tabs kept."""
+    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", _COLOURS.sub("", text))
+
+
+_COLOURS = re.compile(r"\x1b\[[0-9;:]*m")
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+
+
 def _log_text(msg: object) -> str:
     """``[node] message (file:function:line)``, as rqt_console shows a line."""
     name, text = getattr(msg, "name", ""), getattr(msg, "msg", "")
     where = f"{msg.file}:{msg.function}:{msg.line}" if getattr(msg, "file", "") else ""  # type: ignore[attr-defined]
-    return f"[{name}] {text}" + (f" ({where})" if where else "")
+    return shown(f"[{name}] {text}" + (f" ({where})" if where else ""))
 
 
 def decode_log(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
@@ -64,7 +76,7 @@ def decode_ros1_log(data: bytes | memoryview, options: DecodeOptions) -> Decoded
 
 def decode_string(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
     """A std_msgs/String as a log line without a level."""
-    return Decoded("", 0, (LogLine("", str(deserialize(data, "std_msgs/msg/String").data)),))
+    return Decoded("", 0, (LogLine("", shown(str(deserialize(data, "std_msgs/msg/String").data))),))
 
 
 def status_parts(name: str) -> tuple[str, ...]:
@@ -94,10 +106,10 @@ def decode_diagnostics(data: bytes | memoryview, options: DecodeOptions) -> Deco
         Status(
             status_parts(str(s.name)),
             DIAGNOSTIC_LEVELS.get(int(s.level), f"LEVEL {int(s.level)}"),
-            str(s.message),
-            str(s.hardware_id),
-            tuple((str(kv.key), str(kv.value)) for kv in s.values),
-            str(s.name),
+            shown(str(s.message)),
+            shown(str(s.hardware_id)),
+            tuple((shown(str(kv.key)), shown(str(kv.value))) for kv in s.values),
+            shown(str(s.name)),
         )
         for s in msg.status
     )

@@ -9,6 +9,7 @@ import numpy as np
 import rerun as rr
 
 from r2d2_viz.errors import warn
+from r2d2_viz.msgs.telemetry import shown
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.viewer.entities import TIMELINE, WARNINGS
 
@@ -36,7 +37,7 @@ class Notices:
             return
         self._said.add(key)
         self.warn(message)
-        row = rr.TextLog(message, level=rr.TextLogLevel.WARN)
+        row = rr.TextLog(shown(message), level=rr.TextLogLevel.WARN)  # a bag's frame name may hold escapes
         if at_ns is None:
             self.rec.log(WARNINGS, row, static=True)
             return

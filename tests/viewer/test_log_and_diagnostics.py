@@ -242,3 +242,51 @@ def test_a_real_bags_rosout_is_what_rosbags_reads(tmp_path: Path, name: str) -> 
     got = [(t, level[0], text[0]) for (t, level), (_, text) in
            zip(_rows(rows, "TextLog:level"), _rows(rows, "TextLog:text"), strict=True)]  # fmt: skip
     assert got == expected
+
+
+def test_terminal_escapes_from_a_bag_never_reach_the_recordings_text(tmp_path: Path) -> None:
+    """The log view of the e-puck bag's picture showed ``[94mLoaded [1mjoint_state_broadcaster[0m`` (issue 36):
+    ros2_control's spawner writes terminal colours into /rosout (these very bytes are in
+    ../shared/bags/real/webots_epuck). Through the CLI, a bag rosbags wrote with them, a title-setting escape in a
+    std_msgs/String and colours in a diagnostic status: colours dropped, every other control character shown as
+    ``\\x..``, no ESC byte in any text of the recording. Expected texts by hand."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from telemetrybags import HUMBLE, T0, _diagnostics, _tf, _time
+
+    T = HUMBLE.types
+    spawner = "\x1b[94mLoaded \x1b[1mjoint_state_broadcaster\x1b[0m"
+    log = T["rcl_interfaces/msg/Log"](_time(HUMBLE, T0), 20, "spawner_jsb", spawner, "spawner.py", "main", 7)
+    header = T["std_msgs/msg/Header"](_time(HUMBLE, T0), "")
+    rows = {
+        "/tf_static": ("tf2_msgs/msg/TFMessage", _tf(HUMBLE, T["std_msgs/msg/Header"](_time(HUMBLE, T0), "odom"))),
+        "/rosout": ("rcl_interfaces/msg/Log", log),
+        "/chatter": ("std_msgs/msg/String", T["std_msgs/msg/String"]("\x1b]0;pwned\x07ok\r\x9b2J")),
+        "/diagnostics": (
+            "diagnostic_msgs/msg/DiagnosticArray",
+            _diagnostics(HUMBLE, header, [("motor", 1, "\x1b[33mhot\x1b[0m", [("mode", "\x1b[1mauto")])]),
+        ),
+    }
+    bag = tmp_path / "escapes"
+    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        for k, (topic, (typename, msg)) in enumerate(rows.items()):
+            c = writer.add_connection(topic, typename, typestore=HUMBLE)
+            writer.write(c, T0 + k, bytes(HUMBLE.serialize_cdr(msg, typename)))
+    recording = read_recording(_replay(tmp_path, bag)[0])
+    assert [v for _, v in _rows(recording["/rosout"], "TextLog:text")] == [
+        ["[spawner_jsb] Loaded joint_state_broadcaster (spawner.py:main:7)"]
+    ]
+    assert [v for _, v in _rows(recording["/chatter"], "TextLog:text")] == [["\\x1b]0;pwned\\x07ok\\x0d\\x9b2J"]]
+    assert [v for _, v in _rows(recording["/diagnostics/motor"], "StateChange:state")] == [["WARN: hot"]]
+
+    def strings(value: object) -> list[str]:
+        if isinstance(value, str):
+            return [value]
+        return [s for v in value for s in strings(v)] if isinstance(value, (list, tuple)) else []
+
+    texts = [
+        t
+        for rows_ in recording.values()
+        for c in (*rows_.temporal.values(), *rows_.static.values())
+        for t in strings(c)
+    ]
+    assert "WARN: hot" in texts and not [t for t in texts if "\x1b" in t or "\x07" in t]

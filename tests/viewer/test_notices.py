@@ -36,3 +36,17 @@ def test_a_timestamp_clock(tmp_path: Path) -> None:
     rec.flush()
     rec.disconnect()
     assert read_recording(out)["/warnings"].times == [1_700_000_000_000_000_000]
+
+
+def test_a_frame_name_with_terminal_escapes_is_shown_not_sent(tmp_path: Path) -> None:
+    """A warning naming a bag's frame ``base\\x1b]0;owned\\x07`` (an escape that sets a terminal's title) lands in
+    /warnings with the escape shown as text, no ESC or BEL byte (issue 36); what the terminal gets is warn's."""
+    out = tmp_path / "e.rrd"
+    rec = rr.RecordingStream("test")
+    rec.save(out)
+    said: list[str] = []
+    Notices(rec, warn=said.append).report("frame base\x1b]0;owned\x07: \x1b[31mnot in the tree\x1b[0m")
+    rec.flush()
+    rec.disconnect()
+    texts = read_recording(out)["/warnings"].static["TextLog:text"]
+    assert texts == [["frame base\\x1b]0;owned\\x07: not in the tree"]]  # by hand
