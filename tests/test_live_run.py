@@ -85,7 +85,8 @@ def test_jazzy_node_recorded_bagged_and_malformed_samples_survived(tmp_path: Pat
     rrd, bag = tmp_path / "out.rrd", tmp_path / "out.mcap"
     # each run: a Ctrl-C once the node has sent everything (cli_scenario.py); --duration only bounds it
     runs = [["--save", str(rrd), "--duration", "30", "--time", "header"], ["--save", str(bag), "--duration", "30"]]
-    result = _scenario("jazzy", runs, node=["--bad"], wrong_type=True)
+    # --log: the node also logs a line at each level (one real node for both; was a scenario of its own)
+    result = _scenario("jazzy", runs, node=["--bad", "--log"], wrong_type=True)
     assert result["list_rc"] == 0
     assert "/joint_states [sensor_msgs/msg/JointState] 1 publisher" in result["list"]
     assert "/joint_states [std_msgs/msg/String] 1 publisher" in result["list"]
@@ -101,12 +102,17 @@ def test_jazzy_node_recorded_bagged_and_malformed_samples_survived(tmp_path: Pat
         assert _received(err)["/joint_states"] >= 0.995 * COUNT + 3  # + the three valid malformed ones
         assert _received(err)["/robot_description"] == 1
     assert _check_poses(rrd, header_time=True) >= 0.995 * COUNT
+    _check_log(rrd)
     from rosbags.highlevel import AnyReader
 
     store = typestore("jazzy")
     with AnyReader([bag], default_typestore=store) as reader:
         types = {c.topic: c.msgtype for c in reader.connections}
-        assert types == {"/joint_states": "sensor_msgs/msg/JointState", "/robot_description": "std_msgs/msg/String"}
+        assert types == {
+            "/joint_states": "sensor_msgs/msg/JointState",
+            "/robot_description": "std_msgs/msg/String",
+            "/rosout": "rcl_interfaces/msg/Log",
+        }
         states = [(c, raw) for c, _, raw in reader.messages() if c.topic == "/joint_states"]
         description = [raw for c, _, raw in reader.messages() if c.topic == "/robot_description"]
     assert store.deserialize_cdr(description[0], "std_msgs/msg/String").data == PANDA.read_text()
@@ -157,16 +163,11 @@ def test_kilted_node_recorded_at_source_timestamps_and_streamed_to_a_viewer(tmp_
     assert _check_poses(received, header_time=False) >= 0.995 * COUNT
 
 
-@pytest.mark.slow
-def test_a_nodes_log_arrives_with_its_levels_in_a_log_view(tmp_path: Path) -> None:
-    """A real Jazzy node logs a line at each level: /rosout (rcl_interfaces/msg/Log, which every node publishes)
+def _check_log(rrd: Path) -> None:
+    """The real Jazzy node's log, a line at each level: /rosout (rcl_interfaces/msg/Log, which every node publishes)
     is read like a bag's, each line a TextLog with its level and rqt_console's text, in a log view."""
     from sources.live.nodes.publish_robot import LOG_LINES
 
-    rrd = tmp_path / "log.rrd"
-    result = _scenario("jazzy", [["--save", str(rrd), "--duration", "30"]], node=["--log"])
-    [run] = result["runs"]
-    assert run["rc"] == 0, run["stderr"][-3000:]
     rows = read_recording(rrd)["/rosout"]
     lines = [
         (level[0], text[0])
