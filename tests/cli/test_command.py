@@ -59,38 +59,84 @@ def test_headless_computes_and_writes_nothing(tmp_path: Path) -> None:
     assert "30 samples" in result.stderr and not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize(
-    ("args", "fragment"),
-    [
-        (["--rate", "0"], "--rate must be a positive"),
-        (["--rate", "-5"], "--rate must be a positive"),
-        (["--rate", "nan"], "--rate must be a positive"),
-        (["--duration", "0"], "--duration must be a positive"),
-        (["--duration", "-1"], "--duration must be a positive"),
-        (["--duration", "inf"], "--duration must be a positive"),
-        (["--duration", "soon"], "not a number: 'soon'"),
-        (["--motion", "dance"], "unknown motion 'dance'; expected one of tutorial, sweep, still"),
-        (["--urdf", "/nonexistent/robot.urdf"], "robot.urdf"),
-        (["--spawn", "--serve"], "choose one live sink"),
-        (["--headless", "--save", "x.rrd"], "--headless"),
-        (["--bogus"], "unrecognized arguments: --bogus"),
-        (["--save", "out.txt"], "--save out.txt: unknown extension '.txt'; write a recording (.rrd) or a ROS 2 bag"),
-        (["--save", "recording"], "--save recording: unknown extension"),
-        (["--tool-topic", "select=/x"], "--tool-topic 'select=/x': expected TOOL=TOPIC, TOOL one of goal"),
-        (["--tool-topic", "goal"], "--tool-topic 'goal': expected TOOL=TOPIC"),
-        (["--tool-topic", "goal=move base"], "'move base' is not a ROS topic name"),
-    ],
-)
-def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path: Path, args: list[str], fragment: str) -> None:
-    result = (
-        cli(*args, "--save", str(tmp_path / "out.rrd"), cwd=tmp_path)
-        if "--save" not in args and "--headless" not in args
-        else cli(*args, cwd=tmp_path)
-    )
-    assert result.returncode == 2, result.stderr
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0], result.stderr
-    assert "Traceback" not in result.stderr and not list(tmp_path.iterdir())
+BAD_INPUT = [
+    (["--rate", "0"], "--rate must be a positive"),
+    (["--rate", "-5"], "--rate must be a positive"),
+    (["--rate", "nan"], "--rate must be a positive"),
+    (["--duration", "0"], "--duration must be a positive"),
+    (["--duration", "-1"], "--duration must be a positive"),
+    (["--duration", "inf"], "--duration must be a positive"),
+    (["--duration", "soon"], "not a number: 'soon'"),
+    (["--motion", "dance"], "unknown motion 'dance'; expected one of tutorial, sweep, still"),
+    (["--urdf", "/nonexistent/robot.urdf"], "robot.urdf"),
+    (["--spawn", "--serve"], "choose one live sink"),
+    (["--headless", "--save", "x.rrd"], "--headless"),
+    (["--bogus"], "unrecognized arguments: --bogus"),
+    (["--save", "out.txt"], "--save out.txt: unknown extension '.txt'; write a recording (.rrd) or a ROS 2 bag"),
+    (["--save", "recording"], "--save recording: unknown extension"),
+    (["--tool-topic", "select=/x"], "--tool-topic 'select=/x': expected TOOL=TOPIC, TOOL one of goal"),
+    (["--tool-topic", "goal"], "--tool-topic 'goal': expected TOOL=TOPIC"),
+    (["--tool-topic", "goal=move base"], "'move base' is not a ROS topic name"),
+]
+CONSOLE_SCRIPT = {"--bogus", "--urdf"}
+"""The cases run by the real console script, each in its own process: one the parser refuses, one the library does.
+The others go through the same ``main`` in one fresh process (17 console-script starts cost 9.5 s of CPU)."""
+
+_MAINS = """
+import json, os, sys
+from contextlib import redirect_stderr
+from io import StringIO
+from r2d2_viz.cli import main
+results = []
+for cwd, args in json.loads(sys.stdin.read()):
+    os.chdir(cwd)
+    err = StringIO()
+    with redirect_stderr(err):
+        try:
+            code = main(args)
+        except SystemExit as exc:  # the parser's refusals
+            code = exc.code
+    results.append([code, err.getvalue()])
+print(json.dumps(results))
+"""
+
+
+def _with_save(args: list[str], folder: Path) -> list[str]:
+    return [*args, "--save", str(folder / "out.rrd")] if "--save" not in args and "--headless" not in args else args
+
+
+@pytest.fixture(scope="module")
+def bad_input_runs(tmp_path_factory: pytest.TempPathFactory) -> dict[int, tuple[int, str, Path]]:
+    """Exit code, stderr and working folder of each case of :data:`BAD_INPUT`, each in a folder of its own."""
+    import json
+    import subprocess
+    import sys
+
+    folders = {k: tmp_path_factory.mktemp(f"bad{k}") for k in range(len(BAD_INPUT))}
+    runs: dict[int, tuple[int, str, Path]] = {}
+    batch = [k for k, (args, _) in enumerate(BAD_INPUT) if not CONSOLE_SCRIPT & set(args)]
+    payload = json.dumps([[str(folders[k]), _with_save(BAD_INPUT[k][0], folders[k])] for k in batch])
+    done = subprocess.run([sys.executable, "-c", _MAINS], input=payload, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    for k, (code, err) in zip(batch, json.loads(done.stdout.strip().splitlines()[-1]), strict=True):
+        runs[k] = (code, err, folders[k])
+    for k, (args, _) in enumerate(BAD_INPUT):
+        if k not in runs:
+            result = cli(*_with_save(args, folders[k]), cwd=folders[k])
+            runs[k] = (result.returncode, result.stderr, folders[k])
+    return runs
+
+
+@pytest.mark.parametrize("case", range(len(BAD_INPUT)), ids=[" ".join(args) for args, _ in BAD_INPUT])
+def test_bad_input_is_one_line_exit_2_and_nothing_written(
+    bad_input_runs: dict[int, tuple[int, str, Path]], case: int
+) -> None:
+    code, stderr, folder = bad_input_runs[case]
+    fragment = BAD_INPUT[case][1]
+    assert code == 2, stderr
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0], stderr
+    assert "Traceback" not in stderr and not list(folder.iterdir())
 
 
 def test_main_is_callable_in_process(capsys: pytest.CaptureFixture[str]) -> None:
