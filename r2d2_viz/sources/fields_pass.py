@@ -19,6 +19,8 @@ from r2d2_viz.sources.bags.bag import Bag
 from r2d2_viz.sources.bags.storage import Block
 
 TopicColumns = tuple[str, Columns]
+STAMP = ("header.stamp.sec", "header.stamp.nanosec")
+"""Read with every plotted field (``--time header`` puts a plot's points there)."""
 
 
 class FieldsPass:
@@ -32,15 +34,16 @@ class FieldsPass:
         """Topics that cannot be decoded → why."""
         wanted: dict[str, set[str]] = {}
         for p in plots:
-            wanted.setdefault(p.topic, set()).add(p.field)
+            wanted.setdefault(p.topic, set()).update([p.field, *(f.field for f in p.filters), *STAMP])
         for topic in sorted({*shown, *wanted}):
             try:
                 store = store_of(bag, topic)
             except MsgError as exc:
                 self.unusable[topic] = str(exc)
                 continue
-            names = None if topic in shown else frozenset(wanted[topic])
-            self.decoders[topic] = FieldDecoder(store, bag.topics[topic].msgtype, names)
+            keep = frozenset(wanted.get(topic, ()))
+            names = None if topic in shown else keep
+            self.decoders[topic] = FieldDecoder(store, bag.topics[topic].msgtype, names, keep)
 
     @property
     def topics(self) -> tuple[str, ...]:
@@ -94,7 +97,11 @@ def plot_paths(bag: Bag, texts: Sequence[str]) -> tuple[MessagePath, ...]:
         except MsgError as exc:
             raise BagError(f"--plot {text}: {exc}") from None
         msgtype = bag.topics[path.topic].msgtype
-        if (why := check_field(store, msgtype, path.field)) is not None:
+        whys = [
+            check_field(store, msgtype, path.field),
+            *(check_field(store, msgtype, f.field, text=True) for f in path.filters),
+        ]
+        if (why := next((w for w in whys if w is not None), None)) is not None:
             names = field_names(store, msgtype)
             raise BagError(f"--plot {text}: {why}; {path.topic}'s fields: {listed(names, first=8)}")
         out.append(path)

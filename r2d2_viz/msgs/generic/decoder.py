@@ -39,10 +39,13 @@ def topic_store(msgtype: str, definition: str, encoding: str, *, humble: bool = 
 
 class FieldDecoder:
     """Decodes one topic's messages of ``msgtype`` (defined in ``store``); ``wanted``: only these field names (None:
-    all)."""
+    all); ``keep``: names read whatever the summary (the items ``--plot`` paths name)."""
 
-    def __init__(self, store: Typestore, msgtype: str, wanted: frozenset[str] | None = None) -> None:
+    def __init__(
+        self, store: Typestore, msgtype: str, wanted: frozenset[str] | None = None, keep: frozenset[str] = frozenset()
+    ) -> None:
         self.store, self.msgtype, self.wanted = store, msgtype, wanted
+        self.keep = keep | (wanted or frozenset())
         self.layouts: list[Layout] = []
         self.problems = Problems()
         self.decoded = 0
@@ -86,7 +89,7 @@ class FieldDecoder:
 
     def _walk(self, buf: np.ndarray, start: int, length: int) -> Layout | None:
         try:
-            return walk(self.store, self.msgtype, memoryview(buf[start : start + length].tobytes()))
+            return walk(self.store, self.msgtype, memoryview(buf[start : start + length].tobytes()), self.keep)
         except ValueError as exc:
             self.problems.add(str(exc))
             return None
@@ -132,4 +135,5 @@ def _joined(parts: list[Columns]) -> Columns:
         times[order],
         {k: np.concatenate([p.numbers[k] for p in parts])[order] for k in first.numbers},
         {k: np.concatenate([p.texts[k] for p in parts])[order] for k in first.texts},
+        first.picked,
     )

@@ -10,12 +10,15 @@ numpy views over their bytes: no Python object per message. Messages no known la
 
 Long arrays (over :data:`MAX_ITEMS` numbers, over :data:`MAX_NESTED` messages or strings) and byte sequences
 (``uint8[]``, ``int8[]``, ``char[]``) are summarised: ``NAME.len``, and ``NAME.min`` / ``NAME.max`` for numbers.
+The items a message path names (``ranges[180]``, ``poses[80].position.x``, ``ranges[-1]``: from the end) are read
+whatever the summary (``keep``: they are *picked*, :attr:`Columns.picked`).
 
 Pure: numpy; the typestore comes from rosbags. Bad messages raise ``ValueError`` from :func:`walk`.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -46,6 +49,8 @@ class Number:
     count: int | None = None
     summary: bool = False
     """Read as ``NAME.len``, ``NAME.min``, ``NAME.max``."""
+    picked: bool = False
+    """Read because a path names it (an item of a summarised array, or counted from the end)."""
 
 
 @dataclass(frozen=True)
@@ -71,11 +76,25 @@ class Layout:
         return (numbers, self.texts, tuple(n for n, _ in self.lengths))
 
 
+_INDEX = re.compile(r"\[(-?\d+)\]")
+
+
+def picks(names: frozenset[str]) -> dict[str, tuple[int, ...]]:
+    """Array name → the indices paths name in it (``points[-1].positions[2]``: ``points`` → -1 and
+    ``points[-1].positions`` → 2)."""
+    out: dict[str, set[int]] = {}
+    for name in names:
+        for m in _INDEX.finditer(name):
+            out.setdefault(name[: m.start()], set()).add(int(m.group(1)))
+    return {k: tuple(sorted(v)) for k, v in out.items()}
+
+
 class _Walk:
-    def __init__(self, store: Typestore, data: bytes | memoryview) -> None:
+    def __init__(self, store: Typestore, data: bytes | memoryview, keep: frozenset[str]) -> None:
         if len(data) < 4 or bytes(data[:2]) != b"\x00\x01":
             raise ValueError("not little-endian CDR")
         self.store, self.data, self.pos, self.quiet = store, data, 4, 0
+        self.keep, self.picks = keep, picks(keep)
         self.checks: list[tuple[int, int]] = []
         self.numbers: list[Number] = []
         self.offsets: list[int] = []
@@ -124,7 +143,7 @@ class _Walk:
                 raise ValueError(f"shorter than its definition (a length field of {length})")
             if typ == "string" and (length == 0 or self.data[self.pos + length - 1] != 0):
                 raise ValueError("a string without its terminating NUL")
-            if not self.quiet and typ == "string":
+            if typ == "string" and (not self.quiet or name in self.keep):
                 self.texts.append(name)
                 self.spans.append((self.pos, length - 1))
             self.pos += length * width
@@ -132,8 +151,8 @@ class _Walk:
         size = SIZES[typ]
         self.align(size)
         self.need(size)
-        if not self.quiet:
-            self.numbers.append(Number(name, DTYPES[typ]))
+        if not self.quiet or name in self.keep:
+            self.numbers.append(Number(name, DTYPES[typ], picked=bool(self.quiet)))
             self.offsets.append(self.pos)
         self.pos += size
 
@@ -144,27 +163,44 @@ class _Walk:
             if count:
                 self.align(size)
             self.need(size * count)
+            summary = count > MAX_ITEMS or (not fixed and typ in _BYTES)
             if not self.quiet:
-                summary = count > MAX_ITEMS or (not fixed and typ in _BYTES)
                 self.numbers.append(Number(name, DTYPES[typ], count, summary))
                 self.offsets.append(self.pos)
+            for k in self.picks.get(name, ()):  # items a path names that the above does not give
+                i = k if k >= 0 else count + k
+                if (self.quiet or summary or k < 0) and 0 <= i < count and f"{name}[{k}]" in self.keep:
+                    self.numbers.append(Number(f"{name}[{k}]", DTYPES[typ], picked=True))
+                    self.offsets.append(self.pos + size * i)
             self.pos += size * count
             return
         long = count > MAX_NESTED
         if long and not self.quiet:
             self.lengths.append((f"{name}.len", count))
+        from_end = {count + k: k for k in self.picks.get(name, ()) if -count <= k < 0}
         self.quiet += long
         for i in range(count):
-            if sub[0] == 1:
-                self.base(f"{name}[{i}]", sub[1][0])
-            else:
-                self.message(sub[1], f"{name}[{i}].")
+            if i in from_end:  # walked once more under the name the path gives it, keeping only what it names
+                pos, checks = self.pos, len(self.checks)
+                self.quiet += 1
+                self.item(f"{name}[{from_end[i]}]", sub)
+                self.quiet -= 1
+                self.pos = pos
+                del self.checks[checks:]
+            self.item(f"{name}[{i}]", sub)
         self.quiet -= long
 
+    def item(self, name: str, sub: Any) -> None:
+        if sub[0] == 1:
+            self.base(name, sub[1][0])
+        else:
+            self.message(sub[1], name + ".")
 
-def walk(store: Typestore, msgtype: str, data: bytes | memoryview) -> Layout:
-    """The layout of one message of ``msgtype`` (defined in ``store``); ``ValueError`` naming what is wrong."""
-    w = _Walk(store, data)
+
+def walk(store: Typestore, msgtype: str, data: bytes | memoryview, keep: frozenset[str] = frozenset()) -> Layout:
+    """The layout of one message of ``msgtype`` (defined in ``store``); ``ValueError`` naming what is wrong.
+    ``keep``: names read whatever the summary (the items paths name)."""
+    w = _Walk(store, data, keep)
     try:
         w.message(msgtype, "")
     except (KeyError, IndexError) as exc:
@@ -181,6 +217,8 @@ class Columns:
     numbers: dict[str, np.ndarray] = field(default_factory=dict)
     texts: dict[str, np.ndarray] = field(default_factory=dict)
     """Arrays of ``str`` (object)."""
+    picked: frozenset[str] = frozenset()
+    """Numbers read only because a path names them (not part of the topic's own fields)."""
 
     def __len__(self) -> int:
         return len(self.times_ns)
@@ -190,6 +228,7 @@ class Columns:
             self.times_ns[rows],
             {k: v[rows] for k, v in self.numbers.items()},
             {k: v[rows] for k, v in self.texts.items()},
+            self.picked,
         )
 
 
@@ -250,7 +289,7 @@ def read_columns(
     every message's); only the ``wanted`` names (None: all)."""
     first = layouts[0]
     same = len(layouts) == 1
-    out = Columns(times_ns)
+    out = Columns(times_ns, picked=frozenset(n.name for n in first.numbers if n.picked))
     bad = np.zeros(len(starts), dtype=bool)
     for j, number in enumerate(first.numbers):
         at = starts + (first.offsets[j] if same else np.array([x.offsets[j] for x in layouts]))
