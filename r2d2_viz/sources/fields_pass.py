@@ -20,21 +20,25 @@ from r2d2_viz.sources.bags.storage import Block
 
 TopicColumns = tuple[str, Columns]
 STAMP = ("header.stamp.sec", "header.stamp.nanosec")
-"""Read with every plotted field (``--time header`` puts a plot's points there)."""
+"""Read with every plotted field under ``--time header`` (a plot's points go there)."""
 
 
 class FieldsPass:
     """``shown``: topic → type of the topics whose every field is shown; ``plots``: the ``--plot`` paths (checked:
-    :func:`plot_paths`)."""
+    :func:`plot_paths`); ``stamps``: their header stamps too (``--time header``)."""
 
-    def __init__(self, bag: Bag, shown: Mapping[str, str], plots: Sequence[MessagePath] = ()) -> None:
+    def __init__(
+        self, bag: Bag, shown: Mapping[str, str], plots: Sequence[MessagePath] = (), *, stamps: bool = False
+    ) -> None:
         self.bag = bag
         self.decoders: dict[str, FieldDecoder] = {}
         self.unusable: dict[str, str] = {}
         """Topics that cannot be decoded → why."""
         wanted: dict[str, set[str]] = {}
         for p in plots:
-            wanted.setdefault(p.topic, set()).update([p.field, *(f.field for f in p.filters), *STAMP])
+            wanted.setdefault(p.topic, set()).update(
+                [p.field, *(f.field for f in p.filters), *(STAMP if stamps else ())]
+            )
         for topic in sorted({*shown, *wanted}):
             try:
                 store = store_of(bag, topic)

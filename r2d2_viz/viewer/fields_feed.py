@@ -222,7 +222,7 @@ def fields_run(
         return None
     bag = plan.replay.bag
     checked = tuple(plot_paths(bag, texts) for texts in plots)
-    decoding = FieldsPass(bag, plan.undisplayed, [p for group in checked for p in group])
+    decoding = FieldsPass(bag, plan.undisplayed, [p for group in checked for p in group], stamps=header_time)
     if not decoding.decoders and not decoding.unusable:
         return None
     shown = {t: m for t, m in plan.undisplayed.items() if t in decoding.decoders}

@@ -122,7 +122,7 @@ def test_a_field_a_message_lacks_is_cleared_not_inherited(tmp_path: Path) -> Non
     assert result.returncode == 0, result.stderr
     rows = read_recording(out)["/topics/plan"]
     names = {n.split(":", 1)[1]: n for n in rows.temporal if n.startswith(traj + ":")}
-    for topic, t, data in written:
+    for _, t, data in written:
         msg = TS.deserialize_cdr(data, traj)
         want = {f"points[{i}].positions[0]": p.positions[0] for i, p in enumerate(msg.points)}
         for field in (f"points[{i}].positions[0]" for i in range(5)):
