@@ -47,7 +47,8 @@ class FieldsPass:
                 continue
             keep = frozenset(wanted.get(topic, ()))
             names = None if topic in shown else keep
-            self.decoders[topic] = FieldDecoder(store, bag.topics[topic].msgtype, names, keep)
+            info, ros1 = bag.topics[topic], bag.topics[topic].encoding == "ros1msg" and topic not in bag.humble_topics
+            self.decoders[topic] = FieldDecoder(store, info.msgtype, names, keep, ros1=ros1)
 
     @property
     def topics(self) -> tuple[str, ...]:

@@ -18,12 +18,13 @@ Pure: numpy; the typestore comes from rosbags. Bad messages raise ``ValueError``
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from r2d2_viz.msgs.generic.message_path import picks
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
@@ -37,6 +38,8 @@ SIZES |= {"int32": 4, "uint32": 4, "float32": 4, "int64": 8, "uint64": 8, "float
 DTYPES = {"bool": "?", "byte": "u1", "char": "u1", "octet": "u1", "int8": "i1", "uint8": "u1", "float32": "<f4"}
 DTYPES |= {"int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4", "int64": "<i8", "uint64": "<u8"}
 DTYPES |= {"float64": "<f8"}
+BIG = {k: v.replace("<", ">") for k, v in DTYPES.items()}
+"""Big-endian CDR's."""
 _BYTES = {"uint8", "int8", "byte", "char", "octet"}
 
 
@@ -68,6 +71,8 @@ class Layout:
     """``(offset, length)`` of each text (without its NUL)."""
     lengths: tuple[tuple[str, int], ...] = ()
     """Long arrays of messages or strings: ``(NAME.len, count)``."""
+    little: bool = True
+    """Little-endian CDR (else big)."""
 
     @property
     def names(self) -> tuple[object, ...]:
@@ -76,25 +81,14 @@ class Layout:
         return (numbers, self.texts, tuple(n for n, _ in self.lengths))
 
 
-_INDEX = re.compile(r"\[(-?\d+)\]")
-
-
-def picks(names: frozenset[str]) -> dict[str, tuple[int, ...]]:
-    """Array name → the indices paths name in it (``points[-1].positions[2]``: ``points`` → -1 and
-    ``points[-1].positions`` → 2)."""
-    out: dict[str, set[int]] = {}
-    for name in names:
-        for m in _INDEX.finditer(name):
-            out.setdefault(name[: m.start()], set()).add(int(m.group(1)))
-    return {k: tuple(sorted(v)) for k, v in out.items()}
-
-
 class _Walk:
-    def __init__(self, store: Typestore, data: bytes | memoryview, keep: frozenset[str]) -> None:
-        if len(data) < 4 or bytes(data[:2]) != b"\x00\x01":
-            raise ValueError("not little-endian CDR")
+    def __init__(self, store: Typestore, data: bytes | memoryview, keep: frozenset[str], ros1: bool) -> None:
+        if len(data) < 4 or bytes(data[:2]) not in (b"\x00\x01", b"\x00\x00"):
+            raise ValueError("not CDR (an unknown encapsulation)")
         self.store, self.data, self.pos, self.quiet = store, data, 4, 0
         self.keep, self.picks = keep, picks(keep)
+        self.little = data[1] == 1
+        self.dtypes = (DTYPES if self.little else BIG) | ({"byte": "i1"} if ros1 else {})  # ROS 1's byte: int8
         self.checks: list[tuple[int, int]] = []
         self.numbers: list[Number] = []
         self.offsets: list[int] = []
@@ -112,7 +106,7 @@ class _Walk:
     def u32(self) -> int:
         self.align(4)
         self.need(4)
-        value = int.from_bytes(self.data[self.pos : self.pos + 4], "little")
+        value = int.from_bytes(self.data[self.pos : self.pos + 4], "little" if self.little else "big")
         self.checks.append((self.pos, value))
         self.pos += 4
         return value
@@ -152,7 +146,7 @@ class _Walk:
         self.align(size)
         self.need(size)
         if not self.quiet or name in self.keep:
-            self.numbers.append(Number(name, DTYPES[typ], picked=bool(self.quiet)))
+            self.numbers.append(Number(name, self.dtypes[typ], picked=bool(self.quiet)))
             self.offsets.append(self.pos)
         self.pos += size
 
@@ -165,12 +159,12 @@ class _Walk:
             self.need(size * count)
             summary = count > MAX_ITEMS or (not fixed and typ in _BYTES)
             if not self.quiet:
-                self.numbers.append(Number(name, DTYPES[typ], count, summary))
+                self.numbers.append(Number(name, self.dtypes[typ], count, summary))
                 self.offsets.append(self.pos)
             for k in self.picks.get(name, ()):  # items a path names that the above does not give
                 i = k if k >= 0 else count + k
                 if (self.quiet or summary or k < 0) and 0 <= i < count and f"{name}[{k}]" in self.keep:
-                    self.numbers.append(Number(f"{name}[{k}]", DTYPES[typ], picked=True))
+                    self.numbers.append(Number(f"{name}[{k}]", self.dtypes[typ], picked=True))
                     self.offsets.append(self.pos + size * i)
             self.pos += size * count
             return
@@ -197,16 +191,21 @@ class _Walk:
             self.message(sub[1], name + ".")
 
 
-def walk(store: Typestore, msgtype: str, data: bytes | memoryview, keep: frozenset[str] = frozenset()) -> Layout:
-    """The layout of one message of ``msgtype`` (defined in ``store``); ``ValueError`` naming what is wrong.
-    ``keep``: names read whatever the summary (the items paths name)."""
-    w = _Walk(store, data, keep)
+def walk(
+    store: Typestore, msgtype: str, data: bytes | memoryview, keep: frozenset[str] = frozenset(), *, ros1: bool = False
+) -> Layout:
+    """The layout of one message of ``msgtype`` (defined in ``store``); ``ValueError`` naming what is wrong (as
+    rosbags: more than 3 bytes left over is a size mismatch). ``keep``: names read whatever the summary (the items
+    paths name); ``ros1``: a ROS 1 definition (its ``byte`` is signed)."""
+    w = _Walk(store, data, keep, ros1)
     try:
         w.message(msgtype, "")
     except (KeyError, IndexError) as exc:
         raise ValueError(f"cannot be read ({type(exc).__name__})") from None
-    n = tuple(w.numbers)
-    return Layout(len(data), tuple(w.checks), n, tuple(w.offsets), tuple(w.texts), tuple(w.spans), tuple(w.lengths))
+    if w.pos + 3 < len(data):
+        raise ValueError("longer than its definition (size mismatch)")
+    n, spans = tuple(w.numbers), tuple(w.spans)
+    return Layout(len(data), tuple(w.checks), n, tuple(w.offsets), tuple(w.texts), spans, tuple(w.lengths), w.little)
 
 
 @dataclass
@@ -234,13 +233,15 @@ class Columns:
 
 def matching(layout: Layout, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """Which messages (``buf[starts[i] : starts[i] + lengths[i]]``) have ``layout`` (a bool mask)."""
-    ok: np.ndarray = (lengths == layout.size) & (buf[starts] == 0) & (buf[starts + 1] == 1)
+    ok: np.ndarray = (lengths == layout.size) & (buf[starts] == 0) & (buf[starts + 1] == int(layout.little))
     if not ok.any() or not layout.checks:
         return ok
     where = np.flatnonzero(ok)
     positions = np.array([p for p, _ in layout.checks], dtype=np.int64)
     values = np.array([v for _, v in layout.checks], dtype=np.uint32)
-    found = buf[starts[where, None, None] + positions[None, :, None] + np.arange(4)].view("<u4")[..., 0]
+    found = buf[starts[where, None, None] + positions[None, :, None] + np.arange(4)].view(
+        "<u4" if layout.little else ">u4"
+    )[..., 0]
     ok[where] = (found == values).all(axis=1)
     return ok
 
@@ -250,6 +251,8 @@ def gather(buf: np.ndarray, at: np.ndarray, dtype: str, count: int | None) -> np
     width = np.dtype(dtype).itemsize * (1 if count is None else count)
     raw = buf[at[:, None] + np.arange(width)]
     values: np.ndarray = raw.view(dtype) if dtype != "?" else raw != 0
+    if dtype[0] == ">":
+        values = values.astype(dtype.replace(">", "<"))  # native for Arrow
     return values[:, 0] if count is None else values
 
 

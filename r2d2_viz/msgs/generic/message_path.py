@@ -100,6 +100,16 @@ def _form(rest: str) -> str:
     return f"{rest!r}: fields by name, items by index (name[2], name[-1])"
 
 
+def picks(names: frozenset[str]) -> dict[str, tuple[int, ...]]:
+    """Array name → the indices the field names ``names`` take in it (``points[-1].positions[2]``: ``points`` → -1
+    and ``points[-1].positions`` → 2)."""
+    out: dict[str, set[int]] = {}
+    for name in names:
+        for m in re.finditer(r"\[(-?\d+)\]", name):
+            out.setdefault(name[: m.start()], set()).add(int(m.group(1)))
+    return {k: tuple(sorted(v)) for k, v in out.items()}
+
+
 def field_names(store: Typestore, msgtype: str, *, depth: int = 6) -> list[str]:
     """The fields of ``msgtype`` as paths name them (arrays as ``name[i]``), for a message of what fields a topic
     has."""

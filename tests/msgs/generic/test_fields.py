@@ -60,10 +60,10 @@ def test_layouts_are_matched_not_walked_message_by_message() -> None:
 
     real = fd.walk
 
-    def counted(*args: Any) -> Any:
+    def counted(*args: Any, **kwargs: Any) -> Any:
         nonlocal walks
         walks += 1
-        return real(*args)
+        return real(*args, **kwargs)
 
     fd.walk = counted  # type: ignore[assignment]
     try:
