@@ -185,13 +185,14 @@ def test_a_field_keeps_the_kind_it_was_first_logged_as() -> None:
     import rerun as rr
 
     from r2d2_viz.msgs.shapes import Status, Statuses
+    from r2d2_viz.msgs.telemetry import KINDS
     from r2d2_viz.viewer.displays import log_plain
 
     rec = rr.RecordingStream("test", recording_id="t")
     book = PlainBook()
-    log_plain(rec, "/d", Statuses((Status(("a",), "OK", "", "", (("k", "idle"),)),)), book)
-    log_plain(rec, "/d", Statuses((Status(("a",), "WARN", "m", "", (("k", "3.5"),)),)), book)
-    assert book.numeric == {("/d/a", "k"): False}
+    log_plain(rec, "/d", Statuses((Status(("a",), "OK", "", "", (("kind test key", "idle"),)),)), book)
+    log_plain(rec, "/d", Statuses((Status(("a",), "WARN", "m", "", (("kind test key", "3.5"),)),)), book)
+    assert KINDS["kind test key"] is False
     assert book.states["/d/a"] == ["OK", "WARN: m"]
     assert state_of(Status(("a",), "ERROR", "", "", ())) == "ERROR"
 
