@@ -34,6 +34,8 @@ class FieldsPass:
         self.decoders: dict[str, FieldDecoder] = {}
         self.unusable: dict[str, str] = {}
         """Topics that cannot be decoded → why."""
+        self.variants: dict[tuple[str, int], FieldDecoder] = {}
+        """(topic, storage file) → its decoder where that file defines the topic otherwise than the first."""
         wanted: dict[str, set[str]] = {}
         for p in plots:
             wanted.setdefault(p.topic, set()).update(
@@ -49,6 +51,33 @@ class FieldsPass:
             names = None if topic in shown else keep
             info, ros1 = bag.topics[topic], bag.topics[topic].encoding == "ros1msg" and topic not in bag.humble_topics
             self.decoders[topic] = FieldDecoder(store, info.msgtype, names, keep, ros1=ros1)
+            if topic not in bag.humble_topics:
+                self._variants(topic, names, keep)
+
+    def _variants(self, topic: str, names: frozenset[str] | None, keep: frozenset[str]) -> None:
+        """Decoders for the files of the bag whose definition of ``topic`` is another than the first one's (a
+        message type changed between recordings): each file's messages are read with their own."""
+        first = self.bag.topics[topic]
+        made: dict[tuple[str, str], FieldDecoder] = {}
+        for k in range(len(self.bag.files)):
+            info = self.bag.file_topic(topic, k)
+            if (
+                info is None
+                or not info.definition
+                or (info.definition, info.encoding)
+                == (
+                    first.definition,
+                    first.encoding,
+                )
+            ):
+                continue
+            if (key := (info.definition, info.encoding)) not in made:
+                try:
+                    store = topic_store(info.msgtype, info.definition, info.encoding)
+                except MsgError:
+                    continue  # read with the first one's: what does not fit it is counted, never shown
+                made[key] = FieldDecoder(store, info.msgtype, names, keep, ros1=info.encoding == "ros1msg")
+            self.variants[(topic, k)] = made[key]
 
     @property
     def topics(self) -> tuple[str, ...]:
@@ -65,12 +94,14 @@ class FieldsPass:
             if buf is None:
                 buf = np.frombuffer(block.buffer, dtype=np.uint8)
             starts, lengths = block.starts[rows], block.lengths[rows]
+            decoder = self.variants.get((topic, block.file), decoder)
             out += [(topic, c) for c in decoder.decode(buf, starts, lengths, block.times_ns[rows]) if len(c)]
         return out
 
     def finish(self) -> None:
         """Say each topic's problems, once; NaN and infinities (kept: gaps in a plot) in one line for all topics."""
-        for topic, decoder in self.decoders.items():
+        variants = {id(d): (t, d) for (t, _), d in self.variants.items()}  # one per definition, not per file
+        for topic, decoder in (*self.decoders.items(), *variants.values()):
             if lines := decoder.problems.lines(nonfinite=False):
                 self.bag.warn(f"{self.bag.path}: {topic}: {'; '.join(lines)}")
         nan = {t: d.problems.nonfinite for t, d in self.decoders.items() if d.problems.nonfinite}

@@ -102,3 +102,36 @@ def test_a_message_longer_than_its_definition_is_counted_never_shown(tmp_path: P
     assert "/topics/battery" not in read_recording(out)
     lines = [line for line in result.stderr.splitlines() if "/battery" in line and "size mismatch" in line]
     assert len(lines) == 1 and "5 messages" in lines[0], result.stderr
+
+
+def test_each_file_of_a_bag_is_decoded_with_its_own_definition(tmp_path: Path) -> None:
+    """A type that gained a field between two recordings of one (split) bag was read with the first file's
+    definition: voltage 8.4e-45 instead of 23.0, current = the real voltage."""
+    definitions = ("float32 voltage\nfloat32 current\n", "uint32 cells\nfloat32 voltage\nfloat32 current\n")
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    written = []
+    for k, text in enumerate(definitions):
+        ts = get_typestore(Stores.ROS2_HUMBLE)
+        ts.register(get_types_from_msg(text, BATTERY))
+        part = tmp_path / f"part{k}"
+        with Writer(part, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+            conn = writer.add_connection("/battery", BATTERY, typestore=ts)
+            for i in range(4):
+                values = (23.0 + i, 1.5 * i) if k == 0 else (6, 23.0 + i, 1.5 * i)
+                data = bytes(ts.serialize_cdr(ts.types[BATTERY](*values), BATTERY))
+                t = T0 + (k * 10 + i) * 10**8
+                writer.write(conn, t, data)
+                written.append((t, ts.deserialize_cdr(data, BATTERY)))  # golden: rosbags, with this file's definition
+        [mcap] = part.glob("*.mcap")
+        mcap.rename(bag / f"bag_{k}.mcap")
+    out = tmp_path / "out.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "skipped" not in result.stderr, result.stderr
+    rows = read_recording(out)["/topics/battery"]
+    assert rows.times == [t for t, _ in written]
+    for at, (_, want) in enumerate(written):
+        got = _fields(rows, BATTERY, at)
+        assert got["voltage"] == pytest.approx(want.voltage) and got["current"] == pytest.approx(want.current)
+        assert ("cells" in got) == hasattr(want, "cells"), got  # the older messages have no cells (cleared)
