@@ -155,7 +155,10 @@ class FieldsFeed:
                 if not keep.any():
                     continue
                 values, at = values[keep], self._times(columns.times_ns[keep])
-            self.rec.send_columns(entity, indexes=[at], columns=rr.Scalars.columns(scalars=values.astype(np.float64)))
+            scalars = rr.Scalars.columns(scalars=values.astype(np.float64).ravel())
+            if values.ndim == 2:  # a slice ([:]): every item of each message, a line each (Foxglove: a point each)
+                scalars = scalars.partition(np.full(len(values), values.shape[1]))
+            self.rec.send_columns(entity, indexes=[at], columns=scalars)
             self.plotted[entity] = self.plotted.get(entity, 0) + len(values)
 
     def finish(self, report: Callable[[str], None]) -> None:

@@ -83,6 +83,7 @@ def test_an_item_of_a_summarised_array_is_plotted(tmp_path: Path) -> None:
         )
     bag, written = _write(tmp_path / "bag", msgs)
     paths = ["/scan.ranges[180]", "/scan.ranges[-1]", "/bumpers.data[1]", "/people.poses[80].position.x"]
+    paths.append("/bumpers.data[:]")  # Foxglove's slice: every item
     out = tmp_path / "out.rrd"
     result = cli("--bag", str(bag), "--save", str(out), "--plot", *paths, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
@@ -100,6 +101,9 @@ def test_an_item_of_a_summarised_array_is_plotted(tmp_path: Path) -> None:
         rows = _series(recording, 0, text)
         assert rows.times == [t for t, _ in want], text
         assert [v[0] for v in rows.temporal["Scalars:scalars"]] == pytest.approx([v for _, v in want]), text
+    rows = _series(recording, 0, "/bumpers.data[:]")
+    want_all = [TS.deserialize_cdr(d, types["/bumpers"]).data.tolist() for top, _, d in written if top == "/bumpers"]
+    assert rows.temporal["Scalars:scalars"] == want_all
     assert "no message of" not in result.stderr, result.stderr
     bumpers = recording["/topics/bumpers"]  # the topic's own fields: the summary, not the plotted item
     assert not any("data[1]" in name for name in bumpers.temporal), sorted(bumpers.temporal)
@@ -232,7 +236,12 @@ def test_a_filter_on_the_topic_plots_only_the_messages_it_passes(tmp_path: Path)
 
 @pytest.mark.parametrize(
     ("path", "named"),
-    [("/js.position[01]", "leading zero"), ("/js.position[:]", "slice"), ("/js.position[0]{x==1}", "filter inside")],
+    [
+        ("/js.position[01]", "leading zero"),
+        ("/js.position[1:3]", "slice with bounds"),
+        ("/js.name[:]", "not an array of numbers"),
+        ("/js.position[0]{x==1}", "filter inside"),
+    ],
 )
 def test_a_refused_form_is_one_line_naming_it(tmp_path: Path, path: str, named: str) -> None:
     msgs = [

@@ -161,6 +161,9 @@ class _Walk:
             if not self.quiet:
                 self.numbers.append(Number(name, self.dtypes[typ], count, summary))
                 self.offsets.append(self.pos)
+            if f"{name}[:]" in self.keep:  # a slice: every item, one column of rows of ``count``
+                self.numbers.append(Number(f"{name}[:]", self.dtypes[typ], count, picked=True))
+                self.offsets.append(self.pos)
             for k in self.picks.get(name, ()):  # items a path names that the above does not give
                 i = k if k >= 0 else count + k
                 if (self.quiet or summary or k < 0) and 0 <= i < count and f"{name}[{k}]" in self.keep:
@@ -299,7 +302,8 @@ def read_columns(
         if number.summary:
             _summary(out, buf, at, number, layouts if not same else None, j, wanted)
             continue
-        names = [number.name] if number.count is None else [f"{number.name}[{i}]" for i in range(number.count)]
+        whole = number.count is None or number.picked  # one column (a slice's: rows of ``count`` items)
+        names = [number.name] if whole else [f"{number.name}[{i}]" for i in range(number.count or 0)]
         if not names or (wanted is not None and not wanted.intersection(names)):
             continue
         values = gather(buf, at, number.dtype, number.count)
@@ -307,7 +311,7 @@ def read_columns(
             bad |= ~np.isfinite(values).reshape(len(starts), -1).all(axis=1)
         for i, name in enumerate(names):
             if wanted is None or name in wanted:
-                out.numbers[name] = values if number.count is None else values[:, i]
+                out.numbers[name] = values if whole else values[:, i]
     for j, name in enumerate(first.texts):
         if wanted is None or name in wanted:
             out.texts[name] = _texts(buf, starts, [x.text_spans[j] for x in layouts], problems)

@@ -82,8 +82,9 @@ def parse_path(text: str, topics: set[str] | None = None) -> MessagePath:
     if not rest.startswith(".") or len(rest) == 1:
         raise MsgError(f"{text}: not a message path (TOPIC.FIELD, e.g. /odom.twist.twist.linear.x)")
     rest = rest[1:]
-    if not all(_PART.fullmatch(p) for p in rest.split(".")):
-        raise MsgError(f"{text}: {_form(rest)}")
+    whole = rest[:-3] if rest.endswith("[:]") else rest  # a slice of the last array: all its items
+    if not all(_PART.fullmatch(p) for p in whole.split(".")):
+        raise MsgError(f"{text}: {_form(whole)}")
     return MessagePath(text, topic, rest, tuple(filters))
 
 
@@ -91,8 +92,10 @@ def _form(rest: str) -> str:
     """Why the field part of a path is not read, naming the form."""
     if "$" in rest:
         return "variables ($name) are not read: give the value"
+    if "[:]" in rest:
+        return "a slice ([:]) is read at the end of a path only (/scan.ranges[:]), not of messages"
     if re.search(r"\[-?\d*:-?\d*\]", rest):
-        return "a slice ([:], [1:3]) is several values: name one item (name[0], name[-1] for the last)"
+        return "a slice with bounds ([1:3]) is not read: all items ([:]), or one (name[0], name[-1] for the last)"
     if "{" in rest:
         return "a filter inside the path is not read: filter on the topic (/topic{field==value}.x)"
     if re.search(r"\[-?0\d+\]", rest):
@@ -135,6 +138,12 @@ def field_names(store: Typestore, msgtype: str, *, depth: int = 6) -> list[str]:
 def check_field(store: Typestore, msgtype: str, field: str, *, text: bool = False) -> str | None:
     """Why ``field`` names no number (``text``: or text) in messages of ``msgtype`` (None: it may, an index past an
     array's end aside)."""
+    if field.endswith("[:]"):  # every item of an array of numbers
+        why = check_field(store, msgtype, field[:-3] + "[0]")
+        fixed = check_field(store, msgtype, field[:-3])
+        if why is not None or fixed is None or "is an array" not in fixed:
+            return f"{field[:-3]} is not an array of numbers (a slice is read of those only)"
+        return None
     name: Any = msgtype
     for part in field.split("."):
         match = _PART.fullmatch(part)
