@@ -257,3 +257,36 @@ def test_a_refused_form_is_one_line_naming_it(tmp_path: Path, path: str, named: 
     assert result.returncode == 2, result.stderr
     assert named in result.stderr and "Traceback" not in result.stderr, result.stderr
     assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+
+
+def test_a_real_bags_parameter_events_show_each_event_and_nothing_older(tmp_path: Path) -> None:
+    """The e-puck bag's /parameter_events (91): 63 showed fields of earlier events at their time. Golden: rosbags'
+    reader and deserializer, expanded to ``ros2 topic echo``'s names by tests/fieldbags.py."""
+    from fieldbags import expected_fields
+    from rosbags.highlevel import AnyReader
+
+    repo = Path(__file__).resolve().parents[2]
+    bag = repo.parent / "shared" / "bags" / "real" / "webots_epuck"
+    if not bag.is_dir():
+        pytest.skip("the real e-puck bag is not here (../shared/bags/real/webots_epuck)")
+    out = tmp_path / "out.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), "--topics", "/parameter_events", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    rows = read_recording(out)["/topics/parameter_events"]
+    msgtype = "rcl_interfaces/msg/ParameterEvent"
+    with AnyReader([bag], default_typestore=TS) as reader:
+        chosen = [c for c in reader.connections if c.topic == "/parameter_events"]
+        events = [(t, reader.deserialize(raw, c.msgtype)) for c, t, raw in reader.messages(chosen)]
+    assert len(events) == 91
+    for t, msg in events:
+        want = expected_fields(TS, msg, msgtype)
+        shown = {}
+        for column in (c for c in rows.temporal if c.startswith(msgtype + ":")):
+            if value := _latest_at(rows, column, t):
+                shown[column.split(":", 1)[1]] = value[0]
+        empty = {n[: -len(".len")] for n, v in want.items() if n.endswith(".len") and v == 0}
+        shown = {n: v for n, v in shown.items() if not (n[:-4] in empty and n[-4:] in (".min", ".max"))}
+        assert set(shown) == set(want), (t, set(shown) ^ set(want))
+        for name, value in want.items():
+            same = shown[name] == value or (isinstance(value, float) and np.isnan(value) and np.isnan(shown[name]))
+            assert same, (t, name, shown[name], value)
