@@ -268,7 +268,7 @@ def test_a_real_bags_parameter_events_show_each_event_and_nothing_older(tmp_path
     repo = Path(__file__).resolve().parents[2]
     bag = repo.parent / "shared" / "bags" / "real" / "webots_epuck"
     if not bag.is_dir():
-        pytest.skip("the real e-puck bag is not here (../shared/bags/real/webots_epuck)")
+        pytest.skip("the real Webots e-puck bag (third-party data, not in this repository) is not here")
     out = tmp_path / "out.rrd"
     result = cli("--bag", str(bag), "--save", str(out), "--topics", "/parameter_events", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
