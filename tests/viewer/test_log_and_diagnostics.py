@@ -243,3 +243,17 @@ def test_a_real_bags_rosout_is_what_rosbags_reads(tmp_path: Path, name: str) -> 
     got = [(t, level[0], text[0]) for (t, level), (_, text) in
            zip(_rows(rows, "TextLog:level"), _rows(rows, "TextLog:text"), strict=True)]  # fmt: skip
     assert got == expected
+
+
+def test_distinct_status_names_that_make_the_same_path_get_a_lane_each() -> None:
+    """`motor: left` and `motor left` both make `motor_left`: two names, two lanes (by hand)."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.shapes import Status, Statuses
+    from r2d2_viz.viewer.displays import log_plain
+
+    rec = rr.RecordingStream("test", recording_id="lanes")
+    book = PlainBook()
+    for name in ("motor: left", "motor left", "motor: left"):
+        log_plain(rec, "/d", Statuses((Status(("motor_left",), "OK", "", "", (), name),)), book)
+    assert book.lanes == {"/d/motor_left": "motor: left", "/d/motor_left_": "motor left"}
