@@ -6,6 +6,7 @@ rest is :data:`~r2d2_viz.msgs.shapes.Plain`, in a ``Decoded`` without a frame.""
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable
 from typing import Any
@@ -81,34 +82,37 @@ def decode_string(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
 
 def status_parts(name: str) -> tuple[str, ...]:
     """A status name as entity path parts: split at '/' (``/diagnostics_agg``'s ``/Robot/Motors`` nests), each
-    part's runs of other characters than letters, digits, ``_``, ``-`` and ``.`` as one ``_`` (``motor: left`` →
-    ``motor_left``: no escapes in the viewer's lane names), empty parts dropped; a name with none is ``_``."""
+    part's runs of other characters than letters, digits (of any script), ``_``, ``-`` and ``.`` as one ``_``
+    (``motor: left`` → ``motor_left``: no escapes in the viewer's lane names), empty parts dropped; a name with none
+    is itself (escaped where logged)."""
     parts = (_UNSAFE.sub("_", p).strip("_") for p in name.split("/"))
-    return tuple(p for p in parts if p) or ("_",)
+    return tuple(p for p in parts if p) or (name.strip() or "_",)
 
 
-_UNSAFE = re.compile(r"[^A-Za-z0-9_.-]+")
+_UNSAFE = re.compile(r"[^\w.-]+")  # letters and digits of any script (電池) kept
 
 
 MAX_STATUSES = 1000
-"""More statuses in one DiagnosticArray (an entity each), or more key/values in one status, and the message is
-refused (said once per topic, counted): a robot has tens."""
+"""More statuses in one DiagnosticArray (an entity each) and the message is refused (said once per topic, counted):
+a robot has tens."""
+MAX_VALUES = 4096
+"""A status's key/values beyond these are one more key saying how many are not shown (the status is)."""
 
 
 def decode_diagnostics(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
     """A DiagnosticArray: each status's level, message and key/values."""
     msg = deserialize(data, "diagnostic_msgs/msg/DiagnosticArray")
     _, stamp = header_of(msg)
-    most = max((len(s.values) for s in msg.status), default=0)
-    if len(msg.status) > MAX_STATUSES or most > MAX_STATUSES:
-        raise MsgError(f"{len(msg.status)} statuses, up to {most} key/values each: more than {MAX_STATUSES}")
+    if len(msg.status) > MAX_STATUSES:
+        raise MsgError(f"{len(msg.status)} statuses: more than {MAX_STATUSES}")
     statuses = tuple(
         Status(
             status_parts(str(s.name)),
             DIAGNOSTIC_LEVELS.get(int(s.level), f"LEVEL {int(s.level)}"),
             shown(str(s.message)),
             shown(str(s.hardware_id)),
-            tuple((shown(str(kv.key)), shown(str(kv.value))) for kv in s.values),
+            tuple((shown(str(kv.key)), shown(str(kv.value))) for kv in s.values[:MAX_VALUES])
+            + ((("key/values not shown", str(len(s.values) - MAX_VALUES)),) if len(s.values) > MAX_VALUES else ()),
             shown(str(s.name)),
         )
         for s in msg.status
@@ -204,3 +208,38 @@ def _number(msgtype: str) -> Callable[[bytes | memoryview, DecodeOptions], Decod
 
 
 NUMBER_DECODERS = {msgtype: _number(msgtype) for msgtype in NUMBERS}
+
+
+KINDS: dict[str, bool] = {}
+"""Status key → whether it is a number: its first value, in any status of any topic (Rerun fixes a component's type
+at its first log, process-wide); a later value of the other kind goes beside it (``KEY (text)``, the number NaN)."""
+
+
+_EMPTY = {True: np.zeros(0, dtype=np.float64), False: np.zeros(0, dtype=np.str_)}
+"""No value, typed (an untyped empty list is dropped, not logged)."""
+
+
+def _parsed(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def status_fields(status: Status, known: set[str]) -> dict[str, object]:
+    """A status's fields as logged: its level, message, hardware id and key/values (see :data:`KINDS`); ``known``:
+    the fields earlier statuses on its entity had (updated) — those this one lacks are empty (cleared, not
+    inherited)."""
+    out: dict[str, object] = {"name": status.name, "level": status.level, "message": status.message}
+    out["hardware_id"] = status.hardware_id
+    for key, text in status.values:
+        if key in out:
+            key = f"{key} (value)"
+        value = _parsed(text)
+        numeric = KINDS.setdefault(key, value is not None)
+        out[key] = [(math.nan if value is None else value)] if numeric else [text]
+        if numeric and value is None:
+            out[f"{key} (text)"] = [text]
+    out |= {key: _EMPTY[KINDS.get(key, False) and not key.endswith(" (text)")] for key in known - out.keys()}
+    known.update(out)
+    return out

@@ -201,6 +201,7 @@ def plan_bag(
         tf_read = tuple(tf_topics(robots, selected, "tf").items())
         static, moving = _robots_tf(bag, robots, selected, (static, moving), time, start, stop, shared)
     tree = robots[0].tree if robots else compile_tree(robot) if robot is not None else None
+    undisplayed |= {JOINTS: bag.topics[JOINTS].msgtype} if tree is None and JOINTS in selected else {}  # fields
     records = [r for r in (static, moving) if r is not None]
     actuated = tree.actuated if tree is not None and JOINTS in selected and not robots else None
     joint_topics = joint_topics_of(bag, robots, selected)

@@ -12,22 +12,23 @@ camera's pinhole names its frames (parent: the optical frame; child: ``<entity>#
 What is not drawn in 3D (:data:`r2d2_viz.msgs.shapes.Plain`) goes on entities in no frame: log lines as ``TextLog``,
 diagnostic statuses as ``StateChange`` (one entity per status below the topic's, its key/values as fields),
 numbers as ``Scalars`` (named series), fixes as ``GeoPoints``. A :class:`PlainBook` per topic remembers what was
-said: series' names and a state's colours are logged once, and each key/value field keeps the kind it was first
-logged as (Rerun fixes a component's type at its first row).
+said: series' names and a state's colours are logged once, and a status's fields are exactly its own (see
+:data:`r2d2_viz.msgs.telemetry.KINDS`).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
+import pyarrow as pa
 import rerun as rr
 
 from r2d2_viz.msgs import shapes
 from r2d2_viz.msgs.shapes import Decoded, MarkerOp, Pose, is_plain
+from r2d2_viz.msgs.telemetry import status_fields
 
 Clock = Literal["duration", "timestamp"]
 MeshLoader = Callable[[str], "tuple[bytes, str] | None"]
@@ -177,8 +178,10 @@ MAX_STATES = 64
 class PlainBook:
     """What one topic's plain entities were given so far."""
 
-    numeric: dict[tuple[str, str], bool] = field(default_factory=dict)
-    """(entity, key) → whether the field is a number (its first value parsed as one)."""
+    keys: dict[str, set[str]] = field(default_factory=dict)
+    """Status entity → every field its statuses have had (what a status lacks is logged empty: cleared)."""
+    lanes: dict[str, str] = field(default_factory=dict)
+    """Status entity → the status name it shows (distinct names never share one)."""
     styled: set[str] = field(default_factory=set)
     """Entities whose series names are logged."""
     states: dict[str, list[str]] = field(default_factory=dict)
@@ -195,30 +198,16 @@ def state_of(status: shapes.Status) -> str:
     return f"{status.level}: {status.message}" if status.message else status.level
 
 
-def _number(text: str) -> float | None:
-    try:
-        return float(text)
-    except ValueError:
-        return None
-
-
-def _fields(entity: str, status: shapes.Status, book: PlainBook) -> dict[str, object]:
-    """The status's level, message, hardware id and key/values; a key first seen with a number stays a number
-    (NaN when a later value is not one), one first seen with text stays text."""
-    out: dict[str, object] = {"name": status.name, "level": status.level, "message": status.message}
-    out["hardware_id"] = status.hardware_id
-    for key, text in status.values:
-        if key in out:
-            key = f"{key} (value)"
-        value = _number(text)
-        numeric = book.numeric.setdefault((entity, key), value is not None)
-        out[key] = [(math.nan if value is None else value)] if numeric else [text]
-    return out
+def _typed(fields: dict[str, object]) -> dict[str, object]:
+    """Empty (cleared) fields as typed Arrow arrays: Rerun drops an empty one it cannot type."""
+    return {k: pa.array(v) if isinstance(v, np.ndarray) and not len(v) else v for k, v in fields.items()}
 
 
 def _statuses(rec: rr.RecordingStream, entity_path: str, item: shapes.Statuses, book: PlainBook) -> None:
     for status in item.items:
         entity, state = status_entity(entity_path, status), state_of(status)
+        while book.lanes.setdefault(entity, status.name) != status.name:  # another name made the same path
+            entity += "_"
         known = book.states.setdefault(entity, [])
         if state not in known and len(known) < MAX_STATES:
             known.append(state)
@@ -227,7 +216,9 @@ def _statuses(rec: rr.RecordingStream, entity_path: str, item: shapes.Statuses, 
         rec.log(
             entity,
             rr.StateChange(state=state),
-            rr.DynamicArchetype("DiagnosticStatus", components=_fields(entity, status, book)),
+            rr.DynamicArchetype(
+                "DiagnosticStatus", components=_typed(status_fields(status, book.keys.setdefault(entity, set())))
+            ),
         )
 
 

@@ -61,24 +61,32 @@ class FieldsFeed:
         header_time: bool = False,
     ) -> None:
         self.rec, self.clock, self.shown, self.header_time = rec, clock, shown, header_time
-        self.plots: dict[str, list[tuple[str, str]]] = {}
-        """topic → (field, entity) of each series."""
+        self.plots: dict[str, list[tuple[MessagePath, str]]] = {}
+        """topic → (path, entity) of each series."""
         for view, paths in enumerate(plots):
             for p in paths:
                 entity = plot_entity(view, p.text)
-                self.plots.setdefault(p.topic, []).append((p.field, entity))
+                self.plots.setdefault(p.topic, []).append((p, entity))
                 rec.log(entity, rr.SeriesLines(names=p.text), static=True)
         self._pending: deque[TopicColumns] = deque()
         self.messages = 0
         self.plotted: dict[str, int] = {}
+        self.known: dict[str, dict[str, pa.DataType]] = {}
+        """topic → every field its messages have had so far (what a row lacks is logged empty: cleared)."""
 
     def push(self, fields: Sequence[TopicColumns]) -> None:
         for topic, columns in fields:
             if self.header_time and "header.stamp.sec" in columns.numbers:
                 stamps = columns.numbers["header.stamp.sec"].astype(np.int64) * 1_000_000_000
-                columns.times_ns = stamps + columns.numbers["header.stamp.nanosec"].astype(np.int64)
+                stamps += columns.numbers["header.stamp.nanosec"].astype(np.int64)
+                columns.times_ns = np.where(stamps != 0, stamps, columns.times_ns)  # unset: received (as displays)
                 order = np.argsort(columns.times_ns, kind="stable")
                 columns = columns.rows(order)
+            if topic in self.shown:
+                known = self.known.setdefault(topic, {})
+                for name, values in (*columns.numbers.items(), *columns.texts.items()):
+                    if name not in known and name not in columns.picked:
+                        known[name] = pa.utf8() if values.dtype == object else pa.from_numpy_dtype(values.dtype)
             self._pending.append((topic, columns))
 
     @property
@@ -103,9 +111,19 @@ class FieldsFeed:
         offsets = pa.array(np.arange(len(columns) + 1, dtype=np.int32))
         out: Encoded = []
         for name, values in (*columns.numbers.items(), *columns.texts.items()):
+            if name in columns.picked:
+                continue
             descriptor = rr.ComponentDescriptor(name).with_builtin_archetype(archetype)
             array = pa.array(values, type=pa.utf8()) if values.dtype == object else pa.array(values)
             out.append((descriptor, pa.ListArray.from_arrays(offsets, array)))
+        absent = [
+            (n, t) for n, t in self.known.get(topic, {}).items() if n not in columns.numbers and n not in columns.texts
+        ]
+        if absent:  # fields of other messages: empty at these rows (Rerun's latest-at is per field)
+            empty = pa.array(np.zeros(len(columns) + 1, dtype=np.int32))
+            for name, typ in absent:
+                descriptor = rr.ComponentDescriptor(name).with_builtin_archetype(archetype)
+                out.append((descriptor, pa.ListArray.from_arrays(empty, pa.array([], type=typ))))
         return out
 
     def _times(self, times_ns: np.ndarray) -> rr.TimeColumn:
@@ -124,22 +142,33 @@ class FieldsFeed:
                 self._arrow(topic, columns),
             )
             self.messages += len(columns)
-        for field, entity in self.plots.get(topic, ()):
-            values = columns.numbers.get(field)
+        for p, entity in self.plots.get(topic, ()):
+            values = columns.numbers.get(p.field)
             if values is None:
                 continue
-            self.rec.send_columns(
-                entity, indexes=[times], columns=rr.Scalars.columns(scalars=values.astype(np.float64))
-            )
+            at = times
+            if p.filters:
+                keep = np.ones(len(values), dtype=bool)
+                for f in p.filters:
+                    column = columns.numbers.get(f.field, columns.texts.get(f.field))
+                    keep &= f.mask(column) if column is not None else False
+                if not keep.any():
+                    continue
+                values, at = values[keep], self._times(columns.times_ns[keep])
+            scalars = rr.Scalars.columns(scalars=values.astype(np.float64).ravel())
+            if values.ndim == 2:  # a slice ([:]): every item of each message, a line each (Foxglove: a point each)
+                scalars = scalars.partition(np.full(len(values), values.shape[1]))
+            self.rec.send_columns(entity, indexes=[at], columns=scalars)
             self.plotted[entity] = self.plotted.get(entity, 0) + len(values)
 
     def finish(self, report: Callable[[str], None]) -> None:
         """Log what is left; say which ``--plot`` paths matched no message (an index past every array's end)."""
         self.until(None)
         for topic, series in self.plots.items():
-            for field, entity in series:
+            for p, entity in series:
                 if not self.plotted.get(entity):
-                    report(f"--plot {topic}.{field}: no message of {topic} has it (an index past the array's end?)")
+                    why = " passes its filter" if p.filters else " has it (an index past the array's end?)"
+                    report(f"--plot {p.text}: no message of {topic}{why}")
 
 
 class LiveFields:
@@ -196,7 +225,7 @@ def fields_run(
         return None
     bag = plan.replay.bag
     checked = tuple(plot_paths(bag, texts) for texts in plots)
-    decoding = FieldsPass(bag, plan.undisplayed, [p for group in checked for p in group])
+    decoding = FieldsPass(bag, plan.undisplayed, [p for group in checked for p in group], stamps=header_time)
     if not decoding.decoders and not decoding.unusable:
         return None
     shown = {t: m for t, m in plan.undisplayed.items() if t in decoding.decoders}

@@ -33,7 +33,8 @@ def test_status_names_as_entity_parts() -> None:
     assert status_parts("/Robot/Motors/Left") == ("Robot", "Motors", "Left")
     assert status_parts("motor: left") == ("motor_left",)
     assert status_parts("gps (rtk)/fix #2") == ("gps_rtk", "fix_2")
-    assert status_parts("") == ("_",) and status_parts("//") == ("_",)
+    assert status_parts("") == ("_",) and status_parts("//") == ("//",)  # no safe character: the name itself
+    assert status_parts("電池/モーター 1") == ("電池", "モーター_1")  # letters and digits of any script are kept
 
 
 def _imu(q, covariance0: float = 0.0) -> bytes:

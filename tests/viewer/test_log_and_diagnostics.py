@@ -185,13 +185,14 @@ def test_a_field_keeps_the_kind_it_was_first_logged_as() -> None:
     import rerun as rr
 
     from r2d2_viz.msgs.shapes import Status, Statuses
+    from r2d2_viz.msgs.telemetry import KINDS
     from r2d2_viz.viewer.displays import log_plain
 
     rec = rr.RecordingStream("test", recording_id="t")
     book = PlainBook()
-    log_plain(rec, "/d", Statuses((Status(("a",), "OK", "", "", (("k", "idle"),)),)), book)
-    log_plain(rec, "/d", Statuses((Status(("a",), "WARN", "m", "", (("k", "3.5"),)),)), book)
-    assert book.numeric == {("/d/a", "k"): False}
+    log_plain(rec, "/d", Statuses((Status(("a",), "OK", "", "", (("kind test key", "idle"),)),)), book)
+    log_plain(rec, "/d", Statuses((Status(("a",), "WARN", "m", "", (("kind test key", "3.5"),)),)), book)
+    assert KINDS["kind test key"] is False
     assert book.states["/d/a"] == ["OK", "WARN: m"]
     assert state_of(Status(("a",), "ERROR", "", "", ())) == "ERROR"
 
@@ -290,3 +291,17 @@ def test_terminal_escapes_from_a_bag_never_reach_the_recordings_text(tmp_path: P
         for t in strings(c)
     ]
     assert "WARN: hot" in texts and not [t for t in texts if "\x1b" in t or "\x07" in t]
+
+
+def test_distinct_status_names_that_make_the_same_path_get_a_lane_each() -> None:
+    """`motor: left` and `motor left` both make `motor_left`: two names, two lanes (by hand)."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.shapes import Status, Statuses
+    from r2d2_viz.viewer.displays import log_plain
+
+    rec = rr.RecordingStream("test", recording_id="lanes")
+    book = PlainBook()
+    for name in ("motor: left", "motor left", "motor: left"):
+        log_plain(rec, "/d", Statuses((Status(("motor_left",), "OK", "", "", (), name),)), book)
+    assert book.lanes == {"/d/motor_left": "motor: left", "/d/motor_left_": "motor left"}

@@ -39,10 +39,20 @@ def topic_store(msgtype: str, definition: str, encoding: str, *, humble: bool = 
 
 class FieldDecoder:
     """Decodes one topic's messages of ``msgtype`` (defined in ``store``); ``wanted``: only these field names (None:
-    all)."""
+    all); ``keep``: names read whatever the summary (the items ``--plot`` paths name); ``ros1``: ``store`` holds a ROS 1
+    definition (its ``byte`` is signed)."""
 
-    def __init__(self, store: Typestore, msgtype: str, wanted: frozenset[str] | None = None) -> None:
-        self.store, self.msgtype, self.wanted = store, msgtype, wanted
+    def __init__(
+        self,
+        store: Typestore,
+        msgtype: str,
+        wanted: frozenset[str] | None = None,
+        keep: frozenset[str] = frozenset(),
+        *,
+        ros1: bool = False,
+    ) -> None:
+        self.store, self.msgtype, self.wanted, self.ros1 = store, msgtype, wanted, ros1
+        self.keep = keep | (wanted or frozenset())
         self.layouts: list[Layout] = []
         self.problems = Problems()
         self.decoded = 0
@@ -86,7 +96,9 @@ class FieldDecoder:
 
     def _walk(self, buf: np.ndarray, start: int, length: int) -> Layout | None:
         try:
-            return walk(self.store, self.msgtype, memoryview(buf[start : start + length].tobytes()))
+            return walk(
+                self.store, self.msgtype, memoryview(buf[start : start + length].tobytes()), self.keep, ros1=self.ros1
+            )
         except ValueError as exc:
             self.problems.add(str(exc))
             return None
@@ -132,4 +144,5 @@ def _joined(parts: list[Columns]) -> Columns:
         times[order],
         {k: np.concatenate([p.numbers[k] for p in parts])[order] for k in first.numbers},
         {k: np.concatenate([p.texts[k] for p in parts])[order] for k in first.texts},
+        first.picked,
     )

@@ -10,6 +10,8 @@ numpy views over their bytes: no Python object per message. Messages no known la
 
 Long arrays (over :data:`MAX_ITEMS` numbers, over :data:`MAX_NESTED` messages or strings) and byte sequences
 (``uint8[]``, ``int8[]``, ``char[]``) are summarised: ``NAME.len``, and ``NAME.min`` / ``NAME.max`` for numbers.
+The items a message path names (``ranges[180]``, ``poses[80].position.x``, ``ranges[-1]``: from the end) are read
+whatever the summary (``keep``: they are *picked*, :attr:`Columns.picked`).
 
 Pure: numpy; the typestore comes from rosbags. Bad messages raise ``ValueError`` from :func:`walk`.
 """
@@ -21,6 +23,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from r2d2_viz.msgs.generic.message_path import picks
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
@@ -34,6 +38,8 @@ SIZES |= {"int32": 4, "uint32": 4, "float32": 4, "int64": 8, "uint64": 8, "float
 DTYPES = {"bool": "?", "byte": "u1", "char": "u1", "octet": "u1", "int8": "i1", "uint8": "u1", "float32": "<f4"}
 DTYPES |= {"int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4", "int64": "<i8", "uint64": "<u8"}
 DTYPES |= {"float64": "<f8"}
+BIG = {k: v.replace("<", ">") for k, v in DTYPES.items()}
+"""Big-endian CDR's."""
 _BYTES = {"uint8", "int8", "byte", "char", "octet"}
 
 
@@ -46,6 +52,8 @@ class Number:
     count: int | None = None
     summary: bool = False
     """Read as ``NAME.len``, ``NAME.min``, ``NAME.max``."""
+    picked: bool = False
+    """Read because a path names it (an item of a summarised array, or counted from the end)."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +71,8 @@ class Layout:
     """``(offset, length)`` of each text (without its NUL)."""
     lengths: tuple[tuple[str, int], ...] = ()
     """Long arrays of messages or strings: ``(NAME.len, count)``."""
+    little: bool = True
+    """Little-endian CDR (else big)."""
 
     @property
     def names(self) -> tuple[object, ...]:
@@ -72,10 +82,13 @@ class Layout:
 
 
 class _Walk:
-    def __init__(self, store: Typestore, data: bytes | memoryview) -> None:
-        if len(data) < 4 or bytes(data[:2]) != b"\x00\x01":
-            raise ValueError("not little-endian CDR")
+    def __init__(self, store: Typestore, data: bytes | memoryview, keep: frozenset[str], ros1: bool) -> None:
+        if len(data) < 4 or bytes(data[:2]) not in (b"\x00\x01", b"\x00\x00"):
+            raise ValueError("not CDR (an unknown encapsulation)")
         self.store, self.data, self.pos, self.quiet = store, data, 4, 0
+        self.keep, self.picks = keep, picks(keep)
+        self.little = data[1] == 1
+        self.dtypes = (DTYPES if self.little else BIG) | ({"byte": "i1"} if ros1 else {})  # ROS 1's byte: int8
         self.checks: list[tuple[int, int]] = []
         self.numbers: list[Number] = []
         self.offsets: list[int] = []
@@ -93,7 +106,7 @@ class _Walk:
     def u32(self) -> int:
         self.align(4)
         self.need(4)
-        value = int.from_bytes(self.data[self.pos : self.pos + 4], "little")
+        value = int.from_bytes(self.data[self.pos : self.pos + 4], "little" if self.little else "big")
         self.checks.append((self.pos, value))
         self.pos += 4
         return value
@@ -124,7 +137,7 @@ class _Walk:
                 raise ValueError(f"shorter than its definition (a length field of {length})")
             if typ == "string" and (length == 0 or self.data[self.pos + length - 1] != 0):
                 raise ValueError("a string without its terminating NUL")
-            if not self.quiet and typ == "string":
+            if typ == "string" and (not self.quiet or name in self.keep):
                 self.texts.append(name)
                 self.spans.append((self.pos, length - 1))
             self.pos += length * width
@@ -132,8 +145,8 @@ class _Walk:
         size = SIZES[typ]
         self.align(size)
         self.need(size)
-        if not self.quiet:
-            self.numbers.append(Number(name, DTYPES[typ]))
+        if not self.quiet or name in self.keep:
+            self.numbers.append(Number(name, self.dtypes[typ], picked=bool(self.quiet)))
             self.offsets.append(self.pos)
         self.pos += size
 
@@ -144,33 +157,58 @@ class _Walk:
             if count:
                 self.align(size)
             self.need(size * count)
+            summary = count > MAX_ITEMS or (not fixed and typ in _BYTES)
             if not self.quiet:
-                summary = count > MAX_ITEMS or (not fixed and typ in _BYTES)
-                self.numbers.append(Number(name, DTYPES[typ], count, summary))
+                self.numbers.append(Number(name, self.dtypes[typ], count, summary))
                 self.offsets.append(self.pos)
+            if f"{name}[:]" in self.keep:  # a slice: every item, one column of rows of ``count``
+                self.numbers.append(Number(f"{name}[:]", self.dtypes[typ], count, picked=True))
+                self.offsets.append(self.pos)
+            for k in self.picks.get(name, ()):  # items a path names that the above does not give
+                i = k if k >= 0 else count + k
+                if (self.quiet or summary or k < 0) and 0 <= i < count and f"{name}[{k}]" in self.keep:
+                    self.numbers.append(Number(f"{name}[{k}]", self.dtypes[typ], picked=True))
+                    self.offsets.append(self.pos + size * i)
             self.pos += size * count
             return
         long = count > MAX_NESTED
         if long and not self.quiet:
             self.lengths.append((f"{name}.len", count))
+        from_end = {count + k: k for k in self.picks.get(name, ()) if -count <= k < 0}
         self.quiet += long
         for i in range(count):
-            if sub[0] == 1:
-                self.base(f"{name}[{i}]", sub[1][0])
-            else:
-                self.message(sub[1], f"{name}[{i}].")
+            if i in from_end:  # walked once more under the name the path gives it, keeping only what it names
+                pos, checks = self.pos, len(self.checks)
+                self.quiet += 1
+                self.item(f"{name}[{from_end[i]}]", sub)
+                self.quiet -= 1
+                self.pos = pos
+                del self.checks[checks:]
+            self.item(f"{name}[{i}]", sub)
         self.quiet -= long
 
+    def item(self, name: str, sub: Any) -> None:
+        if sub[0] == 1:
+            self.base(name, sub[1][0])
+        else:
+            self.message(sub[1], name + ".")
 
-def walk(store: Typestore, msgtype: str, data: bytes | memoryview) -> Layout:
-    """The layout of one message of ``msgtype`` (defined in ``store``); ``ValueError`` naming what is wrong."""
-    w = _Walk(store, data)
+
+def walk(
+    store: Typestore, msgtype: str, data: bytes | memoryview, keep: frozenset[str] = frozenset(), *, ros1: bool = False
+) -> Layout:
+    """The layout of one message of ``msgtype`` (defined in ``store``); ``ValueError`` naming what is wrong (as
+    rosbags: more than 3 bytes left over is a size mismatch). ``keep``: names read whatever the summary (the items
+    paths name); ``ros1``: a ROS 1 definition (its ``byte`` is signed)."""
+    w = _Walk(store, data, keep, ros1)
     try:
         w.message(msgtype, "")
     except (KeyError, IndexError) as exc:
         raise ValueError(f"cannot be read ({type(exc).__name__})") from None
-    n = tuple(w.numbers)
-    return Layout(len(data), tuple(w.checks), n, tuple(w.offsets), tuple(w.texts), tuple(w.spans), tuple(w.lengths))
+    if w.pos + 3 < len(data):
+        raise ValueError("longer than its definition (size mismatch)")
+    n, spans = tuple(w.numbers), tuple(w.spans)
+    return Layout(len(data), tuple(w.checks), n, tuple(w.offsets), tuple(w.texts), spans, tuple(w.lengths), w.little)
 
 
 @dataclass
@@ -181,6 +219,8 @@ class Columns:
     numbers: dict[str, np.ndarray] = field(default_factory=dict)
     texts: dict[str, np.ndarray] = field(default_factory=dict)
     """Arrays of ``str`` (object)."""
+    picked: frozenset[str] = frozenset()
+    """Numbers read only because a path names them (not part of the topic's own fields)."""
 
     def __len__(self) -> int:
         return len(self.times_ns)
@@ -190,18 +230,21 @@ class Columns:
             self.times_ns[rows],
             {k: v[rows] for k, v in self.numbers.items()},
             {k: v[rows] for k, v in self.texts.items()},
+            self.picked,
         )
 
 
 def matching(layout: Layout, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """Which messages (``buf[starts[i] : starts[i] + lengths[i]]``) have ``layout`` (a bool mask)."""
-    ok: np.ndarray = (lengths == layout.size) & (buf[starts] == 0) & (buf[starts + 1] == 1)
+    ok: np.ndarray = (lengths == layout.size) & (buf[starts] == 0) & (buf[starts + 1] == int(layout.little))
     if not ok.any() or not layout.checks:
         return ok
     where = np.flatnonzero(ok)
     positions = np.array([p for p, _ in layout.checks], dtype=np.int64)
     values = np.array([v for _, v in layout.checks], dtype=np.uint32)
-    found = buf[starts[where, None, None] + positions[None, :, None] + np.arange(4)].view("<u4")[..., 0]
+    found = buf[starts[where, None, None] + positions[None, :, None] + np.arange(4)].view(
+        "<u4" if layout.little else ">u4"
+    )[..., 0]
     ok[where] = (found == values).all(axis=1)
     return ok
 
@@ -211,6 +254,8 @@ def gather(buf: np.ndarray, at: np.ndarray, dtype: str, count: int | None) -> np
     width = np.dtype(dtype).itemsize * (1 if count is None else count)
     raw = buf[at[:, None] + np.arange(width)]
     values: np.ndarray = raw.view(dtype) if dtype != "?" else raw != 0
+    if dtype[0] == ">":
+        values = values.astype(dtype.replace(">", "<"))  # native for Arrow
     return values[:, 0] if count is None else values
 
 
@@ -250,14 +295,15 @@ def read_columns(
     every message's); only the ``wanted`` names (None: all)."""
     first = layouts[0]
     same = len(layouts) == 1
-    out = Columns(times_ns)
+    out = Columns(times_ns, picked=frozenset(n.name for n in first.numbers if n.picked))
     bad = np.zeros(len(starts), dtype=bool)
     for j, number in enumerate(first.numbers):
         at = starts + (first.offsets[j] if same else np.array([x.offsets[j] for x in layouts]))
         if number.summary:
             _summary(out, buf, at, number, layouts if not same else None, j, wanted)
             continue
-        names = [number.name] if number.count is None else [f"{number.name}[{i}]" for i in range(number.count)]
+        whole = number.count is None or number.picked  # one column (a slice's: rows of ``count`` items)
+        names = [number.name] if whole else [f"{number.name}[{i}]" for i in range(number.count or 0)]
         if not names or (wanted is not None and not wanted.intersection(names)):
             continue
         values = gather(buf, at, number.dtype, number.count)
@@ -265,7 +311,7 @@ def read_columns(
             bad |= ~np.isfinite(values).reshape(len(starts), -1).all(axis=1)
         for i, name in enumerate(names):
             if wanted is None or name in wanted:
-                out.numbers[name] = values if number.count is None else values[:, i]
+                out.numbers[name] = values if whole else values[:, i]
     for j, name in enumerate(first.texts):
         if wanted is None or name in wanted:
             out.texts[name] = _texts(buf, starts, [x.text_spans[j] for x in layouts], problems)

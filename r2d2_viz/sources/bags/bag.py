@@ -122,6 +122,11 @@ class Bag:
         spans = [s for f in self._files if (s := f.span) is not None]
         return (min(s[0] for s in spans), max(s[1] for s in spans)) if spans else None
 
+    def file_topic(self, topic: str, file: int) -> TopicInfo | None:
+        """``topic`` as the ``file``-th storage file has it (its own definition); None: not in that file."""
+        own = self._names[file].get(topic) if 0 <= file < len(self._names) else None
+        return self._files[file].topics[own[0]] if own else None
+
     def topic_type(self, topic: str) -> str | None:
         info = self.topics.get(topic)
         return info.msgtype if info else None
@@ -147,8 +152,8 @@ class Bag:
         said: list[str] = []  # damage met in this pass: said once, in one warning, at its end
         got = [0]
         reads = [
-            (f.span, _file_blocks(f, own, order, (start_ns, stop_ns), len(self._files) == 1, said, got))
-            for f, names in zip(self._files, self._names, strict=True)
+            (f.span, _file_blocks(f, k, own, order, (start_ns, stop_ns), len(self._files) == 1, said, got))
+            for k, (f, names) in enumerate(zip(self._files, self._names, strict=True))
             if (own := [n for t in wanted for n in names.get(t, ())])
         ]
         for group in overlapping_files([span for span, _ in reads]):
@@ -275,6 +280,7 @@ def _merged_topics(
 
 def _file_blocks(
     f: Storage,
+    k: int,
     own: list[str],
     order: tuple[str, ...],
     stretch: tuple[int | None, int | None],
@@ -282,13 +288,13 @@ def _file_blocks(
     said: list[str],
     got: list[int],
 ) -> Iterator[Block]:
-    """One file's blocks of its topics ``own``, renamed to the bag's ``order``; its damage noted in ``said``
+    """The ``k``-th file's blocks of its topics ``own``, renamed to the bag's ``order``; its damage noted in ``said``
     (raised, when ``alone`` in its bag and nothing could be read), the messages counted in ``got``."""
     before = got[0]
     try:
         for block in f.blocks(own, start_ns=stretch[0], stop_ns=stretch[1]):
             got[0] += len(block)
-            yield renamed(block, order)
+            yield dataclasses.replace(renamed(block, order), file=k)
     except Exception as exc:  # a truncated or corrupt storage file, whatever the library raises
         if got[0] == before and alone:
             raise BagError(f"{f.path}: cannot read {listed(order)}: {_problem(exc)}") from None

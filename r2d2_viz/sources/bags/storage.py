@@ -45,6 +45,8 @@ class Block:
     read_nbytes: int = 0
     """Bytes the storage read or decompressed to give these messages, where that is more than their own (a
     compressed chunk, decompressed whole for a few of its messages); 0: just theirs."""
+    file: int = -1
+    """Which of its bag's storage files the messages come from (-1: several, or not said): their definitions."""
 
     def __len__(self) -> int:
         return len(self.times_ns)
@@ -78,6 +80,7 @@ class Block:
             self.starts[rows],
             self.lengths[rows],
             self.read_nbytes,
+            self.file,
         )
 
     def compacted(self) -> Block:
@@ -87,7 +90,9 @@ class Block:
         np.cumsum(self.lengths[:-1], out=starts[1:])
         gather = np.repeat(self.starts - starts, self.lengths) + np.arange(self.nbytes, dtype=np.int64)
         data = np.frombuffer(self.buffer, dtype=np.uint8)[gather]
-        return Block(self.times_ns, self.topic_index, self.topics, data.data, starts, self.lengths, self.cost)
+        return Block(
+            self.times_ns, self.topic_index, self.topics, data.data, starts, self.lengths, self.cost, self.file
+        )
 
     def messages(self) -> Iterator[tuple[int, str, memoryview]]:
         """``(time ns, topic, data)`` of each message, in order."""
@@ -167,7 +172,9 @@ def renamed(block: Block, order: tuple[str, ...]) -> Block:
     if block.topics == order:
         return block
     places = np.array([order.index(topic_name(t)) for t in block.topics], dtype=np.int32)
-    return Block(block.times_ns, places[block.topic_index], order, block.buffer, block.starts, block.lengths)
+    return Block(
+        block.times_ns, places[block.topic_index], order, block.buffer, block.starts, block.lengths, file=block.file
+    )
 
 
 def topic_tuple(topics: Collection[str]) -> tuple[str, ...]:

@@ -60,10 +60,10 @@ def test_layouts_are_matched_not_walked_message_by_message() -> None:
 
     real = fd.walk
 
-    def counted(*args: Any) -> Any:
+    def counted(*args: Any, **kwargs: Any) -> Any:
         nonlocal walks
         walks += 1
-        return real(*args)
+        return real(*args, **kwargs)
 
     fd.walk = counted  # type: ignore[assignment]
     try:
@@ -117,3 +117,28 @@ def test_an_array_length_field_of_2_to_the_31_skips_that_message_only() -> None:
     rows = decoded("/arm_controller/state", STATE, data, decoder)
     assert rows[1] == {} and rows[2]["joint_names[2]"] == "panda_joint3" and rows[0]["error.positions[2]"] == 0.05
     assert decoder.problems.lines() == ["1 message skipped: shorter than its definition (a length field of 2147483648)"]
+
+
+def test_named_items_of_summarised_arrays_are_read_the_rest_summarised() -> None:
+    """`keep`: the items a path names, read whatever the summary; golden values from rosbags' deserializer."""
+    data = [d for t, _, d in messages(40) if t == "/battery"]
+    keep = frozenset({"blob[5]", "blob[-1]", "cells[-1].charge", "events[-1]"})
+    got = decoded("/battery", BATTERY, data, FieldDecoder(TS, BATTERY, None, keep))
+    for raw, fields in zip(data, got, strict=True):
+        msg = TS.deserialize_cdr(raw, BATTERY)
+        want = {"blob[5]": msg.blob[5] if len(msg.blob) > 5 else None}
+        want |= {"blob[-1]": msg.blob[-1] if len(msg.blob) else None}
+        want |= {"cells[-1].charge": msg.cells[-1].charge if msg.cells else None}
+        want |= {"events[-1]": msg.events[-1] if len(msg.events) else None}
+        for name, value in want.items():
+            assert fields.get(name) == value, (name, fields.get(name), value)
+        assert "blob.len" in fields  # the summary stays
+
+
+def test_a_message_longer_than_its_definition_is_a_size_mismatch() -> None:
+    from r2d2_viz.msgs.generic.fields import walk
+
+    raw = bytes(TS.serialize_cdr(TS.deserialize_cdr(messages(1)[0][2], BATTERY), BATTERY))
+    walk(TS, BATTERY, raw + b"\0\0\0")  # CDR's padding: fine (as rosbags)
+    with pytest.raises(ValueError, match="size mismatch"):
+        walk(TS, BATTERY, raw + b"\0" * 4)
