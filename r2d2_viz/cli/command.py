@@ -101,6 +101,10 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError("--headless shows nothing; it cannot be combined with a sink")
     if args.bag is not None and args.motion is not None:
         raise UsageError("--motion and --bag both say what moves the robot; choose one")
+    if args.tf_tree is not None and not (live or args.save or args.headless):
+        from r2d2_viz.cli.system import tf_tree_main
+
+        return tf_tree_main(args)
     if args.list and not args.ros:
         if args.bag is None:
             raise UsageError("--list lists the topics of a live ROS 2 graph or a bag: use it with --ros or --bag PATH")
