@@ -72,3 +72,17 @@ def rate_and_gap(times: list[int]) -> tuple[float, float]:
     """messages − 1 over the span (Hz), and the largest gap (s)."""
     t = np.sort(np.asarray(times, dtype=np.int64))
     return (len(t) - 1) / ((t[-1] - t[0]) / S), float(np.diff(t).max()) / S
+
+
+def real_bag(name: str) -> Path:
+    """A third-party bag of tests/data/bags/real/README.md, where a clone or the developers keep it; skips without."""
+    import pytest
+
+    repo = Path(__file__).resolve().parents[1]
+    for place in (repo / "tests" / "data" / "bags" / "real", repo.parent / "shared" / "bags" / "real"):
+        if (place / name / "metadata.yaml").is_file():
+            return place / name
+    pytest.skip(
+        f"the third-party bag {name} is not in this clone: put its files in tests/data/bags/real/{name}/ "
+        "(tests/data/bags/real/README.md says where it comes from)"
+    )

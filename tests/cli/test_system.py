@@ -11,9 +11,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import cli
-from tfbags import MS, T0, bag, edge_every, point, rate_and_gap, reference_edges, reference_static, spec, static
+from tfbags import (
+    MS,
+    T0,
+    bag,
+    edge_every,
+    point,
+    rate_and_gap,
+    real_bag,
+    reference_edges,
+    reference_static,
+    spec,
+    static,
+)
 
-REAL = Path(__file__).resolve().parents[2].parent / "shared" / "bags" / "real"
 EDGE = re.compile(r"^ *(\S.*) ← (\S.*): (static|(\S+) Hz, largest gap (\S+) s|.*no rate)$")
 
 
@@ -82,9 +93,7 @@ def test_bad_usage_is_one_line(tmp_path: Path, args: list[str], words: str) -> N
 
 
 def test_a_real_bag_every_edge_at_rosbags_rate() -> None:
-    path = REAL / "webots_epuck"
-    if not (path / "metadata.yaml").is_file():
-        pytest.skip(f"the real bag {path} is not here (../shared/bags/real/)")
+    path = real_bag("webots_epuck")
     done = cli("--bag", str(path), "--tf-tree")
     assert done.returncode == 0, done.stderr
     edges = parsed(done.stdout)

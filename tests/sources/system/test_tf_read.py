@@ -8,12 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
-from tfbags import MS, T0, TS, bag, edge_every, point, spec
+from tfbags import MS, T0, TS, bag, edge_every, point, real_bag, spec
 
 from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.system.tf_read import has_header, read_bag
-
-REAL = Path(__file__).resolve().parents[3].parent / "shared" / "bags" / "real"
 
 
 def reference_headers(path: Path) -> list[tuple[str, str, int, int]]:
@@ -57,8 +55,6 @@ def test_header_frames_and_stamps_agree_with_rosbags(tmp_path: Path, storage: st
 
 
 def test_header_frames_of_a_real_bag_agree_with_rosbags() -> None:
-    path = REAL / "webots_epuck"
-    if not (path / "metadata.yaml").is_file():
-        pytest.skip(f"the real bag {path} is not here (../shared/bags/real/)")
+    path = real_bag("webots_epuck")
     expected = reference_headers(path)
     assert len(expected) > 10_000 and ours(path) == expected
