@@ -101,10 +101,12 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError("--headless shows nothing; it cannot be combined with a sink")
     if args.bag is not None and args.motion is not None:
         raise UsageError("--motion and --bag both say what moves the robot; choose one")
-    if args.tf_tree is not None and not (live or args.save or args.headless):
-        from r2d2_viz.cli.system import tf_tree_main
+    if args.tf_tree is not None:
+        from r2d2_viz.cli.system import tf_tree_main, tf_tree_sink
 
-        return tf_tree_main(args)
+        if not (live or args.save or args.headless):
+            return tf_tree_main(args)
+        tf_tree_sink(args)
     if args.list and not args.ros:
         if args.bag is None:
             raise UsageError("--list lists the topics of a live ROS 2 graph or a bag: use it with --ros or --bag PATH")
@@ -168,6 +170,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         progress=wanted(),
         tool_topics=parse_tool_topics(args.tool_topic),
         plots=tuple(tuple(p) for p in args.plot),
+        tf_tree=args.tf_tree is not None,
     )
 
     def on_ready(message: str) -> None:

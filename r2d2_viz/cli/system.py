@@ -47,3 +47,14 @@ def tf_tree_main(args: argparse.Namespace) -> int:
     if out is not None:
         print(f"r2d2-viz: wrote {out}", file=sys.stderr)
     return EXIT_OK
+
+
+def tf_tree_sink(args: argparse.Namespace) -> None:
+    """``--tf-tree`` with a sink: the recording gets the TF graph view; a FILE belongs to the printed tree."""
+    if args.tf_tree != "-":
+        raise UsageError(
+            f"--tf-tree {args.tf_tree}: the graph file goes with the printed tree; with a viewer or --save the "
+            "recording holds the TF graph (give --tf-tree alone)"
+        )
+    if args.bag is None and not args.ros:
+        raise UsageError("--tf-tree shows the TF tree of a bag or a live graph: use it with --bag PATH or --ros")

@@ -126,3 +126,10 @@ def test_live_tree_of_a_dds_peer() -> None:
     rate = float(edges["odom", "base_link"].split()[0])
     assert 15 < rate <= 20.5, done.stdout
     assert "problems: none" in done.stdout
+
+
+def test_a_graph_file_with_a_sink_is_refused(tmp_path: Path) -> None:
+    path = crafted(tmp_path)
+    done = cli("--bag", str(path), "--tf-tree", "t.dot", "--save", str(tmp_path / "o.rrd"), cwd=tmp_path)
+    assert done.returncode == 2 and "give --tf-tree alone" in done.stderr and done.stderr.count("\n") == 1
+    assert not (tmp_path / "o.rrd").exists() and not (tmp_path / "t.dot").exists()
