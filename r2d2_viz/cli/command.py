@@ -223,12 +223,15 @@ def _no_display(serving: str, port: int, web_port: int) -> str:
 
 def _list_bag(path: Path) -> int:
     """``r2d2-viz --bag PATH --list``: every topic, however many (warnings show the first few), like ``ros2 bag
-    info``."""
+    info``, with its rate and bandwidth over the bag (``ros2 topic hz`` / ``bw``: one pass over its messages)."""
     from r2d2_viz.sources.bags.bag import open_bag
+    from r2d2_viz.sources.system.topic_rates import rate_words, topic_rates
 
     with open_bag(path) as bag:
+        rates = topic_rates(bag)
         for info in sorted(bag.topics.values(), key=lambda t: t.name):
-            print(f"{info.name} [{info.msgtype}] {info.count} message{'' if info.count == 1 else 's'}", flush=True)
+            count = f"{info.count} message{'' if info.count == 1 else 's'}"
+            print(f"{info.name} [{info.msgtype}] {count}{rate_words(rates.get(info.name))}", flush=True)
     return EXIT_OK
 
 
