@@ -40,7 +40,7 @@ from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
-from r2d2_viz.viewer.system.tf_graph import TfGraph
+from r2d2_viz.viewer.system.health import system_views
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
@@ -222,7 +222,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             for note in (*plan.notes, *view.notes):
                 notices.report(note)
             recorded = RecordedTf(rec, clock=clock, skip=set(plan.skip_edges), axis_length=view.axis_length)
-            recorded.graph = TfGraph(rec, clock=clock) if config.tf_tree else None
+            recorded.graph = system_views(rec, clock, plan.replay) if config.tf_tree else None
             if plan.static_tf is not None:
                 recorded.log(plan.static_tf)
             displays = None

@@ -110,8 +110,9 @@ class TfGraph:
             upto = int(np.searchsorted(times, t, side="right"))
             np.maximum.at(last, codes[:upto], times[:upto])
             span = np.minimum(self.window_ns, t - self._first) / 1e9
+            partial = t - self.window_ns < self._first  # the edge's first message starts the span
             with np.errstate(divide="ignore", invalid="ignore"):
-                rate = np.where(span > 0, counts / span, np.nan)
+                rate = np.where(span > 0, (counts - partial) / span, np.nan)
             age = np.where(last == NEVER, np.nan, (t - last) / 1e9)
             text = list(frames)
             color = [ROOT_COLOR if f in roots else STATIC_COLOR for f in frames]

@@ -56,8 +56,8 @@ def test_rates_ages_and_stale_frames_at_each_snapshot(tmp_path: Path) -> None:
     assert at_3s["wheel"] == ("wheel\n0 Hz · 2.5 s", STALE_COLOR)
     assert at_3s["laser"] == ("laser\nstatic", STATIC_COLOR) and at_3s["odom"][0] == "odom"
     at_0_5 = snapshot(rows, rows.times.index(T0 + S // 2, 1))
-    # at 0.5 s: 10 wheel messages over the 0.5 s since it first came → 20 Hz; the last at 0.45 s
-    assert at_0_5["wheel"] == ("wheel\n20 Hz · 0.05 s", FRESH_COLOR)
+    # at 0.5 s: 9 wheel messages after its first, over the 0.5 s since it came → 18 Hz; the last at 0.45 s
+    assert at_0_5["wheel"] == ("wheel\n18 Hz · 0.05 s", FRESH_COLOR)
     edges = rows.temporal["GraphEdges:edges"][-1]
     assert {(e["first"], e["second"]) for e in edges} == {
         ("base_link", "laser"),
