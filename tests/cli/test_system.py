@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import cli
+from rrd import read_recording
 from tfbags import (
     MS,
     T0,
@@ -109,17 +110,21 @@ def test_a_real_bag_every_edge_at_rosbags_rate() -> None:
         )
 
 
-def test_live_tree_of_a_dds_peer() -> None:
+def test_live_tree_of_a_dds_peer(tmp_path: Path) -> None:
     from sources.live import ros_node
 
     if (missing := ros_node.netns_missing()) is not None:
         ros_node.unavailable(missing)
     peer = Path(__file__).resolve().parents[1] / "sources" / "live" / "nodes" / "tf_peer.py"
     exe = str(Path(sys.executable).parent / "r2d2-viz")
-    listen = f'"{exe}" --ros --tf-tree --duration 3; rc=$?; kill %1 2>/dev/null; exit $rc'
-    script = f'"{sys.executable}" "{peer}" 8 & sleep 1; {listen}'
-    done = ros_node.in_netns(["sh", "-c", script], timeout=120)
+    saved = tmp_path / "live.rrd"
+    listen = f'"{exe}" --ros --tf-tree --duration 3 && "{exe}" --ros --tf-tree --duration 2 --save "{saved}"'
+    script = f'"{sys.executable}" "{peer}" 12 & sleep 1; {listen}; rc=$?; kill %1 2>/dev/null; exit $rc'
+    done = ros_node.in_netns(["sh", "-c", script], timeout=180)
     assert done.returncode == 0, done.stderr
+    assert "Warning" not in done.stderr, done.stderr
+    graph = read_recording(saved)["/tf_tree"]  # the same peer, its TF graph in a recording
+    assert len(graph.times) >= 2 and set(graph.temporal["GraphNodes:node_ids"][-1]) == {"odom", "base_link", "head"}
     edges = parsed(done.stdout)
     assert set(edges) == {("odom", "base_link"), ("base_link", "head")}, done.stdout
     # tf_peer.py writes both transforms in one message every 50 ms (a sleep after each write): just under 20 Hz

@@ -128,7 +128,7 @@ class TfGraph:
             colors += color
         k = len(due)
         nodes = rr.GraphNodes.columns(
-            node_ids=frames * k, labels=labels, colors=colors, positions=np.tile(positions, (k, 1))
+            node_ids=frames * k, labels=labels, colors=np.array(colors, np.uint32), positions=np.tile(positions, (k, 1))
         ).partition([len(frames)] * k)
         links = [*rr.GraphEdges.columns(edges=self.edges * k).partition([len(self.edges)] * k)] if self.edges else []
         kind = rr.GraphEdges.columns(graph_type=["directed"] * k)  # one per snapshot
