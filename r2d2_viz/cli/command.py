@@ -236,16 +236,22 @@ def _list_bag(path: Path) -> int:
 
 
 def _list_topics() -> int:
-    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts; an empty graph says where
+    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts, then each node with what it
+    publishes and subscribes (``ros2 node list`` + ``ros2 node info``); an empty graph says where
     it was searched and how to check (exit 0, like ``ros2 topic list``: an empty graph is an answer, not an error)."""
-    from r2d2_viz.sources.live.dds import LIST_SECONDS, list_topics
+    from r2d2_viz.sources.live.dds import LIST_SECONDS, NODE_SECONDS, list_topics
     from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, EMPTY_LIST_NEXT
 
-    topics, discovery = list_topics()
+    topics, nodes, discovery = list_topics()
     for topic, msgtype, publishers in topics:
         print(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}", flush=True)
+    for node in nodes:  # then ros2 node list, each with ros2 node info's topics
+        print(f"node {node.name}", flush=True)
+        for verb, ends in (("publishes", node.publishes), ("subscribes", node.subscribes)):
+            for topic, msgtype in ends:
+                print(f"  {verb} {topic} [{msgtype}]", flush=True)
     if not topics:
-        searched = f"no topics after {LIST_SECONDS:g} s of discovery on {discovery.searched()}"
+        searched = f"no topics after {max(LIST_SECONDS, NODE_SECONDS):g} s of discovery on {discovery.searched()}"
         print(f"r2d2-viz: {searched}", file=sys.stderr)  # what was searched, then how to check: two short lines
         print(f"r2d2-viz: {EMPTY_GRAPH_HINT}; {EMPTY_LIST_NEXT}", file=sys.stderr, flush=True)
     return EXIT_OK
