@@ -138,3 +138,28 @@ def test_a_graph_file_with_a_sink_is_refused(tmp_path: Path) -> None:
     done = cli("--bag", str(path), "--tf-tree", "t.dot", "--save", str(tmp_path / "o.rrd"), cwd=tmp_path)
     assert done.returncode == 2 and "give --tf-tree alone" in done.stderr and done.stderr.count("\n") == 1
     assert not (tmp_path / "o.rrd").exists() and not (tmp_path / "t.dot").exists()
+
+
+def test_a_real_ros1_bag_of_two_turtles_at_rosbags_rate() -> None:
+    # tests/data/bags/ros1: turtlesim's tf tutorial recorded by ROS 1's rosbag (two turtles and a carrot frame);
+    # rosbags' own ROS 1 reader gives the reference
+    path = Path(__file__).resolve().parents[1] / "data" / "bags" / "ros1" / "example-lz4.bag"
+    done = cli("--bag", str(path), "--tf-tree")
+    assert done.returncode == 0, done.stderr
+    edges = parsed(done.stdout)
+    reference = reference_edges(path)
+    assert (
+        set(edges)
+        == set(reference) | reference_static(path)
+        == {
+            ("world", "turtle1"),
+            ("world", "turtle2"),
+            ("turtle1", "carrot"),
+        }
+    )
+    for edge, times in reference.items():
+        rate, gap = rate_and_gap(times)
+        m = EDGE.match(f"x ← y: {edges[edge]}")
+        assert m is not None and float(m[4]) == pytest.approx(rate, rel=0.05)
+        assert float(m[5]) == pytest.approx(gap, rel=0.01)
+    assert done.stdout.rstrip().endswith("problems: none")
