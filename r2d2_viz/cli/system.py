@@ -58,3 +58,5 @@ def tf_tree_sink(args: argparse.Namespace) -> None:
         )
     if args.bag is None and not args.ros:
         raise UsageError("--tf-tree shows the TF tree of a bag or a live graph: use it with --bag PATH or --ros")
+    if args.save is not None and args.save.suffix == ".mcap":
+        raise UsageError(f"--save {args.save}: a bag has no graph view; --tf-tree goes with a recording (.rrd)")

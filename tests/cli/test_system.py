@@ -135,6 +135,9 @@ def test_live_tree_of_a_dds_peer(tmp_path: Path) -> None:
 
 def test_a_graph_file_with_a_sink_is_refused(tmp_path: Path) -> None:
     path = crafted(tmp_path)
+    done = cli("--bag", str(path), "--tf-tree", "--save", str(tmp_path / "o.mcap"))
+    assert done.returncode == 2 and "a bag has no graph view" in done.stderr and done.stderr.count("\n") == 1
+    assert not (tmp_path / "o.mcap").exists()
     done = cli("--bag", str(path), "--tf-tree", "t.dot", "--save", str(tmp_path / "o.rrd"), cwd=tmp_path)
     assert done.returncode == 2 and "give --tf-tree alone" in done.stderr and done.stderr.count("\n") == 1
     assert not (tmp_path / "o.rrd").exists() and not (tmp_path / "t.dot").exists()
