@@ -49,6 +49,7 @@ from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording, update_blueprint
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
+from r2d2_viz.viewer.system.tf_graph import TfGraph
 from r2d2_viz.viewer.tf_recorded import RecordedTf
 
 POLL_SECONDS = 0.02
@@ -86,6 +87,8 @@ class LiveConfig(Protocol):
     def tool_topics(self) -> tuple[tuple[str, str], ...]: ...
     @property
     def video(self) -> EncoderName | None: ...
+    @property
+    def tf_tree(self) -> bool: ...
 
 
 def run_live(
@@ -121,7 +124,8 @@ def run_on(
     batches = _settle(source, model, deadline)
     plan, view = _plan(config, model.robot, batches)
     # the graph's log, diagnostics, fixes and sensors when the view is planned: their views (later ones: below)
-    view = dataclasses.replace(view, layout=with_telemetry(view.layout, source.display_topics))
+    layout = dataclasses.replace(view.layout, tf_graph=config.tf_tree)
+    view = dataclasses.replace(view, layout=with_telemetry(layout, source.display_topics))
     output = _Output(config.sink)
     lateness = LatenessLog.from_env()
     tools = None
@@ -292,6 +296,7 @@ class _Scene:
         for note in view.notes:
             self.notices.report(note)
         self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
+        self.recorded.graph = TfGraph(rec, clock="timestamp") if config.tf_tree else None
         self.feed = DisplayFeed(
             self.notices,
             clock="timestamp",

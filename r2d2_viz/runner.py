@@ -40,6 +40,7 @@ from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
+from r2d2_viz.viewer.system.health import system_views
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
 
 BATCH_CHUNK_SAMPLES = 20_000
@@ -94,6 +95,7 @@ class RunConfig:
     """``--plot`` paths of a bag's fields, one time-series view per flag (:mod:`r2d2_viz.msgs.generic.message_path`)."""
     video: EncoderName | None = None
     """Encode 8-bit camera images as video (``--video``: av1 or h264); None: lossless ``Image`` s."""
+    tf_tree: bool = False  # --tf-tree with a sink: the TF tree as a graph view (r2d2_viz/viewer/system/tf_graph.py)
 
     @property
     def live(self) -> bool:
@@ -115,9 +117,7 @@ class RunResult:
     samples: int
     interrupted: bool
     saved: Path | None
-    what: str = "samples"
-    """What ``samples`` counts, for the summary: a motion's samples, a bag's joint states, or — in a bag without
-    joint states — its transforms and display messages."""
+    what: str = "samples"  # what ``samples`` counts: a motion's samples, a bag's joint states, or its messages
 
 
 def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -155,8 +155,7 @@ def _ros1(files: tuple[Path, ...]) -> bool:
 
 
 def _counted(config: RunConfig, plan: RunPlan, samples: int) -> str:
-    """What a run without ``--ros`` counted (batch and paced runs count the robot's samples when something moves
-    it and gave any, else the transforms and display messages handed on)."""
+    """What a run without ``--ros`` counted: the robot's samples when some moved it, else the messages handed on."""
     if config.bag is None:
         return "samples"
     if plan.moves_robot and samples:
@@ -208,8 +207,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
     fields = fields_run(plan, config.plots, clock, header_time=config.time == "header")
-    if config.plots:
-        view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, field_plots=config.plots))
+    layout = dataclasses.replace(view.layout, field_plots=config.plots, tf_graph=config.tf_tree)
+    view = dataclasses.replace(view, layout=layout)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
@@ -223,6 +222,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             for note in (*plan.notes, *view.notes):
                 notices.report(note)
             recorded = RecordedTf(rec, clock=clock, skip=set(plan.skip_edges), axis_length=view.axis_length)
+            recorded.graph = system_views(rec, clock, plan.replay) if config.tf_tree else None
             if plan.static_tf is not None:
                 recorded.log(plan.static_tf)
             displays = None

@@ -314,7 +314,7 @@ def test_an_empty_graph_says_what_was_searched_and_how_to_check(tmp_path: Path) 
     assert listed.returncode == 0 and listed.stdout == "", listed.stderr
     searched, hint = listed.stderr.strip().splitlines()
     domain = "ROS_DOMAIN_ID 42, discovery range LOCALHOST (this machine only)"
-    assert searched == f"r2d2-viz: no topics after 2 s of discovery on {domain}"
+    assert searched == f"r2d2-viz: no topics after 5 s of discovery on {domain}"  # 5 s: nodes' names (NODE_SECONDS)
     assert hint.startswith("r2d2-viz: check that") and "ros2 topic list" in hint and "ROS_STATIC_PEERS" in hint
     # the next step is one worth taking: not the command just run, but the one that keeps waiting
     assert "--ros --list" not in hint and hint.endswith("; r2d2-viz --ros keeps waiting for publishers"), hint

@@ -119,6 +119,12 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         raise UsageError("--headless shows nothing; it cannot be combined with a sink")
     if args.bag is not None and args.motion is not None:
         raise UsageError("--motion and --bag both say what moves the robot; choose one")
+    if args.tf_tree is not None:
+        from r2d2_viz.cli.system import tf_tree_main, tf_tree_sink
+
+        if not (live or args.save or args.headless):
+            return tf_tree_main(args)
+        tf_tree_sink(args)
     if args.list and not args.ros:
         if args.bag is None:
             raise UsageError("--list lists the topics of a live ROS 2 graph or a bag: use it with --ros or --bag PATH")
@@ -182,6 +188,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         progress=wanted(),
         tool_topics=parse_tool_topics(args.tool_topic),
         plots=tuple(tuple(p) for p in args.plot),
+        tf_tree=args.tf_tree is not None,
     )
 
     def on_ready(message: str) -> None:
@@ -234,26 +241,35 @@ def _no_display(serving: str, port: int, web_port: int) -> str:
 
 def _list_bag(path: Path) -> int:
     """``r2d2-viz --bag PATH --list``: every topic, however many (warnings show the first few), like ``ros2 bag
-    info``."""
+    info``, with its rate and bandwidth over the bag (``ros2 topic hz`` / ``bw``: one pass over its messages)."""
     from r2d2_viz.sources.bags.bag import open_bag
+    from r2d2_viz.sources.system.topic_rates import rate_words, topic_rates
 
     with open_bag(path) as bag:
+        rates = topic_rates(bag)
         for info in sorted(bag.topics.values(), key=lambda t: t.name):
-            print(f"{info.name} [{info.msgtype}] {info.count} message{'' if info.count == 1 else 's'}", flush=True)
+            count = f"{info.count} message{'' if info.count == 1 else 's'}"
+            print(f"{info.name} [{info.msgtype}] {count}{rate_words(rates.get(info.name))}", flush=True)
     return EXIT_OK
 
 
 def _list_topics() -> int:
-    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts; an empty graph says where
+    """``r2d2-viz --ros --list``: like ``ros2 topic list -t``, with the publisher counts, then each node with what it
+    publishes and subscribes (``ros2 node list`` + ``ros2 node info``); an empty graph says where
     it was searched and how to check (exit 0, like ``ros2 topic list``: an empty graph is an answer, not an error)."""
-    from r2d2_viz.sources.live.dds import LIST_SECONDS, list_topics
+    from r2d2_viz.sources.live.dds import LIST_SECONDS, NODE_SECONDS, list_topics
     from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, EMPTY_LIST_NEXT
 
-    topics, discovery = list_topics()
+    topics, nodes, discovery = list_topics()
     for topic, msgtype, publishers in topics:
         print(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}", flush=True)
+    for node in nodes:  # then ros2 node list, each with ros2 node info's topics
+        print(f"node {node.name}", flush=True)
+        for verb, ends in (("publishes", node.publishes), ("subscribes", node.subscribes)):
+            for topic, msgtype in ends:
+                print(f"  {verb} {topic} [{msgtype}]", flush=True)
     if not topics:
-        searched = f"no topics after {LIST_SECONDS:g} s of discovery on {discovery.searched()}"
+        searched = f"no topics after {max(LIST_SECONDS, NODE_SECONDS):g} s of discovery on {discovery.searched()}"
         print(f"r2d2-viz: {searched}", file=sys.stderr)  # what was searched, then how to check: two short lines
         print(f"r2d2-viz: {EMPTY_GRAPH_HINT}; {EMPTY_LIST_NEXT}", file=sys.stderr, flush=True)
     return EXIT_OK

@@ -159,6 +159,17 @@ def build_parser() -> argparse.ArgumentParser:
         "with --ros the graph's topics, types and publishers (like ros2 topic list -t)",
     )
     parser.add_argument(
+        "--tf-tree",
+        nargs="?",
+        const="-",
+        default=None,
+        metavar="FILE",
+        help="print the TF tree and exit (like view_frames and tf2_monitor): each frame under its parent, static or "
+        "its rate and largest gap, then the problems; with --bag the whole bag, with --ros --duration seconds "
+        "(default 5); FILE.dot or FILE.svg also writes the graph. With a sink (--save, --spawn…): a TF tree graph "
+        "view in the recording instead, each frame's rate and age at the time cursor",
+    )
+    parser.add_argument(
         "--video",
         nargs="?",
         const="av1",

@@ -120,7 +120,7 @@ class TfLayout:
             if data[stamp + 8 : translation] != self.key[stamp + 4 : translation - 4]:
                 return False
             start = translation + 56
-        return True
+        return data[start : self.end] == self.key[start - 4 : self.end - 4]  # the count of an empty message
 
 
 def tf_layout(data: bytes | memoryview) -> TfLayout:

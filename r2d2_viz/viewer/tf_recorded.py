@@ -19,6 +19,7 @@ from r2d2_viz.viewer import entities
 from r2d2_viz.viewer.columns import encoded, f32, send, tiled, time_array
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH
 from r2d2_viz.viewer.scene import ARROW_COLOR
+from r2d2_viz.viewer.system.tf_graph import TfGraph
 
 
 class RecordedTf:
@@ -39,8 +40,12 @@ class RecordedTf:
         self.frames: set[str] = set()
         self._arrow_edges: set[tuple[str, str]] = set()
         self.rows = 0
+        self.graph: TfGraph | None = None
+        """``--tf-tree``: the TF graph view, fed every row (the URDF's edges too)."""
 
     def log(self, records: TfRecords) -> None:
+        if self.graph is not None:
+            self.graph.add(records)
         keep = np.array([(p, c) not in self.skip for p, c in zip(records.parents, records.children, strict=True)])
         if not keep.any():
             return

@@ -74,3 +74,23 @@ def test_tf_offsets_hold_rosbags_transforms(frames, seed) -> None:
     if frames:
         renamed = tf_message([(s, p + "x", c, v, q) for s, p, c, v, q in items])
         assert not layout.matches(renamed)
+
+
+def test_an_empty_tf_message_matches_only_empty_ones() -> None:
+    # found on the real Webots e-puck bag: an empty /tf_static message, then one with 58 transforms that decoded
+    # as the empty layout (zero rows), so 58 static frames were lost
+    empty = tf_layout(tf_message([]))
+    q = np.array([0.0, 0.0, 0.0, 1.0])
+    full = tf_message([(5, "base_link", f"led{k}", np.zeros(3), q) for k in range(58)])
+    assert empty.matches(tf_message([])) and not empty.matches(full)
+    one = tf_layout(tf_message([(5, "base_link", "led0", np.zeros(3), q)]))
+    assert not one.matches(tf_message([(5, "base_link", "led0", np.zeros(3), q)] * 2))  # a longer message
+
+
+def test_tf_decoder_keeps_the_transforms_after_an_empty_message() -> None:
+    from r2d2_viz.sources.bag_tf import TfDecoder
+
+    q = np.array([0.0, 0.0, 0.0, 1.0])
+    messages = [(1, tf_message([])), (2, tf_message([(5, "a", f"b{k}", np.zeros(3), q) for k in range(3)]))]
+    decoder = TfDecoder(lambda d, t: TS.deserialize_cdr(bytes(d), t), static=True, time="receive")
+    assert decoder.decode(messages).children == ("b0", "b1", "b2")

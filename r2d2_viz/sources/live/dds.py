@@ -57,6 +57,20 @@ class Publication:
     transient_local: bool
 
 
+class Node(NamedTuple):
+    """A ROS 2 node: its full name (``/namespace/name``) and the ``(topic, type)`` it publishes and subscribes."""
+
+    name: str
+    publishes: tuple[tuple[str, str], ...]
+    subscribes: tuple[tuple[str, str], ...]
+
+
+DISCOVERY, DISCOVERY_TYPE = "ros_discovery_info", "rmw_dds_common/msg/ParticipantEntitiesInfo"
+READER_AFTER = 3.5
+"""Seconds :meth:`LiveGraph.nodes` reads ``ros_discovery_info`` for once its reader exists: Fast DDS sends a late
+reader the latched samples on its next heartbeat (every 3 s by default)."""
+
+
 def cyclonedds_modules() -> dict[str, ModuleType]:
     """cyclonedds' modules, imported on first use; LiveError naming ``pip install cyclonedds`` if missing."""
     names = ("core", "domain", "topic", "sub", "pub", "builtin", "idl", "idl.types", "util")
@@ -93,11 +107,12 @@ class LiveGraph:
         distro: str = "jazzy",
         queue: int = 2000,
         latched_depth: int = 100,
+        fast_dds_types: bool = False,
     ) -> None:
         self._dds = cyclonedds_modules()
         self.distro = distro
         self.discovery = RosDiscovery.from_env(env)
-        config = self.discovery.cyclone_xml()
+        config = self.discovery.cyclone_xml(fast_dds_types=fast_dds_types)  # True: for nodes() (see cyclone_xml)
         uri = (os.environ if env is None else env).get("CYCLONEDDS_URI", "")
         if uri:
             config += "," + uri
@@ -150,6 +165,10 @@ class LiveGraph:
         for pub in self.publications():
             counts[(pub.topic, pub.ros_type)] = counts.get((pub.topic, pub.ros_type), 0) + 1
         return sorted((topic, rtype, n) for (topic, rtype), n in counts.items())
+
+    def nodes(self, timeout: float = 4.0) -> list[Node]:
+        """The ROS 2 nodes of the graph after ``timeout`` s of discovery (:func:`graph_nodes`)."""
+        return graph_nodes(self, timeout)
 
     def subscribe(self, topic: str, ros_type: str, *, wait: float = 1.0) -> Publication:
         """Read ``topic`` (``pkg/msg/T``); waits up to ``wait`` s for a writer to learn its QoS. Returns the
@@ -258,14 +277,79 @@ class LiveGraph:
             time.sleep(0.001)
 
 
+def graph_nodes(graph: LiveGraph, timeout: float) -> list[Node]:
+    """The ROS 2 nodes of the graph after ``timeout`` s of discovery, as ``ros2 node list`` / ``ros2 node info``
+    see them: their names from ``ros_discovery_info`` (rmw_dds_common's ParticipantEntitiesInfo, which every
+    ROS 2 participant publishes, latched), their topics from DDS discovery, matched by endpoint GUID."""
+    dds = graph._dds
+    policy = dds["core"].Policy
+    qos = dds["core"].Qos(
+        policy.Reliability.Reliable(max_blocking_time=0),
+        policy.Durability.TransientLocal,
+        policy.History.KeepLast(graph._latched_depth),
+    )
+    deadline = time.monotonic() + max(0.0, timeout)
+    while time.monotonic() < deadline - READER_AFTER and not any(  # a reader made before the writers are
+        getattr(p, "topic_name", None) == DISCOVERY  # known hears nothing from Fast DDS (seen with rclpy, Jazzy)
+        for p in graph._publications.read(N=4096, condition=graph._alive)
+    ):
+        time.sleep(0.1)
+    time.sleep(0.5)  # the other participants' writers, discovered with the first
+    try:
+        info = graph._types.raw_struct(DISCOVERY_TYPE)
+        reader = dds["sub"].DataReader(
+            graph._participant, dds["topic"].Topic(graph._participant, DISCOVERY, info), qos=qos
+        )
+        subscriptions = dds["builtin"].BuiltinDataReader(
+            graph._participant, dds["builtin"].BuiltinTopicDcpsSubscription
+        )
+    except Exception as exc:
+        raise LiveError(f"cannot read the graph's nodes ({DISCOVERY}): {exc}") from None
+    samples: list[Any] = []
+    deadline = max(deadline, time.monotonic() + READER_AFTER)
+    while (left := deadline - time.monotonic()) > 0:  # late joiners hear the latched history on a heartbeat
+        time.sleep(min(0.25, left))
+        samples += reader.take(N=4096)
+    endpoints: dict[bytes, tuple[str, str, bool]] = {}  # GUID → (topic, type, is a writer)
+    for kind, builtin in ((True, graph._publications), (False, subscriptions)):
+        for sample in builtin.read(N=4096, condition=graph._alive if kind else None):
+            topic = ros_topic(getattr(sample, "topic_name", "") or "")
+            rtype = ros_type(getattr(sample, "type_name", "") or "")
+            if topic is not None and rtype is not None:
+                endpoints[sample.key.bytes] = (topic, rtype, kind)
+    latest: dict[tuple[str, str], Node] = {}
+    store = typestore(graph.distro)
+    for sample in samples:
+        if not isinstance(sample, RawSample):
+            continue
+        try:
+            message: Any = store.deserialize_cdr(sample.data, DISCOVERY_TYPE)
+        except Exception:  # a participant of another distro (Humble's 24-byte gids): not ours to name
+            continue
+        for node in message.node_entities_info_seq:
+            own = [endpoints[g] for g in (bytes(x.data[:16]) for x in node.writer_gid_seq) if g in endpoints]
+            own += [endpoints[g] for g in (bytes(x.data[:16]) for x in node.reader_gid_seq) if g in endpoints]
+            name = node.node_namespace.rstrip("/") + "/" + node.node_name
+            latest[(node.node_namespace, node.node_name)] = Node(
+                name,
+                tuple(sorted({(t, r) for t, r, w in own if w})),
+                tuple(sorted({(t, r) for t, r, w in own if not w})),
+            )
+    return sorted(latest.values())
+
+
 LIST_SECONDS = 2.0
-"""How long ``--ros --list`` lets discovery run."""
+"""How long ``--ros --list`` lets discovery run…"""
+NODE_SECONDS = 5.0
+"""…and its nodes' names: Fast DDS sends a late reader the latched ``ros_discovery_info`` on its next heartbeat
+(every 3 s by default), so waiting less finds a node started a moment before only sometimes."""
 
 
 def list_topics(
     timeout: float = LIST_SECONDS, env: Mapping[str, str] | None = None
-) -> tuple[list[tuple[str, str, int]], RosDiscovery]:
-    """``(topic, type, publisher count)`` of the ROS 2 graph, like ``ros2 topic list -t`` (``--ros --list``), and
-    where discovery looked."""
-    with LiveGraph(env) as graph:
-        return graph.topics(timeout), graph.discovery
+) -> tuple[list[tuple[str, str, int]], list[Node], RosDiscovery]:
+    """``(topic, type, publisher count)`` of the ROS 2 graph, like ``ros2 topic list -t`` (``--ros --list``), its
+    nodes (``ros2 node list`` and ``ros2 node info``), and where discovery looked."""
+    with LiveGraph(env, fast_dds_types=True) as graph:  # reads no data topic
+        nodes = graph.nodes(max(timeout, NODE_SECONDS))
+        return graph.topics(0.0), nodes, graph.discovery

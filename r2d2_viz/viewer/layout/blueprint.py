@@ -73,6 +73,8 @@ class Layout:
     """Topics plotted (IMUs, batteries, scalar sensors, std_msgs numbers): a time-series view each, as tabs."""
     field_plots: tuple[tuple[str, ...], ...] = ()
     """``--plot`` paths: a time-series view per flag, of its paths (``/plot/<n>``)."""
+    tf_graph: bool = False
+    """``--tf-tree``: the TF tree as a graph view (``/tf_tree``) beside the 3D view."""
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
@@ -95,7 +97,8 @@ def generate_blueprint(
     scene = rrb.Spatial3DView(
         name=f"3D: {fixed} (Grid · TF · RobotModel)",
         origin="/",
-        contents=["+ /**", "- /joints/**", f"- {WARNINGS}", *(f"- {topic}/**" for topic in layout.flat_images)],
+        contents=["+ /**", "- /joints/**", f"- {WARNINGS}", *(f"- {topic}/**" for topic in layout.flat_images)]
+        + (["- /tf_tree/**", "- /health/**"] if layout.tf_graph else []),
         background=rrb.Background(color=spec.background),
         line_grid=_grid(spec),
         spatial_information=rrb.SpatialInformation(target_frame=fixed, show_axes=False, show_bounding_box=False),
@@ -148,6 +151,13 @@ def generate_blueprint(
     shares.append(1)
     parts["side"] = rrb.Vertical(*side, row_shares=shares)
     parts["root"] = rrb.Horizontal(scene, parts["side"], column_shares=[2, 1])
+    if layout.tf_graph:  # view_frames beside the 3D view
+        graph = rrb.GraphView(name="TF tree (rate · age)", origin="/tf_tree")
+        rates = rrb.TimeSeriesView(name="Topic rates (Hz)", origin="/health", contents="+ /health/**/rate")
+        _stable_id(graph, "tf graph")
+        _stable_id(rates, "topic rates")
+        parts["tf tree"] = rrb.Tabs(graph, rates)
+        parts["root"] = rrb.Horizontal(scene, parts["tf tree"], parts["side"], column_shares=[2, 1.5, 1])
     below = _telemetry_views(layout)
     if below:  # a row under the 3D view and plots; none without such topics (the tutorial's layout unchanged)
         parts.update(below)

@@ -52,3 +52,35 @@ def test_real_node_joined_late() -> None:
     assert result["joint_states"] >= 0.995 * 400, result
     assert result["tf"] > 0 and result["tf_equal"] == result["tf"], result  # == rosbags' serialize_cdr
     assert not any(result["dropped"].values())
+
+
+def test_list_names_real_nodes_and_their_topics() -> None:
+    """``--ros --list`` names the nodes, as ``ros2 node list`` does, and per node its topics (``ros2 node info``):
+    two real rclpy nodes (Jazzy, Fast DDS) in a loopback-only namespace. Expected from the nodes' own sources:
+    publish_robot.py's node publishes /robot_description and /joint_states (and rclpy's /rosout and
+    /parameter_events); tool_listener.py's subscribes to four tools' topics and publishes /map."""
+    python = ros_node.require_live("jazzy")
+    nodes = Path(ros_node.__file__).with_name("nodes")
+    exe = str(Path(sys.executable).parent / "r2d2-viz")
+    robot = f'"{python}" "{nodes / "publish_robot.py"}" --urdf "{URDF}" --subscribers 0 --count 150 --rate 10'
+    listener = f'"{python}" "{nodes / "tool_listener.py"}" --seconds 20'
+    listing = f'sleep 2; "{exe}" --ros --list; rc=$?; kill %1 %2; exit $rc'
+    script = f"{robot} >/dev/null 2>&1 & {listener} >/dev/null 2>&1 & {listing}"
+    done = ros_node.in_netns(["sh", "-c", script], timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = done.stdout.splitlines()
+    assert "node /r2d2_viz_test_robot" in lines, (done.stdout, done.stderr[-2000:])
+    start = lines.index("node /r2d2_viz_test_robot")
+    robot_lines = lines[
+        start + 1 : next((i for i in range(start + 1, len(lines)) if not lines[i].startswith("  ")), len(lines))
+    ]
+    assert robot_lines == [
+        "  publishes /joint_states [sensor_msgs/msg/JointState]",
+        "  publishes /parameter_events [rcl_interfaces/msg/ParameterEvent]",
+        "  publishes /robot_description [std_msgs/msg/String]",
+        "  publishes /rosout [rcl_interfaces/msg/Log]",
+    ], done.stdout
+    start = lines.index("node /tool_listener")
+    subscribed = [line for line in lines[start + 1 :] if line.startswith("  subscribes")]
+    assert {line.split()[1] for line in subscribed} >= {"/clicked_point", "/goal_pose", "/initialpose", "/cmd_vel"}
+    assert "  publishes /map [nav_msgs/msg/OccupancyGrid]" in lines[start + 1 :]

@@ -1,0 +1,80 @@
+"""Each topic's health over time, from a bag: its rate (Hz) and bandwidth (B/s) over a sliding window, and, for
+messages that start with a ``std_msgs/Header``, their mean latency (receive time − header stamp) over the same
+window, sampled every :data:`PERIOD_NS` from the topic's first message to its last. One pass over the storage
+blocks (headers read from the bytes, :func:`~.tf_read.header_columns`), then cumulative sums and ``searchsorted``
+per topic. Pure; no rerun import."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from r2d2_viz.arrays import F64, I64
+from r2d2_viz.sources.bags.bag import Bag
+from r2d2_viz.sources.system.tf_read import has_header, header_columns
+
+PERIOD_NS = 500_000_000
+WINDOW_NS = 2_000_000_000
+OTHER_CLOCK_NS = 3600 * 1_000_000_000
+"""Header stamps whose median latency exceeds an hour are on another clock (``use_sim_time``): no latency."""
+
+
+@dataclass(frozen=True)
+class TopicHealth:
+    """One topic's samples: at ``times_ns``, the rate and bandwidth over the window before, and the mean latency
+    (s; NaN where no message of the window had a header, or its type has none)."""
+
+    topic: str
+    times_ns: I64
+    rate_hz: F64
+    bandwidth: F64
+    latency_s: F64
+
+
+def read_messages(bag: Bag, start_ns: int | None = None, stop_ns: int | None = None) -> dict[str, tuple[I64, I64, I64]]:
+    """topic → (receive times, sizes, header stamps or -1) of every message, in time order."""
+    headed = {t for t, info in bag.topics.items() if has_header(info.msgtype)}
+    parts: dict[str, list[tuple[I64, I64, I64]]] = {}
+    for block in bag.blocks(sorted(bag.topics), start_ns=start_ns, stop_ns=stop_ns):
+        for k, topic in enumerate(block.topics):
+            rows = np.flatnonzero(block.topic_index == k)
+            if not len(rows):
+                continue
+            stamps = np.full(len(rows), -1, np.int64)
+            if topic in headed:
+                _, got, ok = header_columns(block, rows)
+                stamps[ok] = got[ok]
+            parts.setdefault(topic, []).append((block.times_ns[rows], block.lengths[rows], stamps))
+    return {t: tuple(np.concatenate(c) for c in zip(*p, strict=True)) for t, p in parts.items()}  # type: ignore[misc]
+
+
+def health(
+    topic: str, times: I64, sizes: I64, stamps: I64, *, period_ns: int = PERIOD_NS, window_ns: int = WINDOW_NS
+) -> TopicHealth:
+    """``topic``'s series from its messages' receive times, sizes and header stamps (-1: none)."""
+    order = np.argsort(times, kind="stable")
+    times, sizes, stamps = times[order], sizes[order], stamps[order]
+    grid = np.arange(int(times[0]), int(times[-1]) + 1, period_ns, dtype=np.int64)
+    hi = np.searchsorted(times, grid, side="right")
+    lo = np.searchsorted(times, grid - window_ns, side="right")
+    span = np.minimum(window_ns, np.maximum(grid - int(times[0]), 1)) / 1e9  # the window, or what of it has passed
+    partial = grid - window_ns < times[0]  # the window reaches back before the first message: it starts the span
+    count = (hi - lo - partial).astype(np.float64)
+    nbytes = np.r_[0, np.cumsum(sizes)]
+    sent = nbytes[hi] - nbytes[lo] - np.where(partial, sizes[0], 0)
+    headed = stamps >= 0
+    if headed.any() and abs(float(np.median(times[headed] - stamps[headed]))) > OTHER_CLOCK_NS:
+        headed[:] = False  # stamps on another clock (simulation time): no latency to speak of
+    lag = np.where(headed, (times - stamps) / 1e9, 0.0)
+    lags, heads = np.r_[0.0, np.cumsum(lag)], np.r_[0, np.cumsum(headed)]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        latency = np.where(heads[hi] > heads[lo], (lags[hi] - lags[lo]) / (heads[hi] - heads[lo]), np.nan)
+    rate = np.where(grid > times[0], count / span, np.nan)  # nothing to divide by at the first message
+    bandwidth = np.where(grid > times[0], sent / span, np.nan)
+    return TopicHealth(topic, grid, rate, bandwidth, latency)
+
+
+def bag_health(bag: Bag, start_ns: int | None = None, stop_ns: int | None = None) -> list[TopicHealth]:
+    """Every topic's :class:`TopicHealth` over the stretch (the whole bag by default)."""
+    return [health(t, *cols) for t, cols in sorted(read_messages(bag, start_ns, stop_ns).items())]

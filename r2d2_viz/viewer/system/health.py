@@ -1,0 +1,49 @@
+"""Every topic's health in the recording (``--tf-tree`` with a sink, on a bag): ``/health/<topic>/rate`` (Hz),
+``…/bandwidth`` (B/s) and, for messages with a header, ``…/latency`` (s, receive time − header stamp) as time
+series (:mod:`r2d2_viz.sources.system.topic_health`), logged once before the replay, beside the TF graph."""
+
+from __future__ import annotations
+
+import numpy as np
+import rerun as rr
+
+from r2d2_viz.sources.base import Clock
+from r2d2_viz.sources.plan import BagReplay
+from r2d2_viz.sources.system.topic_health import TopicHealth, bag_health
+from r2d2_viz.viewer import entities
+from r2d2_viz.viewer.columns import encoded, send, time_array
+from r2d2_viz.viewer.system.tf_graph import TfGraph
+
+ROOT = "/health"
+
+
+def health_entity(topic: str, series: str) -> str:
+    return f"{ROOT}/{topic.strip('/')}/{series}"
+
+
+def log_health(rec: rr.RecordingStream, series: list[TopicHealth], clock: Clock) -> int:
+    """Each topic's series (NaN samples left out); the number of samples logged."""
+    logged = 0
+    for h in series:
+        for name, values in (("rate", h.rate_hz), ("bandwidth", h.bandwidth), ("latency", h.latency_s)):
+            keep = np.isfinite(values)
+            if not keep.any():
+                continue
+            columns = rr.Scalars.columns(scalars=values[keep])
+            send(
+                rec,
+                health_entity(h.topic, name),
+                entities.TIMELINE,
+                time_array(h.times_ns[keep], clock),
+                encoded(columns),
+            )
+            logged += int(keep.sum())
+    return logged
+
+
+def system_views(rec: rr.RecordingStream, clock: Clock, replay: BagReplay | None) -> TfGraph:
+    """``--tf-tree`` with a sink: the TF graph (fed as transforms are logged) and, replaying a bag, every topic's
+    health over the replayed stretch."""
+    if replay is not None:
+        log_health(rec, bag_health(replay.bag, *replay.span), clock)
+    return TfGraph(rec, clock=clock)

@@ -1,0 +1,54 @@
+"""Each topic's rate, bandwidth and latency over time, by hand on made-up messages and against rosbags' reading of
+a crafted bag (receive times, raw sizes, header stamps from its deserialiser)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
+from tfbags import MS, T0, TS, bag, edge_every, point, spec
+
+from r2d2_viz.sources.bags.bag import open_bag
+from r2d2_viz.sources.system.topic_health import bag_health, health
+
+S = 1_000_000_000
+
+
+def test_by_hand() -> None:
+    t = np.arange(0, 5 * S, 100 * MS, dtype=np.int64)  # 10 Hz for 5 s, 50 bytes each, stamped 20 ms before
+    h = health("/x", t, np.full(len(t), 50, np.int64), t - 20 * MS)
+    at = {int(g): k for k, g in enumerate(h.times_ns)}
+    k = at[3 * S]  # window (1 s, 3 s]: 20 messages over 2 s
+    assert h.rate_hz[k] == pytest.approx(10.0) and h.bandwidth[k] == pytest.approx(500.0)
+    assert h.latency_s[k] == pytest.approx(0.02)
+    k = at[S]  # 1 s in: 10 messages after the first, over the 1 s since it came
+    assert h.rate_hz[k] == pytest.approx(10.0) and np.isnan(h.rate_hz[at[0]])
+    none = health("/y", t, np.full(len(t), 50, np.int64), np.full(len(t), -1, np.int64))
+    assert np.isnan(none.latency_s).all()
+    sim = health("/z", t + 1_700_000_000 * S, np.full(len(t), 50, np.int64), t)  # sim-time stamps
+    assert np.isnan(sim.latency_s).all()
+
+
+def test_a_crafted_bag_against_rosbags(tmp_path: Path) -> None:
+    s = spec()
+    edge_every(s, "map", "odom", T0 + np.arange(100) * 50 * MS)
+    for k in range(40):
+        s.add("/points", T0 + k * 100 * MS + 7 * MS, point(T0 + k * 100 * MS, "camera"))  # 7 ms late
+    path = bag(tmp_path / "b", s)
+    with open_bag(path) as b:
+        got = {h.topic: h for h in bag_health(b)}
+    with AnyReader([path], default_typestore=TS) as reader:
+        rows = [(c.topic, t, len(d), reader.deserialize(d, c.msgtype)) for c, t, d in reader.messages()]
+    points = [(t, n, m.header.stamp.sec * S + m.header.stamp.nanosec) for topic, t, n, m in rows if topic == "/points"]
+    times = np.array([p[0] for p in points])
+    sizes = np.array([p[1] for p in points])
+    h = got["/points"]
+    k = int(np.flatnonzero(h.times_ns == T0 + 3 * S + 7 * MS)[0])
+    window = (times > T0 + 1 * S + 7 * MS) & (times <= T0 + 3 * S + 7 * MS)
+    assert h.rate_hz[k] == pytest.approx(window.sum() / 2.0)
+    assert h.bandwidth[k] == pytest.approx(sizes[window].sum() / 2.0)
+    lags = [(t - stamp) / S for t, _, stamp in points]
+    assert h.latency_s[k] == pytest.approx(np.mean(np.array(lags)[window]))
+    assert np.isnan(got["/tf"].latency_s).all()  # TFMessage has no header of its own
