@@ -142,6 +142,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if not sep or not name.isidentifier():
             raise UsageError(f"{item!r}: expected a xacro argument NAME:=VALUE")
         mappings[name] = value
+    if args.tree:
+        return _print_tree(args, mappings)
     config = RunConfig(
         urdf=args.urdf,
         mappings=mappings,
@@ -178,6 +180,24 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             raise SinkError(f"no display for a viewer window, and the web viewer instead failed: {exc}") from None
         raise
     print_summary(result, config)
+    return EXIT_OK
+
+
+def _print_tree(args: argparse.Namespace, mappings: dict[str, str]) -> int:
+    """``r2d2-viz --urdf X --tree``: check_urdf's tree on stdout, the description's warnings on stderr."""
+    from r2d2_viz.robot.model import default_urdf_path
+    from r2d2_viz.robot.packages import PackageIndex
+    from r2d2_viz.robot.tree_text import tree_lines
+    from r2d2_viz.robot.xacro_load import load_robot
+
+    if args.bag is not None or args.ros:
+        raise UsageError("--tree prints the tree of a description file: use it with --urdf (or alone for the R2D2)")
+    path = args.urdf or default_urdf_path()
+    packages = PackageIndex.from_args(tuple(args.package_path), description=path, environ=os.environ)
+    robot = load_robot(path, mappings=mappings, packages=packages)
+    for line in robot.warnings:
+        print(stderr_line(f"warning: {line}"), file=sys.stderr)
+    print("\n".join(tree_lines(robot)), flush=True)
     return EXIT_OK
 
 

@@ -152,6 +152,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
     )
+    bench = parser.add_argument_group("the URDF workbench (what RViz's RobotModel and check_urdf show)")
+    bench.add_argument(
+        "--tree", action="store_true", help="print the kinematic tree as check_urdf does (with each joint) and exit"
+    )
     parser.add_argument(
         "--list",
         action="store_true",
