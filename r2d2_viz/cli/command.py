@@ -184,7 +184,9 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
 
 def _print_tree(args: argparse.Namespace, mappings: dict[str, str]) -> int:
-    """``r2d2-viz --urdf X --tree``: check_urdf's tree on stdout, the description's warnings on stderr."""
+    """``r2d2-viz --urdf X --tree``: check_urdf's tree on stdout; the description's warnings and impossible inertias
+    on stderr, one line each."""
+    from r2d2_viz.robot.inertial import inertia_problems
     from r2d2_viz.robot.model import default_urdf_path
     from r2d2_viz.robot.packages import PackageIndex
     from r2d2_viz.robot.tree_text import tree_lines
@@ -195,7 +197,7 @@ def _print_tree(args: argparse.Namespace, mappings: dict[str, str]) -> int:
     path = args.urdf or default_urdf_path()
     packages = PackageIndex.from_args(tuple(args.package_path), description=path, environ=os.environ)
     robot = load_robot(path, mappings=mappings, packages=packages)
-    for line in robot.warnings:
+    for line in (*robot.warnings, *inertia_problems(robot)):
         print(stderr_line(f"warning: {line}"), file=sys.stderr)
     print("\n".join(tree_lines(robot)), flush=True)
     return EXIT_OK

@@ -83,3 +83,18 @@ def test_cli_tree_of_a_broken_description_is_one_line_and_exit_2(tmp_path: Path)
     assert result.stdout == ""
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: broken.urdf:") and "nope" in lines[0], result.stderr
+
+
+def test_cli_tree_says_impossible_inertias_on_stderr_one_line_each(tmp_path: Path) -> None:
+    urdf = tmp_path / "heavy.urdf"
+    urdf.write_text(
+        '<robot name="h"><link name="a"><inertial><mass value="1"/>'
+        '<inertia ixx="0.001" iyy="0.001" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link></robot>'
+    )
+    result = cli("--urdf", str(urdf), "--tree")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[2] == "root Link: a has 0 child(ren)"
+    assert result.stderr.splitlines() == [
+        "warning: heavy.urdf: link 'a': <inertial>: principal moments 0.001, 0.001, 0.01 kg·m² violate the triangle "
+        "inequality (0.001 + 0.001 < 0.01)"
+    ]
