@@ -16,16 +16,14 @@ only, ignoring the origin's rpy; a URDF whose inertial origin is rotated gets th
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from lxml import etree
 
 from r2d2_viz.arrays import F64
-
-if TYPE_CHECKING:
-    from r2d2_viz.robot.model import Robot
 
 LEAD_DENSITY = 11340.0
 """kg/m³, RViz's ``density_of_lead``."""
@@ -103,7 +101,23 @@ def inertia_problem(inertial: Inertial) -> str | None:
     return None
 
 
-def inertia_problems(robot: Robot) -> list[str]:
+class _Link(Protocol):
+    @property
+    def name(self) -> str: ...
+    @property
+    def inertial(self) -> Inertial | None: ...
+
+
+class _Robot(Protocol):
+    """A :class:`r2d2_viz.robot.model.Robot` (which imports this module)."""
+
+    @property
+    def source(self) -> str: ...
+    @property
+    def links(self) -> Sequence[_Link]: ...
+
+
+def inertia_problems(robot: _Robot) -> list[str]:
     """One line per impossible ``<inertial>``, named as the checker names elements:
     ``arm.urdf: link 'forearm': <inertial>: inertia is not positive definite (…)``."""
     problems = ((link.name, inertia_problem(link.inertial)) for link in robot.links if link.inertial is not None)
