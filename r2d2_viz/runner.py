@@ -94,6 +94,7 @@ class RunConfig:
     """``--plot`` paths of a bag's fields, one time-series view per flag (:mod:`r2d2_viz.msgs.generic.message_path`)."""
     video: EncoderName | None = None
     """Encode 8-bit camera images as video (``--video``: av1 or h264); None: lossless ``Image`` s."""
+    show: frozenset[str] = frozenset()  # --mass, --inertia, --link-axes: the RobotModel's "mass", "inertia", "axes"
 
     @property
     def live(self) -> bool:
@@ -206,7 +207,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     samples, interrupted = 0, False
     tree = plan.tree
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
-    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame, show=config.show)
     fields = fields_run(plan, config.plots, clock, header_time=config.time == "header")
     if config.plots:
         view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, field_plots=config.plots))
@@ -248,7 +249,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                 TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None
             )
             for robot in streamers:
-                robot.log_static()
+                robot.log_static(view.spec.robot)
             with progress_bar(plan, config) as shown:
                 windows = _windows(plan, config, displays, fields)
                 if config.live:
@@ -394,7 +395,6 @@ def batch_chunk_samples(n_moving: int) -> int:
 def print_summary(result: RunResult, config: RunConfig) -> None:
     where = f" to {result.saved}" if result.saved else ""
     how = " (stopped by signal)" if result.interrupted else ""
-    origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
-    origin = "from the ROS 2 graph" if config.ros else origin
+    origin = "from the ROS 2 graph" if config.ros else f"from {config.bag}" if config.bag else f"at {config.rate:g} Hz"
     what = "joint states" if config.ros else result.what
     print(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}", file=sys.stderr)

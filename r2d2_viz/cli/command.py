@@ -166,6 +166,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         progress=wanted(),
         tool_topics=parse_tool_topics(args.tool_topic),
         plots=tuple(tuple(p) for p in args.plot),
+        show=frozenset(k for k, on in (("mass", args.mass), ("inertia", args.inertia), ("axes", args.link_axes)) if on),
     )
 
     def on_ready(message: str) -> None:

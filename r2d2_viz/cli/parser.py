@@ -156,6 +156,13 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument(
         "--tree", action="store_true", help="print the kinematic tree as check_urdf does (with each joint) and exit"
     )
+    bench.add_argument(
+        "--mass", action="store_true", help="each link's centre of mass: a red ball of lead of its mass (as RViz)"
+    )
+    bench.add_argument(
+        "--inertia", action="store_true", help="each link's box of equal inertia on its principal axes (as RViz)"
+    )
+    bench.add_argument("--link-axes", action="store_true", help="each link's axes (RViz's RobotModel Show Axes)")
     parser.add_argument(
         "--list",
         action="store_true",
