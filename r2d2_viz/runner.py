@@ -214,7 +214,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
-        tools = attach_view_tools(recording, view, dict(config.tool_topics))
+        tools = attach_view_tools(recording, view, dict(config.tool_topics), source=plan.source)
         try:
             rec = recording.rec
             gather = config.realtime and not config.sink.live  # saved only: no viewer waits for each sample

@@ -126,10 +126,13 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     _check_video(args)
     implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
     fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
+    sliders = args.motion == "sliders"  # joint_state_publisher_gui: the sliders are on the served page
+    if sliders and (args.spawn or args.connect or args.headless or (args.save and not args.serve)):
+        raise UsageError("--motion sliders: the sliders are on --serve's page; use --serve (and --save to record)")
     sink = SinkConfig(
-        spawn=args.spawn or (implied and not fallback),
+        spawn=args.spawn or (implied and not fallback and not sliders),
         connect=args.connect,
-        serve=args.serve or fallback,
+        serve=args.serve or fallback or (implied and sliders),
         save=args.save,
         headless=args.headless,
         bind=args.bind,

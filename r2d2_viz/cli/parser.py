@@ -48,7 +48,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--motion",
         default=None,
         metavar="{" + ",".join(MOTIONS) + "}",
-        help="tutorial: state_publisher.py; sweep: every joint back and forth; still: all zeros "
+        help="tutorial: state_publisher.py; sweep: every joint back and forth; still: all zeros; sliders: a slider "
+        "per joint in the served page, like joint_state_publisher_gui "
         "(default: tutorial if the robot has swivel, tilt and periscope, else sweep)",
     )
     parser.add_argument(
