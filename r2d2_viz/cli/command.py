@@ -126,18 +126,19 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     _check_video(args)
     implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
     fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
-    sliders = args.motion == "sliders"  # joint_state_publisher_gui: the sliders are on the served page
-    if sliders and (args.spawn or args.connect or args.headless or (args.save and not args.serve)):
-        raise UsageError("--motion sliders: the sliders are on --serve's page; use --serve (and --save to record)")
+    sliders = args.motion == "sliders"  # joint_state_publisher_gui: on the page (served, or beside the native viewer)
+    if sliders and (args.connect or args.headless or (args.save and not (args.serve or args.spawn))):
+        raise UsageError("--motion sliders: the sliders are on a served page; use --serve or --spawn (with --save)")
     sink = SinkConfig(
-        spawn=args.spawn or (implied and not fallback and not sliders),
+        spawn=args.spawn or (implied and not fallback),
         connect=args.connect,
-        serve=args.serve or fallback or (implied and sliders),
+        serve=args.serve or fallback,
         save=args.save,
         headless=args.headless,
         bind=args.bind,
         port=args.port,
         web_port=args.web_port,
+        page=sliders,
     )
     mappings: dict[str, str] = {}
     for item in args.xacro_args:

@@ -148,8 +148,13 @@ def test_a_slider_moved_in_the_page_is_in_the_recording(tmp_path: Path) -> None:
             assert json.loads(answer.read()) == {"line": "tilt = -0.3"}
         assert run.wait(timeout=60) == 0, run.stderr.read()
     finally:
-        run.kill()
-        run.wait()
+        if run.poll() is None:  # SIGTERM: the app stops its gRPC server too (SIGKILL would orphan it)
+            run.terminate()
+            try:
+                run.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                run.kill()
+                run.wait()
     plot = read_recording(out)["/joints/limited"]
     names = plot.static["SeriesLines:names"][-1]
     tilt = [row[names.index("tilt")] for row in plot.temporal["Scalars:scalars"]]
