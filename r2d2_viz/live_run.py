@@ -30,6 +30,7 @@ from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import load_robot
+from r2d2_viz.ros_out.joint_states_out import live_sliders
 from r2d2_viz.ros_out.live_record import LiveBagRecorder
 from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
 from r2d2_viz.rviz.config import load_rviz
@@ -127,7 +128,8 @@ def run_on(
     tools = None
     try:
         recording = output.open(view, on_ready)
-        tools = attach_view_tools(recording, view, dict(config.tool_topics), publisher=graph)
+        sliders = live_sliders(getattr(config, "motion", None), model.robot)  # the page's sliders, on /joint_states
+        tools = attach_view_tools(recording, view, dict(config.tool_topics), publisher=graph, source=sliders)
         scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
         if tools is not None and tools.drawing is not None:
             scene.feed.on_map = tools.drawing.cover  # the ground covers the maps

@@ -106,8 +106,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             raise UsageError("--list lists the topics of a live ROS 2 graph or a bag: use it with --ros or --bag PATH")
         return _list_bag(args.bag)
     if args.ros:
-        if args.bag is not None or args.motion is not None:
-            raise UsageError("--ros shows the live graph; it cannot be combined with --bag or --motion")
+        if args.bag is not None or args.motion not in (None, "sliders"):  # sliders: published on /joint_states
+            raise UsageError("--ros shows the live graph; it cannot be combined with --bag or --motion (but sliders)")
         if args.list:
             return _list_topics()
     elif args.save is not None and args.save.suffix == ".mcap" and (live or args.realtime):

@@ -19,6 +19,7 @@ from typing import Any, Protocol
 
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.msgs.typestore import typestore
+from r2d2_viz.ros_out.joint_states_out import JointStatesOut
 from r2d2_viz.rviz.tools import GOAL_POSE, MEASURE, MESSAGE_TYPES, POSE_ESTIMATE, PUBLISH_POINT, TELEOP, tool_topics
 from r2d2_viz.sources.motion import SlidersMotion
 from r2d2_viz.sources.sliders import SLIDERS, SliderBoard
@@ -120,6 +121,8 @@ class ToolOutput:
         self._last_drive = 0.0
         self._stop = threading.Event()
         self._watchdog: threading.Thread | None = None
+        self.closers: list[Callable[[], None]] = []
+        """Called by :meth:`close` (the sliders' ``/joint_states``)."""
 
     def handle(self, event: dict[str, Any]) -> str:
         """One event from the page (checked: :func:`~r2d2_viz.viewer.web.events.parse_event`) → the line said."""
@@ -181,6 +184,8 @@ class ToolOutput:
         self._stop.set()
         if self._drive.moving:
             self.drive(Drive(0.0, 0.0))
+        for close in self.closers:
+            close()
 
     def _publish(self, tool: str, message: Any) -> str:
         if self.publisher is None:
@@ -227,6 +232,8 @@ def attach_tools(
     page.set_handler(output.handle if sliders is None else with_sliders(sliders, output.handle))
     if sliders is not None:
         page.config.update(joints=sliders.describe())
+        if publisher is not None:  # --ros: the sliders on /joint_states at 10 Hz, as joint_state_publisher
+            output.closers.append(JointStatesOut(sliders, publisher).start().close)
     return output
 
 
