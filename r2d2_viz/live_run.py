@@ -220,7 +220,7 @@ def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> 
     root = tree.robot.root if tree is not None else None
     frame = config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
     plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
-    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame, show=getattr(config, "show", frozenset()))
     if names := robot_namespaces(batches):  # several robots: a plot each, shapes under /robots/<namespace>
         view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=names))
     return plan, view
@@ -326,7 +326,7 @@ class _Scene:
             show_names=self.view.show_names,
         )
         self.streamer.notices = self.notices
-        self.streamer.log_static()
+        self.streamer.log_static(self.view.spec.robot)  # and the RobotModel's mass properties, link axes
         self.recorded.skip = set(urdf_edges(tree)) | self.robots.edges
         self.source.set_joints(tree.actuated)
 
