@@ -5,9 +5,8 @@ scene is logged again; one that does not parse is one line and the run goes on w
 goes through the kinematics (:class:`~r2d2_viz.viewer.stream.RobotStream`), ``/tf`` and ``/tf_static`` are
 recorded transforms (:class:`~r2d2_viz.viewer.tf_recorded.RecordedTf`), display topics go through
 :class:`~r2d2_viz.viewer.display_feed.DisplayFeed` — all as a bag replay does them, on the same ``timestamp``
-clock (the writers' source timestamps, or header stamps with ``--time header``). ``--save out.rrd`` is finalised
-when ``--duration`` (seconds of wall time) runs out or on Ctrl-C / SIGTERM; ``--save out.mcap`` records what was
-received (:mod:`r2d2_viz.ros_out.live_record`). Only subscribes: nothing is ever published.
+clock (source timestamps, or header stamps with ``--time header``). ``--save out.rrd`` is finalised when
+``--duration`` (wall seconds) runs out or on a signal; ``--save out.mcap`` records what was received.
 """
 
 from __future__ import annotations
@@ -30,9 +29,10 @@ from r2d2_viz.pacing import LatenessLog
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import load_robot
+from r2d2_viz.ros_out.joint_states_out import live_sliders
 from r2d2_viz.ros_out.live_record import LiveBagRecorder
 from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
-from r2d2_viz.rviz.config import load_rviz
+from r2d2_viz.rviz.config import load_rviz, wanted_topics
 from r2d2_viz.signals import signals_set
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.base import tf_root
@@ -89,6 +89,10 @@ class LiveConfig(Protocol):
     def video(self) -> EncoderName | None: ...
     @property
     def tf_tree(self) -> bool: ...
+    @property
+    def show(self) -> frozenset[str]: ...
+    @property
+    def motion(self) -> str | None: ...
 
 
 def run_live(
@@ -102,13 +106,6 @@ def run_live(
     stop = threading.Event()
     with signals_set(stop), LiveGraph(env) as graph:
         return run_on(config, graph, stop, on_ready)
-
-
-def wanted_topics(rviz: Path | None) -> set[str] | None:
-    """The enabled displays' topics of an RViz config (None without one: every displayable topic)."""
-    if rviz is None:
-        return None
-    return {t.topic for t in load_rviz(rviz).topics if t.enabled and t.topic}
 
 
 def run_on(
@@ -131,7 +128,8 @@ def run_on(
     tools = None
     try:
         recording = output.open(view, on_ready)
-        tools = attach_view_tools(recording, view, dict(config.tool_topics), publisher=graph)
+        sliders = live_sliders(config.motion, model.robot)  # the page's sliders, on /joint_states
+        tools = attach_view_tools(recording, view, dict(config.tool_topics), publisher=graph, source=sliders)
         scene = _Scene(config, model, source, view, plan.fixed_frame, recording, lateness, batches)
         if tools is not None and tools.drawing is not None:
             scene.feed.on_map = tools.drawing.cover  # the ground covers the maps
@@ -222,7 +220,7 @@ def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> 
     root = tree.robot.root if tree is not None else None
     frame = config.fixed_frame or rviz_frame or tf_root(records) or root or ODOM
     plan = RunPlan(tree, frame, static_tf=static, moving_tf=moving)
-    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame, show=config.show)
     if names := robot_namespaces(batches):  # several robots: a plot each, shapes under /robots/<namespace>
         view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=names))
     return plan, view
@@ -329,7 +327,7 @@ class _Scene:
             show_names=self.view.show_names,
         )
         self.streamer.notices = self.notices
-        self.streamer.log_static()
+        self.streamer.log_static(self.view.spec.robot)  # and the RobotModel's mass properties, link axes
         self.recorded.skip = set(urdf_edges(tree)) | self.robots.edges
         self.source.set_joints(tree.actuated)
 

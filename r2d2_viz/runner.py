@@ -96,6 +96,7 @@ class RunConfig:
     video: EncoderName | None = None
     """Encode 8-bit camera images as video (``--video``: av1 or h264); None: lossless ``Image`` s."""
     tf_tree: bool = False  # --tf-tree with a sink: the TF tree as a graph view (r2d2_viz/viewer/system/tf_graph.py)
+    show: frozenset[str] = frozenset()  # --mass, --inertia, --link-axes: the RobotModel's "mass", "inertia", "axes"
 
     @property
     def live(self) -> bool:
@@ -205,14 +206,14 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     samples, interrupted = 0, False
     tree = plan.tree
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
-    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame)
+    view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame, show=config.show)
     fields = fields_run(plan, config.plots, clock, header_time=config.time == "header")
     layout = dataclasses.replace(view.layout, field_plots=config.plots, tf_graph=config.tf_tree)
     view = dataclasses.replace(view, layout=layout)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     try:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
-        tools = attach_view_tools(recording, view, dict(config.tool_topics))
+        tools = attach_view_tools(recording, view, dict(config.tool_topics), source=plan.source)
         try:
             rec = recording.rec
             gather = config.realtime and not config.sink.live  # saved only: no viewer waits for each sample
@@ -248,7 +249,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                 TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None
             )
             for robot in streamers:
-                robot.log_static()
+                robot.log_static(view.spec.robot)
             with progress_bar(plan, config) as shown:
                 windows = _windows(plan, config, displays, fields)
                 if config.live:
@@ -394,7 +395,6 @@ def batch_chunk_samples(n_moving: int) -> int:
 def print_summary(result: RunResult, config: RunConfig) -> None:
     where = f" to {result.saved}" if result.saved else ""
     how = " (stopped by signal)" if result.interrupted else ""
-    origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
-    origin = "from the ROS 2 graph" if config.ros else origin
+    origin = "from the ROS 2 graph" if config.ros else f"from {config.bag}" if config.bag else f"at {config.rate:g} Hz"
     what = "joint states" if config.ros else result.what
     print(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}", file=sys.stderr)

@@ -130,8 +130,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             raise UsageError("--list lists the topics of a live ROS 2 graph or a bag: use it with --ros or --bag PATH")
         return _list_bag(args.bag)
     if args.ros:
-        if args.bag is not None or args.motion is not None:
-            raise UsageError("--ros shows the live graph; it cannot be combined with --bag or --motion")
+        if args.bag is not None or args.motion not in (None, "sliders"):  # sliders: published on /joint_states
+            raise UsageError("--ros shows the live graph; it cannot be combined with --bag or --motion (but sliders)")
         if args.list:
             return _list_topics()
     elif args.save is not None and args.save.suffix == ".mcap" and (live or args.realtime):
@@ -150,6 +150,9 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     _check_video(args)
     implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
     fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
+    sliders = args.motion == "sliders"  # joint_state_publisher_gui: on the page (served, or beside the native viewer)
+    if sliders and (args.connect or args.headless or (args.save and not (args.serve or args.spawn))):
+        raise UsageError("--motion sliders: the sliders are on a served page; use --serve or --spawn (with --save)")
     sink = SinkConfig(
         spawn=args.spawn or (implied and not fallback),
         connect=args.connect,
@@ -159,6 +162,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         bind=args.bind,
         port=args.port,
         web_port=args.web_port,
+        page=sliders,
     )
     mappings: dict[str, str] = {}
     for item in args.xacro_args:
@@ -166,6 +170,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if not sep or not name.isidentifier():
             raise UsageError(f"{item!r}: expected a xacro argument NAME:=VALUE")
         mappings[name] = value
+    if args.tree:
+        return _print_tree(args, mappings)
     config = RunConfig(
         urdf=args.urdf,
         mappings=mappings,
@@ -189,6 +195,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         tool_topics=parse_tool_topics(args.tool_topic),
         plots=tuple(tuple(p) for p in args.plot),
         tf_tree=args.tf_tree is not None,
+        show=frozenset(k for k, on in (("mass", args.mass), ("inertia", args.inertia), ("axes", args.link_axes)) if on),
     )
 
     def on_ready(message: str) -> None:
@@ -203,6 +210,26 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             raise SinkError(f"no display for a viewer window, and the web viewer instead failed: {exc}") from None
         raise
     print_summary(result, config)
+    return EXIT_OK
+
+
+def _print_tree(args: argparse.Namespace, mappings: dict[str, str]) -> int:
+    """``r2d2-viz --urdf X --tree``: check_urdf's tree on stdout; the description's warnings and impossible inertias
+    on stderr, one line each."""
+    from r2d2_viz.robot.inertial import inertia_problems
+    from r2d2_viz.robot.model import default_urdf_path
+    from r2d2_viz.robot.packages import PackageIndex
+    from r2d2_viz.robot.tree_text import tree_lines
+    from r2d2_viz.robot.xacro_load import load_robot
+
+    if args.bag is not None or args.ros:
+        raise UsageError("--tree prints the tree of a description file: use it with --urdf (or alone for the R2D2)")
+    path = args.urdf or default_urdf_path()
+    packages = PackageIndex.from_args(tuple(args.package_path), description=path, environ=os.environ)
+    robot = load_robot(path, mappings=mappings, packages=packages)
+    for line in (*robot.warnings, *inertia_problems(robot)):
+        print(stderr_line(f"warning: {line}"), file=sys.stderr)
+    print("\n".join(tree_lines(robot)), flush=True)
     return EXIT_OK
 
 

@@ -48,7 +48,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--motion",
         default=None,
         metavar="{" + ",".join(MOTIONS) + "}",
-        help="tutorial: state_publisher.py; sweep: every joint back and forth; still: all zeros "
+        help="tutorial: state_publisher.py; sweep: every joint back and forth; still: all zeros; sliders: a slider "
+        "per joint in the served page, like joint_state_publisher_gui "
         "(default: tutorial if the robot has swivel, tilt and periscope, else sweep)",
     )
     parser.add_argument(
@@ -152,6 +153,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--rviz", type=Path, default=None, metavar="CONFIG", help="lay the viewer out as this RViz config does"
     )
+    bench = parser.add_argument_group("the URDF workbench (what RViz's RobotModel and check_urdf show)")
+    bench.add_argument(
+        "--tree", action="store_true", help="print the kinematic tree as check_urdf does (with each joint) and exit"
+    )
+    bench.add_argument(
+        "--mass", action="store_true", help="each link's centre of mass: a red ball of lead of its mass (as RViz)"
+    )
+    bench.add_argument(
+        "--inertia", action="store_true", help="each link's box of equal inertia on its principal axes (as RViz)"
+    )
+    bench.add_argument("--link-axes", action="store_true", help="each link's axes (RViz's RobotModel Show Axes)")
     parser.add_argument(
         "--list",
         action="store_true",

@@ -26,6 +26,7 @@ import numpy.typing as npt
 from lxml import etree
 
 from r2d2_viz.errors import listed
+from r2d2_viz.robot.inertial import Inertial, read_inertial
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.urdf_check import JOINT_TYPES, check_robot, parse_urdf_xml, read_urdf_xml
 
@@ -144,6 +145,7 @@ class Link:
     name: str
     visuals: tuple[Shape, ...] = ()
     collisions: tuple[Shape, ...] = ()
+    inertial: Inertial | None = None
 
 
 @dataclass(frozen=True)
@@ -246,12 +248,10 @@ def build_robot(root: etree._Element, *, source: str, base_dir: Path, packages: 
     for link in root.iterchildren("link"):
         visuals = (_shape(v, v.find("material"), named_colors, base_dir, index) for v in link.iterchildren("visual"))
         collisions = (_shape(c, None, named_colors, base_dir, index) for c in link.iterchildren("collision"))
-        name = str(link.get("name"))
-        links[name] = Link(
-            name=name,
-            visuals=tuple(s for s in visuals if s is not None),
-            collisions=tuple(s for s in collisions if s is not None),
-        )
+        name, inertial = str(link.get("name")), link.find("inertial")
+        origin = _origin(inertial.find("origin")) if inertial is not None else _frozen(None)
+        links[name] = Link(name, tuple(s for s in visuals if s is not None),
+                           tuple(s for s in collisions if s is not None), read_inertial(inertial, origin))  # fmt: skip
     joint_elements = list(root.iterchildren("joint"))
     joint_names = {str(j.get("name")) for j in joint_elements}
     joints = [_joint(j, joint_names) for j in joint_elements]

@@ -19,11 +19,15 @@ from typing import Any, Protocol
 
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.msgs.typestore import typestore
+from r2d2_viz.ros_out.joint_states_out import JointStatesOut
 from r2d2_viz.rviz.tools import GOAL_POSE, MEASURE, MESSAGE_TYPES, POSE_ESTIMATE, PUBLISH_POINT, TELEOP, tool_topics
+from r2d2_viz.sources.motion import SlidersMotion
+from r2d2_viz.sources.sliders import SLIDERS, SliderBoard
 from r2d2_viz.viewer.layout.plan import ViewPlan
 from r2d2_viz.viewer.sinks import Recording
 from r2d2_viz.viewer.web.draw import ToolDrawing
 from r2d2_viz.viewer.web.events import Drive, Pick, parse_event
+from r2d2_viz.viewer.web.server import EventHandler
 
 INITIAL_POSE_COVARIANCE = {0: 0.25, 7: 0.25, 35: 0.06853891945200942}
 """RViz's 2D Pose Estimate: x and y variance 0.25 m², yaw 0.0685 rad² ((π/12)²), row-major 6x6 indices."""
@@ -117,6 +121,8 @@ class ToolOutput:
         self._last_drive = 0.0
         self._stop = threading.Event()
         self._watchdog: threading.Thread | None = None
+        self.closers: list[Callable[[], None]] = []
+        """Called by :meth:`close` (the sliders' ``/joint_states``)."""
 
     def handle(self, event: dict[str, Any]) -> str:
         """One event from the page (checked: :func:`~r2d2_viz.viewer.web.events.parse_event`) → the line said."""
@@ -178,6 +184,8 @@ class ToolOutput:
         self._stop.set()
         if self._drive.moving:
             self.drive(Drive(0.0, 0.0))
+        for close in self.closers:
+            close()
 
     def _publish(self, tool: str, message: Any) -> str:
         if self.publisher is None:
@@ -207,10 +215,11 @@ def attach_tools(
     publisher: Publisher | None = None,
     say: Callable[[str], None] = say_line,
     background: tuple[int, int, int] = (48, 48, 48),
+    sliders: SliderBoard | None = None,
 ) -> ToolOutput | None:
     """Connect ``--serve``'s page (if the recording has one) to a :class:`ToolOutput`: the ground drawn, the page
-    told the fixed frame and topics, its events handled; ``background``: the 3D view's (the ground's colour). None
-    when there is no page."""
+    told the fixed frame and topics, its events handled; ``background``: the 3D view's (the ground's colour);
+    ``sliders``: the joint sliders of ``--motion sliders`` (their events to them). None when there is no page."""
     page = recording.page
     if page is None:
         return None
@@ -220,21 +229,39 @@ def attach_tools(
         fixed_frame, topics=tool_topics(config_topics, overrides), publisher=publisher, drawing=drawing, say=say
     )
     page.config.update(fixed_frame=fixed_frame, topics=output.topics, publishing=publisher is not None)
-    page.set_handler(output.handle)
+    page.set_handler(output.handle if sliders is None else with_sliders(sliders, output.handle))
+    if sliders is not None:
+        page.config.update(joints=sliders.describe())
+        if publisher is not None:  # --ros: the sliders on /joint_states at 10 Hz, as joint_state_publisher
+            output.closers.append(JointStatesOut(sliders, publisher).start().close)
     return output
 
 
+def with_sliders(board: SliderBoard, tools: EventHandler) -> EventHandler:
+    """The page's events: the sliders' (``"tool": "Joints"``) to ``board``, RViz's tools' to ``tools``."""
+
+    def handle(event: dict[str, Any]) -> str:
+        return board.handle(event) if event.get("tool") == SLIDERS else tools(event)
+
+    return handle
+
+
 def attach_view_tools(
-    recording: Recording, view: ViewPlan, overrides: Mapping[str, str], *, publisher: Publisher | None = None
+    recording: Recording,
+    view: ViewPlan,
+    overrides: Mapping[str, str],
+    *,
+    publisher: Publisher | None = None,
+    source: object = None,
 ) -> ToolOutput | None:
     """:func:`attach_tools` for a run laid out as ``view``: its fixed frame, its config's tool topics under
-    ``overrides`` (``--tool-topic``), its background."""
+    ``overrides`` (``--tool-topic``), its background; ``source``: what moves the robot (sliders: on the page)."""
     spec = view.spec
     frame = view.layout.fixed_frame or spec.fixed_frame
     topics = dict(spec.tool_topics)
-    return attach_tools(
-        recording, frame, config_topics=topics, overrides=overrides, publisher=publisher, background=spec.background
-    )
+    sliders = source.board if isinstance(source, SlidersMotion) else None  # the run's source: sliders?
+    return attach_tools(recording, frame, config_topics=topics, overrides=overrides, publisher=publisher,
+                        background=spec.background, sliders=sliders)  # fmt: skip
 
 
 def detach_tools(recording: Recording, output: ToolOutput | None) -> None:

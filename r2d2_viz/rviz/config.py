@@ -74,3 +74,10 @@ def spec_from_data(data: Any, *, source: str) -> ViewSpec:
         raise RvizError(f"{source}: no 'Visualization Manager' mapping; is this an RViz config?")
     spec = Reader(source).spec(data, manager)
     return dataclasses.replace(spec, tool_topics=tuple(sorted(config_tool_topics(manager.get("Tools")).items())))
+
+
+def wanted_topics(rviz: Path | None) -> set[str] | None:
+    """The enabled displays' topics of an RViz config (None without one: every displayable topic)."""
+    if rviz is None:
+        return None
+    return {t.topic for t in load_rviz(rviz).topics if t.enabled and t.topic}

@@ -41,6 +41,13 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
     ("RobotModel", "Alpha", "the URDF colours' alpha; below 1 noted"),
     (
         "RobotModel",
+        "Mass Properties / Mass, Inertia",
+        "`/robot/mass/<link>`: a red ball of lead of the link's mass at its centre of mass; `/robot/inertia/<link>`: "
+        "the red box of equal inertia on the principal axes (RViz's shapes; as `--mass`, `--inertia`)",
+    ),
+    ("RobotModel", "Links / <link> / Show Axes", "`/robot/axes/<link>`: the link's axes (every link: `--link-axes`)"),
+    (
+        "RobotModel",
         "Description Topic, TF Prefix",
         "several robots: each RobotModel display's settings apply to the robot of its Description Topic "
         "(`/robot2/robot_description` → `/robots/robot2/**`); a TF Prefix other than the one the recording shows is "

@@ -204,9 +204,13 @@ class Reader:
             else ("Visual Enabled", "Collision Enabled", "Alpha")
         )
         links = d.get("Links") or {}
-        hidden = ()
+        hidden: tuple[str, ...] = ()
+        axes: tuple[str, ...] = ()  # the links whose "Show Axes" is ticked
         if isinstance(links, dict):
             hidden = tuple(sorted(k for k, v in links.items() if isinstance(v, dict) and v.get("Value") is False))
+            axes = tuple(sorted(k for k, v in links.items() if isinstance(v, dict) and v.get("Show Axes") is True))
+        found = d.get("Mass Properties")
+        masses: Mapping[str, Any] = found if isinstance(found, dict) else {}
         alpha = self.number(d, alpha_key, 1.0, where)
         if alpha < 1:
             self.note(f"RobotModel / Alpha {alpha:g}: shown opaque (the URDF colours' alpha applies)")
@@ -218,6 +222,9 @@ class Reader:
             hidden_links=hidden,
             description_topic=self.text(d, "Description Topic", "", where) or "/robot_description",
             tf_prefix=self.text(d, "TF Prefix", "", where).strip("/"),
+            mass=self.flag(masses, "Mass", False, where),
+            inertia=self.flag(masses, "Inertia", False, where),
+            axes=axes,
         )
 
 

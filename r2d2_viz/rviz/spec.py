@@ -113,6 +113,12 @@ class RobotModel:
     """Which robot it draws (several robots: ``/robot2/robot_description``)."""
     tf_prefix: str = ""
     """The prefix of the robot's frames (robot_state_publisher's ``frame_prefix``), ``robot1`` or ``""``."""
+    mass: bool = False
+    """``Mass Properties / Mass``: each link's centre of mass, a ball of lead of its mass (``--mass``)."""
+    inertia: bool = False
+    """``Mass Properties / Inertia``: each link's box of equal inertia (``--inertia``)."""
+    axes: tuple[str, ...] = ()
+    """The links whose ``Links / <link> / Show Axes`` is on (``--link-axes``: every link, ``("*",)``)."""
 
 
 @dataclass(frozen=True)

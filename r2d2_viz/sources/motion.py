@@ -2,7 +2,8 @@
 
 * ``tutorial`` — exactly what the tutorial's ``state_publisher.py`` publishes at 30 Hz, odom → root included;
 * ``sweep`` — joint_state_publisher's ``delta`` behaviour, for any robot;
-* ``still`` — every joint at zero.
+* ``still`` — every joint at zero;
+* ``sliders`` — a slider per joint in the page (:mod:`r2d2_viz.sources.sliders`).
 
 Sample ``k`` is at ``t = k / rate`` (a duration since the start). Motions yield chunks of consecutive samples,
 so a 24 h run never holds all of them at once. Pure numpy; no rerun import.
@@ -20,12 +21,13 @@ import numpy as np
 from r2d2_viz.arrays import F64, I64
 from r2d2_viz.errors import UsageError
 from r2d2_viz.sources.base import Clock, FrameTrack, SampleChunk
+from r2d2_viz.sources.sliders import SliderBoard
 
 if TYPE_CHECKING:  # the model imports lxml; the CLI imports this module for --help
     from r2d2_viz.robot.model import Joint, Robot
 
-MotionName = Literal["tutorial", "sweep", "still"]
-MOTIONS: tuple[MotionName, ...] = ("tutorial", "sweep", "still")
+MotionName = Literal["tutorial", "sweep", "still", "sliders"]
+MOTIONS: tuple[MotionName, ...] = ("tutorial", "sweep", "still", "sliders")
 TUTORIAL_JOINTS = ("swivel", "tilt", "periscope")
 ODOM = "odom"
 """The tutorial's fixed frame: state_publisher.py publishes ``odom → axis``."""
@@ -82,6 +84,8 @@ def make_motion(
         return SweepMotion(robot, rate=rate, n_samples=n_samples)
     if name == "still":
         return StillMotion(robot, rate=rate, n_samples=n_samples)
+    if name == "sliders":
+        return SlidersMotion(robot, rate=rate, n_samples=n_samples)
     raise UsageError(f"unknown motion {name!r}; expected one of {', '.join(MOTIONS)}")
 
 
@@ -215,3 +219,22 @@ class StillMotion(GeneratedMotion):
 
     def at(self, k: I64) -> tuple[F64, tuple[FrameTrack, ...]]:
         return np.zeros((len(k), len(self.joints))), ()
+
+
+class SlidersMotion(GeneratedMotion):
+    """The page's sliders as a source (:mod:`r2d2_viz.sources.sliders`): every sample holds the values the sliders
+    had when it was taken."""
+
+    name: MotionName = "sliders"
+
+    def __init__(self, robot: Robot, *, rate: float = 30.0, n_samples: int | None = None) -> None:
+        super().__init__(robot, rate=rate, n_samples=n_samples)
+        self.board = SliderBoard(robot)
+
+    def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
+        """A sample a chunk, whatever ``max_samples``: a live run takes each when it is due, so a move shows at the
+        next sample (blocks of several would show it only when the next block is computed)."""
+        return super().chunks(1)
+
+    def at(self, k: I64) -> tuple[F64, tuple[FrameTrack, ...]]:
+        return np.tile(self.board.values(), (len(k), 1)), ()

@@ -52,6 +52,9 @@ class SinkConfig:
     """Recording properties, ``/__properties/<name>`` text values (what a fleet recording says of its bag)."""
     layout_file: Path | None = None
     """The blueprint also written to this ``.rbl`` (a fleet's: the catalog gives it to its dataset)."""
+    page: bool = False
+    """r2d2-viz's page beside a native viewer (``--motion sliders --spawn``): its sliders, and a web viewer of the
+    native viewer's own gRPC server."""
 
     @property
     def live(self) -> bool:
@@ -118,6 +121,8 @@ def open_recording(
         if not has_display():
             raise SinkError("--spawn: no display to open the viewer on; use --save FILE.rrd or --serve instead")
         sinks.append(rr.GrpcSink(_spawn_viewer(config.port)))
+        if config.page and not config.serve:
+            page = PageServer(config.port, config.bind, config.web_port)
     if config.connect is not None:
         _probe(config.connect)
         sinks.append(rr.GrpcSink(config.connect))
@@ -134,6 +139,8 @@ def open_recording(
         public = uri.replace("127.0.0.1", host)
         url = page.url() if page is not None else f"http://{host}:{config.web_port}/?url={quote(public, safe='')}"
         on_ready(f"serving: open {url} in a browser, or run: rerun {public}")
+    elif page is not None and on_ready is not None:
+        on_ready(f"the page with the sliders: open {page.url()} in a browser")
     return Recording(rec, server, live=config.live, page=page)
 
 

@@ -32,6 +32,7 @@ from r2d2_viz.arrays import F64, I64
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.kinematics.tree import KinematicTree, compile_tree, moving_values
 from r2d2_viz.robot.model import parse_urdf
+from r2d2_viz.rviz.spec import RobotModel
 from r2d2_viz.sources.base import Clock, JointState, SampleChunk
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.robots import RobotPlan, choose_prefix, prefixed_robot, unreached
@@ -44,6 +45,7 @@ from r2d2_viz.viewer.plots import JointPlots
 from r2d2_viz.viewer.scene import log_scene
 from r2d2_viz.viewer.tf_recorded import RecordedTf
 from r2d2_viz.viewer.tf_rows import TfRows
+from r2d2_viz.viewer.workbench.mass import log_mass_properties
 
 if TYPE_CHECKING:  # a plain save imports no live source (nor rosbags)
     from r2d2_viz.robot.packages import PackageIndex
@@ -129,7 +131,8 @@ class RobotStream:
 
     # --- 1. static ---------------------------------------------------------------------------------
 
-    def log_static(self) -> None:
+    def log_static(self, display: RobotModel | None = None) -> None:
+        """The scene, and what ``display`` (a RobotModel display) asks of mass properties and link axes."""
         log_scene(
             self.rec,
             self.tree,
@@ -141,6 +144,8 @@ class RobotStream:
             robot_name=self.robot_name,
             frame_prefix=self.frame_prefix,
         )
+        log_mass_properties(self.rec, self.tree.robot, display, self.notices, axis_length=self.axis_length,
+                            robot_name=self.robot_name, frame_prefix=self.frame_prefix)  # fmt: skip
         self.tf.log_static(self.rec, entities.TF)
         self.plots.log_styles(self.rec)
 

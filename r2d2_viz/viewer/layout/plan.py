@@ -49,8 +49,17 @@ class ViewPlan:
     """Display topic → how the config's display draws it (absent: RViz's defaults)."""
 
 
-def plan_view(plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None) -> ViewPlan:
+def plan_view(
+    plan: RunPlan, *, rviz: Path | None, fixed_frame: str | None, show: frozenset[str] = frozenset()
+) -> ViewPlan:
+    """``show``: what the command line turns on of the RobotModel display (``mass``, ``inertia``, ``axes``), over
+    the config's."""
     spec = load_rviz(rviz) if rviz is not None else tutorial_spec()
+    if show and spec.robot is not None:
+        robot = spec.robot
+        spec = dataclasses.replace(spec, robot=dataclasses.replace(
+            robot, mass=robot.mass or "mass" in show, inertia=robot.inertia or "inertia" in show,
+            axes=("*",) if "axes" in show else robot.axes))  # fmt: skip
     if rviz is None:  # without a config, every image topic gets its 2D view, as an Image display would
         images = [TopicDisplay("Image", t, t, True) for t, m in sorted(plan.displays.items()) if m in IMAGES]
         spec = dataclasses.replace(spec, topics=(*spec.topics, *images))

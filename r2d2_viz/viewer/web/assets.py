@@ -18,7 +18,7 @@ from pathlib import Path
 from r2d2_viz.errors import SinkError
 
 HERE = Path(__file__).resolve().parent
-PAGE_FILES = ("page.html", "page.js", "page.css")
+PAGE_FILES = ("page.html", "page.js", "page.css", "sliders.js")
 VIEWER_FILES = ("widget.js", "widget.css")
 WASM = "re_viewer_bg.wasm"
 GZIP_LEVEL = 6
