@@ -38,6 +38,9 @@ class Config:
     rviz: Path | None = None
     tool_topics: tuple[tuple[str, str], ...] = ()
     video: Any = None
+    tf_tree: bool = False
+    show: frozenset[str] = frozenset()
+    motion: str | None = None
 
 
 def _image() -> bytes:
