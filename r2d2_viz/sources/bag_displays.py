@@ -82,13 +82,18 @@ def first_messages(
     return tuple(found)
 
 
-def _keyframe(msgtype: str, data: bytes | memoryview) -> bool:
+def _video_sample(msgtype: str, data: bytes | memoryview) -> VideoSample | None:
     try:
         decoded = decode(msgtype, data)
     except MsgError:
-        return False
+        return None
     item = decoded.items[0] if isinstance(decoded, Decoded) and decoded.items else None
-    return isinstance(item, VideoSample) and item.keyframe
+    return item if isinstance(item, VideoSample) else None
+
+
+def _keyframe(msgtype: str, data: bytes | memoryview) -> bool:
+    sample = _video_sample(msgtype, data)
+    return sample is not None and sample.keyframe
 
 
 def video_preroll(bag: Bag, shown: dict[str, str], start_ns: int) -> tuple[TopicMessage, ...]:
@@ -98,7 +103,8 @@ def video_preroll(bag: Bag, shown: dict[str, str], start_ns: int) -> tuple[Topic
     first = bag.span[0] if bag.span is not None else start_ns
     out: list[TopicMessage] = []
     for topic, msgtype in shown.items():
-        if msgtype not in VIDEO_TYPES:
+        last = bag.last(topic, before_ns=start_ns) if msgtype in VIDEO_TYPES else None
+        if last is None or _video_sample(msgtype, last[1]) is None:  # no video there (JPEG images, say)
             continue
         back, key = 2 * 1_000_000_000, None
         while key is None:
