@@ -99,9 +99,9 @@ function onViewerEvent(message) {
     return;
   }
   const tool = active;
-  const event = { tool, points: clicks, entity: item.entity_path ?? null };
-  if (ON_GROUND.has(tool)) void viewEye().then((eye) => post(eye ? { ...event, eye } : event));
-  else void post(event);
+  const pick = { tool, points: clicks, entity: item.entity_path ?? null };
+  if (ON_GROUND.has(tool)) void viewEye().then((eye) => post(eye ? { ...pick, eye } : pick));
+  else void post(pick);
   clicks = [];
   if (ONE_SHOT.has(tool)) activate(tool); // back to no tool, as RViz returns to Interact
 }
