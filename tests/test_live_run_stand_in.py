@@ -135,3 +135,33 @@ def test_robots_described_after_the_settle_are_several_robots(
     err = capsys.readouterr().err
     assert err.count("robot /robot1: no recorded transform places its root") == 1, err
     assert err.count("robot /robot2: no recorded transform places its root") == 1, err
+
+
+def test_no_entity_has_arrow_colours_without_vectors_when_no_joint_states_come(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A live run of a robot with a prismatic joint whose graph never publishes ``/joint_states`` (seen: the 3D
+    view's error badge "Component 'Arrows3D:vectors' does not exist on the entity" on ``/tf``, the moving arrows'
+    colours logged up front and their vectors never). Read back: every entity with arrow colours has vectors."""
+    from rrd import read_recording
+
+    monkeypatch.setattr(live_run, "SETTLE_SECONDS", 0.1)
+    urdf = tmp_path / "slide.urdf"
+    urdf.write_text(
+        """<robot name="slide"><link name="a"/><link name="b"/>
+<joint name="s" type="prismatic"><parent link="a"/><child link="b"/><origin xyz="0 0 0.5"/><axis xyz="1 0 0"/>
+<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"""
+    )
+    graph = FakeGraph()
+    graph.pubs = [Publication("/cam/image", IMAGE, False, False)]
+    graph.queue = [Sample("/cam/image", IMAGE, time.time_ns(), _image())]
+    config = Config(urdf, SinkConfig(save=tmp_path / "out.rrd"))
+    samples, _, _ = live_run.run_on(config, graph, threading.Event())  # type: ignore[arg-type]
+    assert samples == 0
+    recording = read_recording(tmp_path / "out.rrd")
+    half = []
+    for entity, rows in recording.items():
+        names = {*rows.static, *rows.temporal}
+        if any("Arrows3D:colors" in n for n in names) and not any("Arrows3D:vectors" in n for n in names):
+            half.append(entity)
+    assert half == [], {e: sorted({*recording[e].static, *recording[e].temporal}) for e in half}

@@ -30,6 +30,10 @@ Convert = Callable[[bytes | memoryview], memoryview]
 MAX_DEFINITION_CHARS = 1 << 20
 ENCODINGS = ("ros1msg", "ros2msg", "ros2idl")
 _ROSLIB_HEADER = re.compile(r"\broslib/Header\b")
+_IDL_DELIMITER = re.compile(r"^={80}\r?\nIDL: *\S*[ \t]*\r?\n", re.MULTILINE)
+"""What precedes each IDL file of a ``ros2idl`` schema (rosbag2's docs/message_definition_encoding.md)."""
+_PREPROCESSOR = re.compile(r"^[ \t]*#[^\n]*", re.MULTILINE)
+"""``#include`` and ``#pragma`` lines: the files included are in the schema already (rosbags' parser takes none)."""
 _ONE_BYTE = {"bool", "byte", "char", "int8", "uint8", "octet"}
 """One-byte types: the same on the wire (ROS 1's ``byte`` is ``int8``, ROS 2's is ``octet``)."""
 
@@ -42,7 +46,8 @@ def _unusable(msgtype: str, why: str) -> MsgError:
 def own_store(msgtype: str, definition: str, encoding: str) -> Typestore:
     """A typestore of the types ``definition`` (in ``encoding``) gives for ``msgtype`` and its fields' types; types
     it names without defining come from Humble. ROS 1 definitions get ROS 2's ``std_msgs/msg/Header`` (rosbags'
-    ROS 1 → CDR conversion drops ``seq``), also for pre-2010 ``roslib/Header``. Raises ``MsgError``."""
+    ROS 1 → CDR conversion drops ``seq``), also for pre-2010 ``roslib/Header``. A ``ros2idl`` schema is parsed one
+    IDL file at a time, without its preprocessor lines. Raises ``MsgError``."""
     from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
 
     if encoding not in ENCODINGS:
@@ -51,7 +56,10 @@ def own_store(msgtype: str, definition: str, encoding: str) -> Typestore:
         raise _unusable(msgtype, f"{len(definition)} characters")
     try:
         if encoding == "ros2idl":
-            typs = get_types_from_idl(definition)
+            typs = {}
+            for idl in _IDL_DELIMITER.split(definition):  # one IDL file each (any order), or one without delimiter
+                if text := _PREPROCESSOR.sub("", idl).strip():
+                    typs.update(get_types_from_idl(text))
         else:
             text = _ROSLIB_HEADER.sub("std_msgs/Header", definition) if encoding == "ros1msg" else definition
             typs = get_types_from_msg(text, msgtype)

@@ -46,15 +46,22 @@ ENCODINGS: dict[str, tuple[str, int, ColorModel]] = {
     "32FC1": ("f4", 1, "L"),
     "64FC1": ("f8", 1, "L"),
 }
+BAYER = {f"bayer_{cfa}{bits}": cfa for cfa in ("rggb", "bggr", "gbrg", "grbg") for bits in (8, 16)}
+"""Bayer mosaics (the colour filter's 2x2 cell, row by row) → RGB, each 2x2 cell one colour: its red, the mean of
+its two greens, its blue (the superpixel demosaic; RViz would show the raw mosaic as grey)."""
+YUV422 = {"yuv422": (1, 0, 2), "uyvy": (1, 0, 2), "yuv422_yuy2": (0, 1, 3), "yuyv": (0, 1, 3)}
+"""YUV 4:2:2, two pixels in 4 bytes → RGB: where the first Y, the U and the V sit (UYVY: U Y0 V Y1; YUY2: Y0 U Y1 V;
+ROS's ``yuv422`` is UYVY). BT.601 limited range, as OpenCV (cv_bridge), FFmpeg and Rerun's YUY2 read it."""
 
 
 def decode_image(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
     """The pixels ``(H, W)`` or ``(H, W, C)`` of an Image, row padding (``step``) removed, native byte order."""
     msg = deserialize(data, "sensor_msgs/msg/Image")
     frame, stamp = header_of(msg)
-    spec = ENCODINGS.get(str(msg.encoding))
+    encoding = str(msg.encoding)
+    spec = ENCODINGS.get(encoding) or _converted(encoding)
     if spec is None:
-        raise MsgError(f"unsupported image encoding {msg.encoding!r}")
+        raise MsgError(f"unsupported image encoding {encoding[:40]!r}")
     code, channels, model = spec
     dtype = np.dtype((">" if msg.is_bigendian else "<") + code)
     width, height, step = int(msg.width), int(msg.height), int(msg.step)
@@ -68,8 +75,52 @@ def decode_image(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
     pixels = np.ascontiguousarray(rows).view(dtype).reshape(height, width, channels)
     if dtype.byteorder == ">":
         pixels = pixels.astype(dtype.newbyteorder("="))
-    image = Image(pixels[:, :, 0] if channels == 1 else pixels, model, str(msg.encoding))
+    if encoding in BAYER:
+        pixels, model = debayer(pixels[:, :, 0], BAYER[encoding]), "RGB"
+    elif encoding in YUV422:
+        pixels, model = yuv422_rgb(pixels.reshape(height, width * 2), YUV422[encoding]), "RGB"
+    image = Image(pixels[:, :, 0] if pixels.ndim == 3 and pixels.shape[2] == 1 else pixels, model, encoding)
     return Decoded(frame, stamp, (image,))
+
+
+def _converted(encoding: str) -> tuple[str, int, ColorModel] | None:
+    """The storage of an encoding shown converted to RGB: a Bayer mosaic (one channel), YUV 4:2:2 (two bytes a
+    pixel)."""
+    if encoding in BAYER:
+        return ("u2" if encoding.endswith("16") else "u1"), 1, "L"
+    return ("u1", 2, "L") if encoding in YUV422 else None
+
+
+def debayer(mosaic: np.ndarray, cfa: str) -> np.ndarray:
+    """``(H, W, 3)`` RGB of a Bayer ``mosaic`` ``(H, W)`` whose 2x2 cell is ``cfa`` (``rggb``...): each cell one
+    colour; an odd last row or column takes the colour of the cell beside it."""
+    height, width = mosaic.shape
+    if height < 2 or width < 2:
+        raise MsgError(f"a {width}x{height} Bayer image has no full 2x2 cell")
+    cells = mosaic[: height // 2 * 2, : width // 2 * 2].reshape(height // 2, 2, width // 2, 2)
+    at = [divmod(k, 2) for k in range(4)]
+    greens = [cells[:, y, :, x].astype(np.uint32) for (y, x), c in zip(at, cfa, strict=True) if c == "g"]
+    (ry, rx), (by, bx) = at[cfa.index("r")], at[cfa.index("b")]
+    green = ((greens[0] + greens[1] + 1) // 2).astype(mosaic.dtype)
+    rgb = np.stack([cells[:, ry, :, rx], green, cells[:, by, :, bx]], axis=-1)
+    rgb = np.repeat(np.repeat(rgb, 2, axis=0), 2, axis=1)
+    out: np.ndarray = np.pad(rgb, ((0, height - rgb.shape[0]), (0, width - rgb.shape[1]), (0, 0)), mode="edge")
+    return out
+
+
+def yuv422_rgb(packed: np.ndarray, order: tuple[int, int, int]) -> np.ndarray:
+    """``(H, W, 3)`` uint8 RGB of packed YUV 4:2:2 rows ``(H, 2W)`` (``order``: offsets of Y0, U, V in each 4 bytes),
+    BT.601 limited range (Y 16-235, U and V 16-240)."""
+    height, row = packed.shape
+    if row % 4:
+        raise MsgError(f"YUV 4:2:2 needs an even width, got {row // 2}")
+    quads = packed.reshape(height, row // 4, 4).astype(np.float32)
+    y0, u, v = order
+    luma = 1.164383 * (quads[:, :, [y0, y0 + 2]] - 16.0)  # (H, W/2, 2): both pixels of each pair
+    cb, cr = (quads[:, :, u] - 128.0)[:, :, None], (quads[:, :, v] - 128.0)[:, :, None]
+    rgb = np.stack([luma + 1.596027 * cr, luma - 0.391762 * cb - 0.812968 * cr, luma + 2.017232 * cb], axis=-1)
+    out: np.ndarray = np.clip(np.rint(rgb), 0, 255).astype(np.uint8).reshape(height, row // 2, 3)
+    return out
 
 
 def media_type(blob: bytes, fmt: str) -> str:
@@ -114,7 +165,9 @@ VIDEO_FORMATS: dict[str, Codec] = {
 }  # fmt: skip
 """A message's ``format`` (lower case) → the Rerun codec of its samples."""
 PIXEL_FORMATS = {"RGB": "rgb24", "BGR": "bgr24", "RGBA": "rgba", "BGRA": "bgra", "L": "gray"}
-VIDEO_ENCODINGS = frozenset({"rgb8", "bgr8", "rgba8", "bgra8", "mono8", "8UC1", "8UC3", "8UC4"})
+VIDEO_ENCODINGS = frozenset(
+    {"rgb8", "bgr8", "rgba8", "bgra8", "mono8", "8UC1", "8UC3", "8UC4", *YUV422, *(b for b in BAYER if b.endswith("8"))}
+)
 """The 8-bit colour and mono encodings encoded as video; 16-bit, float and depth images stay lossless."""
 CRF = {"av1": 26, "h264": 20}
 """Constant quality for recordings (luma PSNR ≥ 38 dB on a noisy textured camera: benchmarks/video.py)."""

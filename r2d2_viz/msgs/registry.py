@@ -82,7 +82,8 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     "sensor_msgs/msg/Range": ("Range", "`LineStrips3D` cone of its field of view; nothing outside its limits"),
     "sensor_msgs/msg/Image": (
         "Image",
-        "`Image` in a 2D view (mono, rgb, bgr, 16-bit, with row padding); 8-bit ones as `VideoStream` with `--video`",
+        "`Image` in a 2D view (mono, rgb, bgr, 16-bit, with row padding; Bayer and YUV 4:2:2 as RGB); 8-bit ones as "
+        "`VideoStream` with `--video`",
     ),
     "sensor_msgs/msg/CompressedImage": ("Image", "`EncodedImage` (JPEG, PNG); `VideoStream` (h264, h265, av1, vp9)"),
     "foxglove_msgs/msg/CompressedVideo": ("Image", "`VideoStream` samples as they are (h264, h265, av1, vp9)"),

@@ -133,6 +133,8 @@ class ToolOutput:
 
     def pick(self, pick: Pick) -> str:
         frame = self.fixed_frame
+        if pick.tool in (GOAL_POSE, POSE_ESTIMATE):
+            pick = pick.on_ground()  # RViz's pose tools: the ground under the pointer, whatever is drawn there
         if pick.tool == MEASURE:
             line = f"measured: {pick.distance:.3f} m in {frame} from {_xyz(pick.points[0])} to {_xyz(pick.points[-1])}"
             if self.drawing is not None:

@@ -9,7 +9,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from r2d2_viz.msgs.registry import DECODERS, decode, in_3d
-from r2d2_viz.msgs.shapes import Decoded, MarkerOp
+from r2d2_viz.msgs.shapes import Decoded, MarkerOp, VideoSample
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.bag import Bag
 
@@ -17,6 +17,10 @@ GRID_UPDATE = "map_msgs/msg/OccupancyGridUpdate"
 """A map's partial update (nav2's costmaps): applied to the map of the topic it updates (``<map>_updates``)."""
 OURS = ("/joint_states", "/tf", "/tf_static", "/robot_description")
 """Topics the robot pipeline itself reads."""
+VIDEO_TYPES = ("foxglove_msgs/msg/CompressedVideo", "sensor_msgs/msg/CompressedImage")
+"""Types whose messages may be video samples passed through (a CompressedImage when its format names a codec)."""
+KEYFRAME_SEARCH_NS = 120 * 1_000_000_000
+"""How far before a seek a passed-through video's keyframe is looked for (read twice as far each time, 2 s first)."""
 
 
 @dataclass(frozen=True)
@@ -76,3 +80,41 @@ def first_messages(
         if seen > max_bytes:
             break
     return tuple(found)
+
+
+def _video_sample(msgtype: str, data: bytes | memoryview) -> VideoSample | None:
+    try:
+        decoded = decode(msgtype, data)
+    except MsgError:
+        return None
+    item = decoded.items[0] if isinstance(decoded, Decoded) and decoded.items else None
+    return item if isinstance(item, VideoSample) else None
+
+
+def _keyframe(msgtype: str, data: bytes | memoryview) -> bool:
+    sample = _video_sample(msgtype, data)
+    return sample is not None and sample.keyframe
+
+
+def video_preroll(bag: Bag, shown: dict[str, str], start_ns: int) -> tuple[TopicMessage, ...]:
+    """For a seek to ``start_ns``: each passed-through video topic's samples from its last keyframe before the
+    seek (found by parsing the samples' bitstreams, up to :data:`KEYFRAME_SEARCH_NS` back) up to the seek, at their
+    own times — without them the frames after the seek cannot be decoded until the next keyframe."""
+    first = bag.span[0] if bag.span is not None else start_ns
+    out: list[TopicMessage] = []
+    for topic, msgtype in shown.items():
+        last = bag.last(topic, before_ns=start_ns) if msgtype in VIDEO_TYPES else None
+        if last is None or _video_sample(msgtype, last[1]) is None:  # no video there (JPEG images, say)
+            continue
+        back, key = 2 * 1_000_000_000, None
+        while key is None:
+            low = max(first, start_ns - back)
+            for block in bag.blocks([topic], start_ns=low, stop_ns=start_ns):
+                key = next((t for t, data in reversed(block.pairs()) if _keyframe(msgtype, data)), key)
+            if low == first or back >= KEYFRAME_SEARCH_NS:
+                break
+            back *= 2
+        if key is not None:
+            for block in bag.blocks([topic], start_ns=key, stop_ns=start_ns):
+                out += [TopicMessage(t, topic, msgtype, bytes(data)) for t, data in block.pairs()]
+    return tuple(sorted(out, key=lambda m: m.time_ns))

@@ -21,7 +21,7 @@ from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.msgs.registry import in_3d
 from r2d2_viz.robot.model import Robot, parse_urdf
 from r2d2_viz.robot.packages import PackageIndex
-from r2d2_viz.sources.bag_displays import TopicMessage, display_topics, first_messages, frames_of
+from r2d2_viz.sources.bag_displays import TopicMessage, display_topics, first_messages, frames_of, video_preroll
 from r2d2_viz.sources.bag_joints import TimeSource, read_robot_description
 from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
 from r2d2_viz.sources.bags.bag import Bag
@@ -105,7 +105,7 @@ class RunPlan:
     preview_messages: tuple[TopicMessage, ...] = ()
     """The first display messages and the first two of each topic (the view frames them; their frames are checked)."""
     seek_messages: tuple[TopicMessage, ...] = ()
-    """Shown first: the latest maps before a seek."""
+    """Shown first: the latest maps before a seek, passed-through videos from their keyframe before it."""
     robots: tuple[RobotPlan, ...] = ()
     """Several robots (namespaces with a robot_description; the first is ``tree``); empty for one robot."""
 
@@ -248,7 +248,7 @@ def plan_bag(
         TopicMessage(found[0], topic, msgtype, found[1])
         for topic, msgtype in shown.items()
         if start > span[0] and msgtype in SEEK_LATEST and (found := bag.last(topic, before_ns=start)) is not None
-    )
+    ) + (video_preroll(bag, shown, start) if start > span[0] else ())
     return RunPlan(
         tree,
         frame,

@@ -42,14 +42,10 @@ class TfRows:
         return len(self.children)
 
     def log_static(self, rec: rr.RecordingStream, entity: str) -> None:
-        """The moving arrows' frame and colour, once."""
+        """The moving arrows' frame, once (their colour rides with their vectors: colours logged up front would
+        be half an archetype in a run whose joint states never come — an error badge on the 3D view)."""
         if self._arrow_ends:
-            rec.log(
-                entity,
-                rr.CoordinateFrame(self.fixed_frame),
-                rr.Arrows3D.from_fields(colors=[ARROW_COLOR] * len(self._arrow_ends)),
-                static=True,
-            )
+            rec.log(entity, rr.CoordinateFrame(self.fixed_frame), static=True)
 
     def encode(self, values: F64, tracks: tuple[FrameTrack, ...]) -> Encoded:
         """Columns of ``rows`` rows per sample for the moving joints' ``values`` ``(n, M)`` and the tracks."""
@@ -78,5 +74,8 @@ class TfRows:
         child = np.stack([at[c] for c, _ in self._arrow_ends], axis=1)  # (n, k, 3)
         parent = np.stack([at[p] if p >= 0 else origin for _, p in self._arrow_ends], axis=1)
         k = len(self._arrow_ends)
-        arrows = rr.Arrows3D.columns(origins=f32(child.reshape(-1, 3)), vectors=f32((parent - child).reshape(-1, 3)))
+        colors = np.broadcast_to(np.array(ARROW_COLOR, dtype=np.uint8), (n * k, 3))
+        arrows = rr.Arrows3D.columns(
+            origins=f32(child.reshape(-1, 3)), vectors=f32((parent - child).reshape(-1, 3)), colors=colors
+        )
         return encoded(arrows.partition(np.full(n, k)))

@@ -95,3 +95,25 @@ def test_teleop_stops_on_release_on_silence_and_on_close() -> None:
     out.handle({"tool": "Teleop", "linear": 0.2, "angular": 0})
     out.close()  # the app stops: so does the robot
     assert [(m.linear.x, m.angular.z) for _, _, m in graph.sent] == [(0.2, 0.0), (0.0, 0.0), (0.2, 0.0), (0.0, 0.0)]
+
+
+def test_a_goal_clicked_on_a_drawn_sphere_lands_on_the_ground_under_the_pointer() -> None:
+    """As found: after a Publish Point at (2, 1, 0), the app draws a 0.08 m sphere there; a goal clicked on it
+    took the sphere's surface. RViz's pose tools take the click's ray on z = 0, whatever is drawn. By hand: the eye
+    at (-3, 1, 5) looks along (5, 0, -5) at (2, 1, 0); the ray meets the sphere where (5 - 5s)^2 * 2 = 0.08^2, so
+    s = 1 - 0.08 / (5 sqrt 2), at (-3 + 5s, 1, 5 - 5s) = (1.94343, 1, 0.05657): the point the viewer reports. The
+    ground point of that ray is (2, 1, 0); the heading click is on the ground at (3, 2, 0): 45°."""
+    graph, lines = Graph(), []
+    out = _output(graph, lines)
+    s = 1 - 0.08 / (5 * math.sqrt(2))
+    on_sphere = [-3 + 5 * s, 1.0, 5 - 5 * s]
+    event = {"tool": "2D Goal Pose", "points": [on_sphere, [3.0, 2.0, 0.0]], "entity": "/tools/ground"}
+    out.handle({**event, "eye": [-3.0, 1.0, 5.0]})
+    ((_, _, goal),) = graph.sent
+    p, q = goal.pose.position, goal.pose.orientation
+    assert np.allclose([p.x, p.y, p.z], [2.0, 1.0, 0.0], atol=1e-12)
+    assert np.allclose([q.x, q.y, q.z, q.w], [0, 0, math.sin(math.pi / 8), math.cos(math.pi / 8)])
+    assert lines == ["goal: map (2.00, 1.00) yaw 45.0° → /goal_pose"]
+    # Publish Point keeps the surface it was clicked on, as RViz's does
+    out.handle({"tool": "Publish Point", "points": [on_sphere], "eye": [-3.0, 1.0, 5.0]})
+    assert np.allclose([graph.sent[-1][2].point.x, graph.sent[-1][2].point.z], [on_sphere[0], on_sphere[2]])

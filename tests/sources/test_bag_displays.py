@@ -51,3 +51,43 @@ def test_the_display_topics_merged_by_receive_time_as_rosbags_reads_them(tmp_pat
         firsts = {topic: [g for g in got if g[1] == topic and g[0] < T0 + 2 * 10**9][:2] for topic in shown}
         assert all(set(first) <= set(preview) for first in firsts.values())
         assert frames_of(previewed) == {"base_laser", "odom"}
+
+
+def test_a_seek_finds_each_videos_keyframe_before_it_and_leaves_images_alone(tmp_path: Path) -> None:
+    """Keyframes every 60 samples at 5 Hz (12 s apart, PyAV's encoder says which): a seek to 11 s searches back
+    2, 4, 8 then 16 s and sends from the keyframe at 0 s; a JPEG CompressedImage topic is never read back."""
+    av = pytest.importorskip("av")
+    from fractions import Fraction
+
+    import numpy as np
+    from camerabag import write_video_bag
+
+    from r2d2_viz.sources.bag_displays import video_preroll
+
+    encoder = av.CodecContext.create("libx264", "w")
+    encoder.width, encoder.height, encoder.pix_fmt = 64, 48, "yuv420p"
+    encoder.time_base, encoder.gop_size, encoder.max_b_frames = Fraction(1, 5), 60, 0
+    encoder.options = {"tune": "zerolatency", "preset": "ultrafast", "sc_threshold": "0"}
+    packets: list[tuple[bytes, bool]] = []
+    rng = np.random.default_rng(1)
+    for i in range(70):
+        frame = av.VideoFrame.from_ndarray(rng.integers(0, 255, (48, 64, 3), dtype=np.uint8), format="rgb24")
+        frame.pts = i
+        packets += [(bytes(p), bool(p.is_keyframe)) for p in encoder.encode(frame)]
+    packets += [(bytes(p), bool(p.is_keyframe)) for p in encoder.encode(None)]
+    assert [i for i, (_, key) in enumerate(packets) if key] == [0, 60]
+    step = 200_000_000
+    jpeg = b"\xff\xd8\xff\xe0" + bytes(60)
+    samples = [("/video", T0 + i * step, "h264", p) for i, (p, _) in enumerate(packets)]
+    samples += [("/cam/compressed", T0 + i * step + 1, "jpeg", jpeg) for i in range(70)]
+    write_video_bag(tmp_path / "bag", sorted(samples, key=lambda s: s[1]))
+    with open_bag(tmp_path / "bag") as bag:
+        shown, _ = display_topics(bag)
+        read: list[tuple[str, ...]] = []
+        blocks = bag.blocks
+        bag.blocks = lambda topics, **kw: (read.append(tuple(topics)), blocks(topics, **kw))[1]  # type: ignore[method-assign]
+        found = video_preroll(bag, shown, T0 + 11 * 10**9)
+    assert [m.time_ns for m in found] == [T0 + i * step for i in range(55)]  # 0 to 10.8 s: before the seek
+    assert all(m.topic == "/video" for m in found)
+    assert all(packets[i][0] in bytes(m.data) for i, m in enumerate(found))  # each sample in its message's CDR
+    assert ("/cam/compressed",) not in read and read.count(("/video",)) == 5  # 2, 4, 8, 16 s back; then the samples

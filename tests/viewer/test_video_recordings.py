@@ -174,13 +174,46 @@ def test_live_video_has_a_keyframe_a_second_under_two_megabits(tmp_path: Path) -
     assert len(decoded_luma(samples, "av1")) == 75
 
 
-def test_a_seek_into_passed_through_video_starts_at_its_next_keyframe(tmp_path: Path) -> None:
+def test_a_seek_into_passed_through_video_without_a_keyframe_before_it_starts_at_its_next_one(
+    tmp_path: Path,
+) -> None:
     packets = _h264_packets(40, gop=20)
-    samples = [("/foxglove/video", T0 + i * 33_000_000, "h264", p) for i, p in enumerate(packets)]
-    write_video_bag(tmp_path / "video", samples)
+    samples = [("/foxglove/video", T0 + i * 33_000_000, "h264", p) for i, p in enumerate(packets) if i >= 5]
+    write_video_bag(tmp_path / "video", samples)  # the recording started mid-GOP: no keyframe before frame 20
     out = tmp_path / "v.rrd"
-    result = cli("--bag", str(tmp_path / "video"), "--save", str(out), "--start-offset", "0.2")  # frame 7 on
+    result = cli("--bag", str(tmp_path / "video"), "--save", str(out), "--start-offset", "0.2")  # frame 11 on
     assert result.returncode == 0, result.stderr
     times, passed, keys = _samples(out, "/foxglove/video")
     assert passed == packets[20:] and keys[0] and times[0] == T0 + 20 * 33_000_000
     assert sum("keyframe" in line for line in result.stderr.splitlines()) == 1, result.stderr
+
+
+def test_a_seek_into_passed_through_video_starts_at_the_keyframe_before_it(tmp_path: Path) -> None:
+    """As found: ``--start-offset 12`` into a CompressedVideo (and a CompressedImage h264) with a keyframe every
+    10 s showed no video until 20 s, although the keyframe at 10 s makes the frames at 12-20 s decodable. The
+    samples are sent from that keyframe on, at their own times; which samples are keyframes, PyAV's encoder says."""
+    encoder = av.CodecContext.create("libx264", "w")
+    encoder.width, encoder.height, encoder.pix_fmt = 160, 120, "yuv420p"
+    encoder.time_base, encoder.gop_size, encoder.max_b_frames = Fraction(1, 5), 50, 0  # 5 Hz: 10 s a keyframe
+    encoder.options = {"tune": "zerolatency", "preset": "ultrafast", "sc_threshold": "0"}
+    frames = Frames(160, 120)
+    packets: list[tuple[bytes, bool]] = []
+    for i in range(150):  # 30 s
+        frame = av.VideoFrame.from_ndarray(frames(i), format="rgb24")
+        frame.pts = i
+        packets += [(bytes(p), bool(p.is_keyframe)) for p in encoder.encode(frame)]
+    packets += [(bytes(p), bool(p.is_keyframe)) for p in encoder.encode(None)]
+    assert [i for i, (_, key) in enumerate(packets) if key] == [0, 50, 100]  # PyAV: keyframes at 0, 10 and 20 s
+    step = 200_000_000
+    samples = [("/foxglove/video", T0 + i * step, "h264", p) for i, (p, _) in enumerate(packets)]
+    samples += [("/cam/image/compressed", T0 + i * step + 1, "h264", p) for i, (p, _) in enumerate(packets)]
+    write_video_bag(tmp_path / "video", sorted(samples, key=lambda s: s[1]))
+    out = tmp_path / "v.rrd"
+    result = cli("--bag", str(tmp_path / "video"), "--save", str(out), "--start-offset", "12")
+    assert result.returncode == 0, result.stderr
+    for topic, offset in (("/foxglove/video", 0), ("/cam/image/compressed", 1)):
+        times, sent, keys = _samples(out, topic)
+        assert times == [T0 + i * step + offset for i in range(50, 150)], topic  # from the keyframe at 10 s
+        assert sent == [p for p, _ in packets[50:]] and keys == [key for _, key in packets[50:]]
+        assert len(decoded_luma(sent, "h264")) == 100  # every sample decodes from the first one sent
+    assert "keyframe" not in result.stderr, result.stderr

@@ -1,5 +1,6 @@
 """The page's tool events, checked and typed: a :class:`Pick` (the points a tool was clicked at, in the view's
-fixed frame, as the viewer reported them) or a :class:`Drive` (a teleop velocity). Anything else is refused with
+fixed frame, as the viewer reported them, and the view's eye when the page knows it) or a :class:`Drive` (a teleop
+velocity). Anything else is refused with
 :class:`~r2d2_viz.errors.ToolEventError`: the page is reachable by whoever has the URL, and what it sends may
 be published to a robot. Pure: no rerun.
 """
@@ -7,13 +8,13 @@ be published to a robot. Pure: no rerun.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from r2d2_viz.errors import ToolEventError
-from r2d2_viz.rviz.tools import MEASURE, POSE_ESTIMATE, PUBLISH_POINT, TELEOP, TOOLS
+from r2d2_viz.rviz.tools import GOAL_POSE, MEASURE, POSE_ESTIMATE, PUBLISH_POINT, TELEOP, TOOLS
 
-CLICKS = {POSE_ESTIMATE: 2, "2D Goal Pose": 2, PUBLISH_POINT: 1, MEASURE: 2}
+CLICKS = {POSE_ESTIMATE: 2, GOAL_POSE: 2, PUBLISH_POINT: 1, MEASURE: 2}
 """How many clicks each tool takes: a position (and a second point for the heading, or the distance's end)."""
 MAX_COORDINATE = 1e6
 """Metres: a picked point farther than 1000 km from the fixed frame's origin is not a click."""
@@ -27,11 +28,29 @@ Point = tuple[float, float, float]
 
 @dataclass(frozen=True)
 class Pick:
-    """A tool used in the 3D view: ``points`` (x, y, z in the fixed frame), ``entity`` the last one was on."""
+    """A tool used in the 3D view: ``points`` (x, y, z in the fixed frame), ``entity`` the last one was on, ``eye``
+    the view's camera position (fixed frame) when the page knows it."""
 
     tool: str
     points: tuple[Point, ...]
     entity: str | None = None
+    eye: Point | None = None
+
+    def on_ground(self) -> Pick:
+        """The pick as RViz's pose tools take it (``PoseTool`` → ``getViewportPointProjectionOnXYPlane``): each
+        click's ray — from the eye through the point picked on whatever is drawn — met with the fixed frame's z = 0
+        plane; without an eye, the points picked, straight down. ToolEventError when a ray does not meet the plane
+        in front of the eye (RViz sends nothing then)."""
+        if self.eye is None:
+            return replace(self, points=tuple((x, y, 0.0) for x, y, _ in self.points))
+        ex, ey, ez = self.eye
+        grounded: list[Point] = []
+        for x, y, z in self.points:
+            if ez <= 0 or ez - z <= 1e-9:  # an eye under the ground, or a ray going up or along it
+                raise ToolEventError(f"{self.tool}: the click's ray does not meet the ground (z = 0)")
+            t = ez / (ez - z)  # E + t (P - E) has z = 0; t >= 1 when the point is above the ground
+            grounded.append((ex + t * (x - ex), ey + t * (y - ey), 0.0))
+        return replace(self, points=tuple(grounded))
 
     @property
     def yaw(self) -> float:
@@ -76,8 +95,8 @@ def parse_event(event: dict[str, Any]) -> Pick | Drive:
         return Drive(
             _number(event.get("linear"), "linear", MAX_SPEED), _number(event.get("angular"), "angular", MAX_SPEED)
         )
-    if set(event) - {"tool", "points", "entity"}:
-        raise ToolEventError(f"{tool}: expected only points and entity")
+    if set(event) - {"tool", "points", "entity", "eye"}:
+        raise ToolEventError(f"{tool}: expected only points, entity and eye")
     points = event.get("points")
     if not isinstance(points, list) or len(points) != CLICKS[tool]:
         raise ToolEventError(f"{tool}: expected {CLICKS[tool]} clicked point{'s' if CLICKS[tool] > 1 else ''}")
@@ -90,4 +109,8 @@ def parse_event(event: dict[str, Any]) -> Pick | Drive:
     entity = event.get("entity")
     if entity is not None and (not isinstance(entity, str) or len(entity) > MAX_ENTITY):
         raise ToolEventError(f"{tool}: entity is an entity path")
-    return Pick(tool, tuple(parsed), entity)
+    eye = event.get("eye")
+    if eye is not None and (not isinstance(eye, list) or len(eye) != 3):
+        raise ToolEventError(f"{tool}: the eye is [x, y, z]")
+    ex, ey, ez = (_number(v, f"{tool}: eye", MAX_COORDINATE) for v in eye) if eye is not None else (0.0, 0.0, 0.0)
+    return Pick(tool, tuple(parsed), entity, None if eye is None else (ex, ey, ez))

@@ -8,6 +8,7 @@ const config = JSON.parse(document.getElementById("r2d2-config").textContent);
 const TOOLBAR_PX = 36;
 const CLICKS = { "2D Pose Estimate": 2, "2D Goal Pose": 2, "Publish Point": 1, Measure: 2 };
 const ONE_SHOT = new Set(["2D Pose Estimate", "2D Goal Pose", "Publish Point"]); // as in RViz
+const ON_GROUND = new Set(["2D Pose Estimate", "2D Goal Pose"]); // RViz's pose tools: the click's ray on z = 0
 const TELEOP_PERIOD_MS = 100; // 10 Hz while held
 
 const status = document.getElementById("status");
@@ -62,6 +63,23 @@ async function post(event) {
   }
 }
 
+// The 3D view's eye, for the pose tools' rays: Rerun keeps it in the viewer's blueprint (EyeControls3D, saved as
+// the view is orbited); the server serves rerun-notebook's widget with its viewer on globalThis.r2d2Viewer, and
+// reads the eye out of the blueprint sent to `eye`. null when there is none (the tool takes the point picked).
+async function viewEye() {
+  const viewer = globalThis.r2d2Viewer;
+  if (!viewer) return null;
+  try {
+    const blueprint = await new Response(viewer.save_blueprint()).arrayBuffer();
+    const response = await fetch("eye", { method: "POST", body: blueprint,
+      headers: { "Content-Type": "application/octet-stream" } });
+    const answer = await response.json();
+    return Array.isArray(answer.eye) ? answer.eye : null;
+  } catch {
+    return null;
+  }
+}
+
 function onViewerEvent(message) {
   if (message === "ready") { window.r2d2.ready = true; return; }
   let event;
@@ -81,7 +99,9 @@ function onViewerEvent(message) {
     return;
   }
   const tool = active;
-  void post({ tool, points: clicks, entity: item.entity_path ?? null });
+  const pick = { tool, points: clicks, entity: item.entity_path ?? null };
+  if (ON_GROUND.has(tool)) void viewEye().then((eye) => post(eye ? { ...pick, eye } : pick));
+  else void post(pick);
   clicks = [];
   if (ONE_SHOT.has(tool)) activate(tool); // back to no tool, as RViz returns to Interact
 }

@@ -4,7 +4,9 @@ the URL) so that neither another local user nor a web page in the same browser c
 
 Threaded and bounded: at most :data:`MAX_CONNECTIONS` requests at once (more are closed unanswered); the event
 endpoint takes JSON bodies of at most :data:`MAX_EVENT_BYTES`, at most :data:`EVENTS_PER_S` a second on average
-(a burst of :data:`EVENT_BURST`); anything else gets 4xx and changes nothing.
+(a burst of :data:`EVENT_BURST`); the ``eye`` endpoint (the 3D view's eye from the viewer's blueprint, for the pose
+tools: :mod:`.eye`) blueprints of at most :data:`~.eye.MAX_BLUEPRINT_BYTES`, under the same rate; anything else gets
+4xx and changes nothing.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from typing import Any
 
 from r2d2_viz.errors import R2d2VizError, SinkError
 from r2d2_viz.viewer.web.assets import HERE, PAGE_FILES, VIEWER_FILES, WASM, compressed_wasm, viewer_static
+from r2d2_viz.viewer.web.eye import MAX_BLUEPRINT_BYTES, blueprint_eye, hooked_widget
 
 MAX_CONNECTIONS = 16
 MAX_EVENT_BYTES = 4096
@@ -101,7 +104,8 @@ class _Handler(BaseHTTPRequestHandler):
         elif name in PAGE_FILES:
             self._reply(HTTPStatus.OK, (HERE / name).read_bytes(), TYPES[Path(name).suffix])
         elif name in VIEWER_FILES:
-            self._reply(HTTPStatus.OK, (page.static / name).read_bytes(), TYPES[Path(name).suffix])
+            data = (page.static / name).read_bytes()
+            self._reply(HTTPStatus.OK, hooked_widget(data) if name == "widget.js" else data, TYPES[Path(name).suffix])
         elif name == WASM:
             self._send_file(page.wasm_gz(), TYPES[".wasm"], gzip=True)
         else:
@@ -111,20 +115,23 @@ class _Handler(BaseHTTPRequestHandler):
         name = self._name()
         if name is None:
             return
-        if name != "event":
+        if name not in ("event", "eye"):
             self._reply(HTTPStatus.NOT_FOUND, b"not found\n", "text/plain")
             return
         try:
             length = int(self.headers.get("Content-Length", "-1"))
         except ValueError:
             length = -1
-        if not 0 <= length <= MAX_EVENT_BYTES:
+        if not 0 <= length <= (MAX_EVENT_BYTES if name == "event" else MAX_BLUEPRINT_BYTES):
             self.close_connection = True
             self._reply(HTTPStatus.REQUEST_ENTITY_TOO_LARGE, b"too large\n", "text/plain")
             return
         body = self.rfile.read(length)
         if not self.server.page.limit.take():
             self._reply(HTTPStatus.TOO_MANY_REQUESTS, b"too many events\n", "text/plain")
+            return
+        if name == "eye":
+            self._reply(HTTPStatus.OK, json.dumps({"eye": blueprint_eye(body)}).encode(), "application/json")
             return
         try:
             event = json.loads(body)

@@ -39,3 +39,20 @@ def test_the_wasm_is_compressed_once(tmp_path: Path) -> None:
     before = made.stat().st_mtime_ns
     assert assets.compressed_wasm(static, tmp_path / "cache") == made and made.stat().st_mtime_ns == before
     assert [p.name for p in (tmp_path / "cache").iterdir()] == [made.name]  # no temporary file left
+
+
+def test_the_page_module_parses(tmp_path: Path) -> None:
+    """page.js is an ES module: a syntax error leaves the page on "loading the viewer…" for ever (seen: a ``const``
+    declared twice in one function). Node's own parser checks it, when Node is installed."""
+    import shutil
+    import subprocess
+
+    from r2d2_viz.viewer.web.assets import HERE
+
+    node = shutil.which("node")
+    if node is None:
+        pytest.skip("no node to parse page.js with")
+    module = tmp_path / "page.mjs"
+    module.write_bytes((HERE / "page.js").read_bytes())
+    done = subprocess.run([node, "--check", str(module)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr

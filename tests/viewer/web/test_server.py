@@ -13,6 +13,7 @@ import pytest
 
 from r2d2_viz.errors import ToolEventError
 from r2d2_viz.viewer.web.assets import viewer_static
+from r2d2_viz.viewer.web.eye import hooked_widget
 from r2d2_viz.viewer.web.server import MAX_EVENT_BYTES, PageServer, RateLimit
 
 
@@ -55,7 +56,8 @@ def test_the_page_and_the_viewer_need_the_token(page: tuple[PageServer, list[dic
     for name in ("2D Pose Estimate", "2D Goal Pose", "Publish Point", "Measure", "Teleop"):  # RViz's names
         assert f">{name}<" in body.decode()
     status, _, js = _request(server, "GET", f"/{server.token}/widget.js")
-    assert status == 200 and js == (viewer_static() / "widget.js").read_bytes()
+    assert status == 200 and js == hooked_widget((viewer_static() / "widget.js").read_bytes())
+    assert js.count(b"globalThis.r2d2Viewer = this.viewer;") == 1  # the viewer, for the pose tools' eye
     for path in ("/", "/widget.js", "/re_viewer_bg.wasm", f"/{server.token[:-1]}x/", f"/{server.token}/../x"):
         assert _request(server, "GET", path)[0] == 404, path
 
