@@ -15,7 +15,7 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import UsageError
+from r2d2_viz.errors import UsageError, shown
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.msgs.images import EncoderName
@@ -141,7 +141,10 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
 
             if len(plan.robots) > 1:
                 first = plan.robots[0].name
-                print(f"warning: {config.bag}: several robots: {save} holds only the first, {first}", file=sys.stderr)
+                print(
+                    shown(f"warning: {config.bag}: several robots: {save} holds only the first, {first}"),
+                    file=sys.stderr,
+                )
             with sigterm_raises():
                 samples = write_bag(save, plan, plan.description or _description_text(config))
             return RunResult(samples=samples, interrupted=False, saved=save)
@@ -397,4 +400,4 @@ def print_summary(result: RunResult, config: RunConfig) -> None:
     origin = f"from {config.bag}" if config.bag is not None else f"at {config.rate:g} Hz"
     origin = "from the ROS 2 graph" if config.ros else origin
     what = "joint states" if config.ros else result.what
-    print(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}", file=sys.stderr)
+    print(shown(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}"), file=sys.stderr)

@@ -16,7 +16,7 @@ const say = (text) => { status.textContent = text; status.title = text; };
 // --- the anywidget model rerun-notebook's widget reads -------------------------------------------------------
 const listeners = new Map();
 const state = {
-  _url: `rerun+http://${location.hostname}:${config.grpc_port}/proxy`,
+  _url: config.recording ? new URL(config.recording, location.href).href : null, // the RRD stream, as it grows
   _panel_states: null,
   _width: "auto",
   _height: Math.max(200, window.innerHeight - TOOLBAR_PX),
@@ -67,6 +67,7 @@ function onViewerEvent(message) {
   let event;
   try { event = typeof message === "string" ? JSON.parse(message) : message; } catch { return; }
   window.r2d2.events = [...window.r2d2.events.slice(-19), event]; // the last 20, for scripts and tests
+  if (event?.type === "recording_open") emit("msg:custom", { type: "time_ctrl", play: "following" }, []); // live
   if (event?.type !== "selection_change" || !active) return;
   const item = (event.items ?? []).find((i) => Array.isArray(i.position));
   if (!item) {

@@ -26,7 +26,7 @@ def page() -> Iterator[tuple[PageServer, list[dict[str, Any]]]]:
         got.append(event)
         return "clicked"
 
-    server = PageServer(9876, "127.0.0.1", 0, config={"fixed_frame": "map"}, on_event=handle)
+    server = PageServer(None, "127.0.0.1", 0, config={"fixed_frame": "map"}, on_event=handle)
     try:
         yield server, got
     finally:
@@ -51,7 +51,7 @@ def test_the_page_and_the_viewer_need_the_token(page: tuple[PageServer, list[dic
     status, headers, body = _request(server, "GET", f"/{server.token}/")
     assert status == 200 and headers["Content-Type"].startswith("text/html")
     config = json.loads(body.decode().split('type="application/json">')[1].split("</script>")[0])
-    assert config == {"grpc_port": 9876, "fixed_frame": "map"}
+    assert config == {"recording": None, "fixed_frame": "map"}
     for name in ("2D Pose Estimate", "2D Goal Pose", "Publish Point", "Measure", "Teleop"):  # RViz's names
         assert f">{name}<" in body.decode()
     status, _, js = _request(server, "GET", f"/{server.token}/widget.js")
