@@ -10,6 +10,7 @@ import dataclasses
 import math
 import os
 import sys
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass, field
@@ -25,7 +26,7 @@ from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
 from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
-from r2d2_viz.signals import sigterm_raises
+from r2d2_viz.signals import signals_set, sigterm_raises
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.base import Clock, Source
@@ -259,6 +260,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                 else:
                     with sigterm_raises():
                         samples = _batch(streamer, windows, feeds, rec.flush, shown)
+            if config.sink.serve and config.bag is not None and not interrupted:
+                _keep_serving(rec.flush)
             if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
                 notices.report(f"{config.bag}: {line}")
             if feeds.fields is not None:
@@ -277,6 +280,17 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             tmp.unlink(missing_ok=True)
         raise
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
+
+
+def _keep_serving(flush: Callable[[], None]) -> None:
+    """``--bag BAG --serve``: the bag has ended, the page stays up (its viewer holds the whole bag) until Ctrl-C
+    or SIGTERM, as a live run's does."""
+    flush()
+    print("r2d2-viz: the bag has ended; still serving until Ctrl-C", file=sys.stderr, flush=True)
+    stop = threading.Event()
+    with signals_set(stop):
+        while not stop.wait(0.5):
+            pass
 
 
 def _robot_streams(
