@@ -70,6 +70,7 @@ class DoorServer(ThreadingHTTPServer):
     :meth:`done` around each request."""
 
     daemon_threads = True
+    request_queue_size = 128  # the listen backlog (socketserver's 5 makes a burst of connects wait seconds)
 
     def __init__(self, address: tuple[str, int], family: socket.AddressFamily, handler: Any) -> None:
         self.address_family = family
