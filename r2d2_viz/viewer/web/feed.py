@@ -1,8 +1,11 @@
 """The recording as the page's viewer reads it: one RRD byte stream (what ``rr.binary_stream()`` encodes), served
 under the page's token at ``recording.rrd`` — Rerun's gRPC server takes no token, so it is not started at all.
 
-Every byte since the start is kept (in memory), so a page opened late, or reloaded, gets the whole recording and
-then follows what comes, as it would from Rerun's gRPC server. Pure: the reader is a callable (no rerun here).
+The bytes since the start are kept in memory, so a page opened late, or reloaded, gets the whole recording and then
+follows what comes, as from Rerun's gRPC server; like it, at most :data:`HISTORY_BYTES` (its default, 1 GiB): past
+that the oldest data goes, but never the first bytes read (the recording's identity, its layout and the robot's
+meshes, sent when it opens). Each read is a whole RRD stream, so what is dropped is whole too. Pure: the reader is
+a callable (no rerun here).
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ from collections.abc import Callable, Iterator
 
 PUMP_PERIOD_S = 0.05
 """How often the encoded bytes are taken from the recording (the viewer sees data at most this late)."""
+HISTORY_BYTES = 1 << 30
 WAIT_S = 1.0
 """How long a follower waits for new bytes before it looks again (whether the feed closed)."""
 
@@ -23,9 +27,11 @@ class RecordingFeed:
     """RRD bytes from ``read`` (called every :data:`PUMP_PERIOD_S` in a thread of its own), kept for every
     follower: :meth:`follow` yields them all from the first, then the new ones as they come, until :meth:`close`."""
 
-    def __init__(self, read: Reader, period: float = PUMP_PERIOD_S) -> None:
-        self._read, self._period = read, period
-        self._chunks: list[bytes] = []
+    def __init__(self, read: Reader, period: float = PUMP_PERIOD_S, history: int = HISTORY_BYTES) -> None:
+        self._read, self._period, self._history = read, period, history
+        self._chunks: list[bytes] = []  # the first read, then the newest that fit in the history
+        self._dropped = 0  # reads dropped (after the first) to keep within the history
+        self._size = 0
         self._changed = threading.Condition()
         self._closed = threading.Event()
         self._thread = threading.Thread(target=self._pump, name="r2d2-viz-feed", daemon=True)
@@ -33,14 +39,19 @@ class RecordingFeed:
 
     @property
     def size(self) -> int:
+        """Bytes kept."""
         with self._changed:
-            return sum(len(c) for c in self._chunks)
+            return self._size
 
     def _take(self) -> None:
         data = self._read()
         if data:
             with self._changed:
                 self._chunks.append(bytes(data))
+                self._size += len(data)
+                while self._size > self._history and len(self._chunks) > 2:  # the oldest but the first
+                    self._size -= len(self._chunks.pop(1))
+                    self._dropped += 1
                 self._changed.notify_all()
 
     def _pump(self) -> None:
@@ -48,16 +59,17 @@ class RecordingFeed:
             self._take()
 
     def follow(self) -> Iterator[bytes]:
-        """Every chunk from the first; then waits for more (each wait at most :data:`WAIT_S`) until closed."""
-        sent = 0
+        """Every chunk kept, from the first; then the new ones as they come (each wait at most :data:`WAIT_S`)
+        until closed. A follower that fell behind what was dropped goes on from the oldest kept."""
+        sent = 0  # reads yielded or skipped, dropped ones included
         while True:
             with self._changed:
-                if sent == len(self._chunks):
+                if sent == self._dropped + len(self._chunks):
                     if self._closed.is_set():
                         return
                     self._changed.wait(WAIT_S)
-                new = self._chunks[sent:]
-            sent += len(new)
+                new = self._chunks[max(sent - self._dropped, 1) if sent else 0 :]
+                sent = self._dropped + len(self._chunks)
             yield from new
 
     def close(self) -> None:

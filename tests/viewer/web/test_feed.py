@@ -38,6 +38,20 @@ def test_a_late_follower_gets_everything_from_the_first_byte() -> None:
     assert feed.size == len(b"headerfirstsecondlast")
 
 
+def test_the_history_is_bounded_but_keeps_the_first_read() -> None:
+    """Past the history's bytes the oldest reads go, never the first (the recording's identity and layout)."""
+    reads = [b"F" * 10]
+    feed = RecordingFeed(lambda: reads.pop(0) if reads else None, period=0.01, history=25)
+    behind = feed.follow()
+    assert next(behind) == b"F" * 10  # it has the first read; then it waits, while the rest comes
+    reads.extend([b"a" * 10, b"b" * 10, b"c" * 10])
+    while reads:
+        threading.Event().wait(0.01)
+    feed.close()
+    assert feed.size == 20 and list(feed.follow()) == [b"F" * 10, b"c" * 10]
+    assert list(behind) == [b"c" * 10]  # "a" and "b" were dropped before it asked again
+
+
 def test_a_rerun_recording_arrives_whole(tmp_path: Path) -> None:
     """The bytes followed are an RRD that Rerun's own CLI reads back (the points logged, by entity)."""
     rec = rr.RecordingStream("r2d2_viz_feed_test")
