@@ -129,6 +129,8 @@ def open_recording(
     if save_to is not None:
         sinks.append(rr.FileSink(save_to, write_footer=True))
     rec.set_sinks(*sinks, default_blueprint=blueprint)
+    if feed is not None and blueprint is not None:  # set_sinks gives a binary stream no default blueprint
+        rec.send_blueprint(blueprint, make_active=True, make_default=True)
     if config.layout_file is not None and blueprint is not None:
         blueprint.save(APP_ID, config.layout_file)
     if page is not None and on_ready is not None:
