@@ -25,6 +25,10 @@ MAX_SERVING = 16
 MAX_THREADS = MAX_WAITING + MAX_SERVING
 READ_TIMEOUT_S = 10.0
 """A read (a request's line, headers or body) or a write that takes longer ends the connection."""
+KEEP_ALIVE_S = 330.0
+"""How long a connection that showed the token may wait for its next request: longer than a browser keeps an idle
+connection (Chromium: 300 s), so that the browser, not the server, closes it (a POST sent on a connection the
+server has just closed fails in the page: "Failed to fetch")."""
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1")
 WILDCARDS = ("0.0.0.0", "::", "")
 

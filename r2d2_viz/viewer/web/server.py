@@ -36,7 +36,14 @@ from r2d2_viz.viewer.web.assets import (
     viewer_static,
     widget_js,
 )
-from r2d2_viz.viewer.web.door import READ_TIMEOUT_S, DoorServer, allowed_hosts, host_allowed, origin_allowed
+from r2d2_viz.viewer.web.door import (
+    KEEP_ALIVE_S,
+    READ_TIMEOUT_S,
+    DoorServer,
+    allowed_hosts,
+    host_allowed,
+    origin_allowed,
+)
 from r2d2_viz.viewer.web.feed import RecordingFeed
 
 RECORDING = "recording.rrd"
@@ -83,6 +90,8 @@ class _Handler(BaseHTTPRequestHandler):
 
     def handle_one_request(self) -> None:
         self.server.waiting(self.connection)
+        if getattr(self, "_admitted", False):  # it showed the token: the browser's keep-alive, not a stranger's
+            self.connection.settimeout(KEEP_ALIVE_S)
         self._admitted = False
         try:
             super().handle_one_request()
@@ -106,6 +115,7 @@ class _Handler(BaseHTTPRequestHandler):
             self._refuse(HTTPStatus.FORBIDDEN, "not from this page")
             return None
         self._admitted = self.server.admit(self.connection)
+        self.connection.settimeout(self.timeout)
         if not self._admitted:
             self._refuse(HTTPStatus.SERVICE_UNAVAILABLE, "busy")
             return None
