@@ -5,6 +5,7 @@ Part of the stream layer (with :mod:`r2d2_viz.viewer.stream`, the only modules t
 
 from __future__ import annotations
 
+import copy
 import os
 import shutil
 import signal
@@ -130,7 +131,7 @@ def open_recording(
         sinks.append(rr.FileSink(save_to, write_footer=True))
     rec.set_sinks(*sinks, default_blueprint=blueprint)
     if feed is not None and blueprint is not None:  # set_sinks gives a binary stream no default blueprint
-        rec.send_blueprint(blueprint, make_active=True, make_default=True)
+        rec.send_blueprint(following(blueprint), make_active=True, make_default=True)
     if config.layout_file is not None and blueprint is not None:
         blueprint.save(APP_ID, config.layout_file)
     if page is not None and on_ready is not None:
@@ -143,7 +144,18 @@ def update_blueprint(recording: Recording, blueprint: rrb.Blueprint) -> None:
     planned): the viewer makes it active and the default; a saved ``.rrd`` holds it after the first."""
     if rr.get_application_id(recording=recording.rec) is None:
         return  # a recording that goes nowhere (a live run saved as a bag, --headless): no viewer to lay out
-    recording.rec.send_blueprint(blueprint, make_active=True, make_default=True)
+    live = following(blueprint) if recording.feed is not None else blueprint
+    recording.rec.send_blueprint(live, make_active=True, make_default=True)
+
+
+def following(blueprint: rrb.Blueprint) -> rrb.Blueprint:
+    """``blueprint`` with a time panel that follows the latest data: the page's viewer opens the recording as an
+    HTTP ``.rrd``, which it would play from its start like a file (a gRPC stream it follows by itself)."""
+    live = copy.copy(blueprint)
+    panel = copy.copy(getattr(blueprint, "time_panel", None)) or rrb.TimePanel()
+    panel.play_state = rrb.components.PlayState.Following
+    live.time_panel = panel
+    return live
 
 
 def serve_recording(rec: rr.RecordingStream, config: SinkConfig) -> Recording:
