@@ -10,23 +10,22 @@ import dataclasses
 import math
 import os
 import sys
-import threading
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import UsageError, shown
+from r2d2_viz.errors import UsageError, shown, warn
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.msgs.images import EncoderName
-from r2d2_viz.pacing import Feeds, paced
+from r2d2_viz.pacing import Feeds, keep_serving, paced
 from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
 from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
-from r2d2_viz.signals import signals_set, sigterm_raises
+from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.base import Clock, Source
@@ -141,11 +140,7 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
             from r2d2_viz.ros_out.bag_out import write_bag
 
             if len(plan.robots) > 1:
-                first = plan.robots[0].name
-                print(
-                    shown(f"warning: {config.bag}: several robots: {save} holds only the first, {first}"),
-                    file=sys.stderr,
-                )
+                warn(f"{config.bag}: several robots: {save} holds only the first, {plan.robots[0].name}")
             with sigterm_raises():
                 samples = write_bag(save, plan, plan.description or _description_text(config))
             return RunResult(samples=samples, interrupted=False, saved=save)
@@ -260,8 +255,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                 else:
                     with sigterm_raises():
                         samples = _batch(streamer, windows, feeds, rec.flush, shown)
-            if config.sink.serve and config.bag is not None and not interrupted:
-                _keep_serving(rec.flush)
+            keep_serving(config.sink.serve and config.bag is not None and not interrupted, rec.flush)
             if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
                 notices.report(f"{config.bag}: {line}")
             if feeds.fields is not None:
@@ -280,17 +274,6 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             tmp.unlink(missing_ok=True)
         raise
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
-
-
-def _keep_serving(flush: Callable[[], None]) -> None:
-    """``--bag BAG --serve``: the bag has ended, the page stays up (its viewer holds the whole bag) until Ctrl-C
-    or SIGTERM, as a live run's does."""
-    flush()
-    print("r2d2-viz: the bag has ended; still serving until Ctrl-C", file=sys.stderr, flush=True)
-    stop = threading.Event()
-    with signals_set(stop):
-        while not stop.wait(0.5):
-            pass
 
 
 def _robot_streams(
