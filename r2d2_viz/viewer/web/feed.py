@@ -6,10 +6,15 @@ follows what comes, as from Rerun's gRPC server; like it, at most :data:`HISTORY
 that the oldest data goes, but never the first bytes read (the recording's identity, its layout and the robot's
 meshes, sent when it opens). Each read is a whole RRD stream, so what is dropped is whole too. Pure: the reader is
 a callable (no rerun here).
+
+Each read of a binary stream is whole RRD files (header, messages, end marker, footer). Concatenated, the viewer
+takes each as a new source and plays the recording from its start again; so the feed is *one* stream: the first
+header, then the messages of every file (:func:`messages`), never an end (a live stream's).
 """
 
 from __future__ import annotations
 
+import struct
 import threading
 from collections.abc import Callable, Iterator
 
@@ -19,8 +24,40 @@ HISTORY_BYTES = 1 << 30
 WAIT_S = 1.0
 """How long a follower waits for new bytes before it looks again (whether the feed closed)."""
 
+MAGIC = b"RRF2"
+HEADER_BYTES = 12
+"""An RRD stream's header: ``RRF2``, the format version, the options (compression)."""
+MESSAGE_HEAD = struct.Struct("<QQ")
+"""Each message: its kind (0: the end of the stream, its payload the footer) and its length in bytes."""
+TRAILER = b"RRF2FOOT"
+TRAILER_BYTES = 32
+"""After the end marker's footer: where the footer is, a checksum, ``RRF2FOOT`` and its version."""
+
 Reader = Callable[[], "bytes | None"]
 """Returns the bytes encoded since its last call (None or b'' if none)."""
+
+
+def messages(rrd: bytes) -> tuple[bytes, bytes]:
+    """The header of the first of the RRD files in ``rrd`` and the messages of all of them, without their end
+    markers and footers; ``(b"", rrd)`` if they are not laid out as expected (then passed on whole)."""
+    header, body, offset = b"", [], 0
+    while offset < len(rrd):
+        if rrd[offset : offset + 4] != MAGIC or offset + HEADER_BYTES > len(rrd):
+            return b"", rrd
+        header = header or rrd[offset : offset + HEADER_BYTES]
+        start = offset = offset + HEADER_BYTES
+        while True:
+            if offset + MESSAGE_HEAD.size > len(rrd):
+                return b"", rrd
+            kind, length = MESSAGE_HEAD.unpack_from(rrd, offset)
+            if kind == 0:
+                break
+            offset += MESSAGE_HEAD.size + length
+        body.append(rrd[start:offset])
+        offset += MESSAGE_HEAD.size + length + TRAILER_BYTES
+        if rrd[offset - 12 : offset - 4] != TRAILER:
+            return b"", rrd
+    return header, b"".join(body)
 
 
 class RecordingFeed:
@@ -46,8 +83,10 @@ class RecordingFeed:
     def _take(self) -> None:
         data = self._read()
         if data:
+            header, body = messages(bytes(data))
+            data = header + body if not self._chunks or not header else body
             with self._changed:
-                self._chunks.append(bytes(data))
+                self._chunks.append(data)
                 self._size += len(data)
                 while self._size > self._history and len(self._chunks) > 2:  # the oldest but the first
                     self._size -= len(self._chunks.pop(1))

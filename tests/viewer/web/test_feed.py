@@ -3,6 +3,7 @@ what comes, until the feed closes; what a real Rerun recording stream encodes ar
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 import threading
@@ -53,19 +54,26 @@ def test_the_history_is_bounded_but_keeps_the_first_read() -> None:
 
 
 def test_a_rerun_recording_arrives_whole(tmp_path: Path) -> None:
-    """The bytes followed are an RRD that Rerun's own CLI reads back (the points logged, by entity)."""
+    """The bytes followed are one RRD stream (a single header, no end marker or footer between the reads: the
+    viewer would take each file as a new source and play from the start again) that Rerun's own CLI reads back."""
     rec = rr.RecordingStream("r2d2_viz_feed_test")
     stream = rr.binary_stream(recording=rec)
     feed = RecordingFeed(lambda: stream.read(flush=False), period=0.01)
     for step in range(20):
         rec.set_time("step", sequence=step)
         rec.log("points", rr.Points3D([[step, 0.0, 0.0]]))
+        if step % 5 == 4:
+            rec.flush()
+            threading.Event().wait(0.05)  # the feed takes a read: several RRD files in all
     rec.flush()
     rec.disconnect()
     feed.close()
     rrd = tmp_path / "followed.rrd"
-    rrd.write_bytes(b"".join(feed.follow()))
+    followed = b"".join(feed.follow())
+    rrd.write_bytes(followed)
+    assert followed.count(b"RRF2") == 1 and followed.startswith(b"RRF2") and b"RRF2FOOT" not in followed
     rerun = Path(sys.executable).parent / "rerun"
     printed = subprocess.run([str(rerun), "rrd", "print", str(rrd)], capture_output=True, text=True, timeout=60)
     assert printed.returncode == 0, printed.stderr
     assert "/points" in printed.stdout and "Points3D:positions" in printed.stdout
+    assert sum(int(n) for n in re.findall(r"with (\d+) rows? .* - /points", printed.stdout)) == 20
