@@ -179,7 +179,8 @@ def serve_tools(
 ) -> ToolsPage:
     """Stream ``recording`` (default: the current one) to r2d2-viz's page — Rerun's web viewer with RViz's tools,
     on ``bind`` behind a per-run token — instead of its other sinks. The tools pick, draw and call
-    :func:`on_pick`'s callbacks (and ``say`` with each line); nothing is published."""
+    :func:`on_pick`'s callbacks (and ``say`` with each line); nothing is published. ``port`` is unused (the page
+    carries the recording: no gRPC port is opened), kept so that calls which pass it still work."""
     served = serve_recording(
         current_recording(recording), SinkConfig(serve=True, bind=bind, port=port, web_port=web_port)
     )

@@ -6,6 +6,7 @@ else is unexpected and exits 1.
 
 from __future__ import annotations
 
+import re
 import sys
 import threading
 from collections.abc import Iterable
@@ -82,9 +83,21 @@ def short(name: object, width: int = NAME_WIDTH) -> str:
     return text if len(text) <= width else text[: width - 1] + "…"
 
 
+CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+"""Control characters but tab and newline: a frame or topic name from a bag that carries them would move the
+cursor, rewrite the lines above or set the terminal's title."""
+
+
+def shown(text: str) -> str:
+    """``text`` with its control characters shown as escapes (``\\x1b``), never sent to the terminal."""
+    return CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
+
+
 def stderr_line(text: str, limit: int = LINE_LIMIT) -> str:
-    """``text`` with each of its lines at most ``limit`` characters: a longer one keeps its start and its last 80
-    characters (where "(further problems … are counted)" and the like are) around a '…'."""
+    """``text`` with its control characters shown (:func:`shown`) and each of its lines at most ``limit``
+    characters: a longer one keeps its start and its last 80 characters (where "(further problems … are
+    counted)" and the like are) around a '…'."""
+    text = shown(text)
     return "\n".join(line if len(line) <= limit else f"{line[: limit - 81]}…{line[-80:]}" for line in text.split("\n"))
 
 

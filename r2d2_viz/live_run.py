@@ -20,7 +20,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Protocol
 
-from r2d2_viz.errors import R2d2VizError, listed
+from r2d2_viz.errors import R2d2VizError, listed, shown
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.msgs.images import EncoderName
@@ -392,7 +392,7 @@ def _say_received(source: LiveSource, seconds: float) -> None:
     if not received:
         discovery: RosDiscovery | None = getattr(source.graph, "discovery", None)
         where = f" on {discovery.searched()}" if discovery is not None else ""
-        print(f"r2d2-viz: received nothing in {seconds:.1f} s{where}", file=sys.stderr)
+        print(shown(f"r2d2-viz: received nothing in {seconds:.1f} s{where}"), file=sys.stderr)
         print(f"r2d2-viz: {EMPTY_GRAPH_HINT}; {EMPTY_RUN_NEXT}", file=sys.stderr, flush=True)
         return
-    print(f"r2d2-viz: received {received}", file=sys.stderr, flush=True)
+    print(shown(f"r2d2-viz: received {received}"), file=sys.stderr, flush=True)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -232,3 +233,16 @@ def _paced_samples(
         sent += j - i
         i = j
     return i
+
+
+def keep_serving(serving: bool, flush: Callable[[], None]) -> None:
+    """``--bag BAG --serve`` once the bag has ended (``serving``): the page stays up, its viewer holding the whole
+    bag, until Ctrl-C or SIGTERM, as a live run's does."""
+    if not serving:
+        return
+    flush()
+    print("r2d2-viz: the bag has ended; still serving until Ctrl-C", file=sys.stderr, flush=True)
+    stop = threading.Event()
+    with signals_set(stop):
+        while not stop.wait(0.5):
+            pass

@@ -15,11 +15,11 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import UsageError
+from r2d2_viz.errors import UsageError, shown, warn
 from r2d2_viz.kinematics.tree import compile_tree
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.msgs.images import EncoderName
-from r2d2_viz.pacing import Feeds, paced
+from r2d2_viz.pacing import Feeds, keep_serving, paced
 from r2d2_viz.progress import progress_bar
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
@@ -141,8 +141,7 @@ def run(config: RunConfig, *, on_ready: Callable[[str], None] | None = None) -> 
             from r2d2_viz.ros_out.bag_out import write_bag
 
             if len(plan.robots) > 1:
-                first = plan.robots[0].name
-                print(f"warning: {config.bag}: several robots: {save} holds only the first, {first}", file=sys.stderr)
+                warn(f"{config.bag}: several robots: {save} holds only the first, {plan.robots[0].name}")
             with sigterm_raises():
                 samples = write_bag(save, plan, plan.description or _description_text(config))
             return RunResult(samples=samples, interrupted=False, saved=save)
@@ -257,6 +256,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                 else:
                     with sigterm_raises():
                         samples = _batch(streamer, windows, feeds, rec.flush, shown)
+            keep_serving(config.sink.serve and config.bag is not None and not interrupted, rec.flush)
             if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
                 notices.report(f"{config.bag}: {line}")
             if feeds.fields is not None:
@@ -397,4 +397,4 @@ def print_summary(result: RunResult, config: RunConfig) -> None:
     how = " (stopped by signal)" if result.interrupted else ""
     origin = "from the ROS 2 graph" if config.ros else f"from {config.bag}" if config.bag else f"at {config.rate:g} Hz"
     what = "joint states" if config.ros else result.what
-    print(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}", file=sys.stderr)
+    print(shown(f"r2d2-viz: {result.samples} {what} {origin}{where}{how}"), file=sys.stderr)

@@ -76,7 +76,7 @@ def test_serve_on_a_port_in_use_is_a_clear_error(tmp_path: Path) -> None:
         busy.bind(("127.0.0.1", 0))
         busy.listen()
         port = busy.getsockname()[1]
-        result = cli("--serve", "--port", str(port), "--duration", "1", cwd=tmp_path)
+        result = cli("--serve", "--web-port", str(port), "--duration", "1", cwd=tmp_path)  # the one port it opens
     assert result.returncode == 2
     _assert_refused(result.stderr, f"cannot listen on 127.0.0.1:{port}", tmp_path)
 

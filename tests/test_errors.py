@@ -74,3 +74,13 @@ def test_warnings_from_two_threads_stay_whole_lines(capsys: pytest.CaptureFixtur
         thread.join()
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 600 and all(line.startswith("warning: ") and line.endswith("x" * 200) for line in lines)
+
+
+def test_control_characters_are_shown_not_sent(capsys: pytest.CaptureFixture[str]) -> None:
+    """A frame name from a bag with escape sequences (cursor up, erase line, set the title, a carriage return):
+    the warning shows them as escapes, one line, and the lines above stay as they were."""
+    frame = "base\x1b[2A\x1b[2Kr2d2-viz: all fine\x1b]0;pwned\x07\r\x9b"
+    errors.warn(f"no transform to {frame}")
+    err = capsys.readouterr().err
+    assert err == "warning: no transform to base\\x1b[2A\\x1b[2Kr2d2-viz: all fine\\x1b]0;pwned\\x07\\x0d\\x9b\n"
+    assert errors.shown("tab\tand\nnewline") == "tab\tand\nnewline"  # the two a line may hold

@@ -22,7 +22,7 @@ from r2d2_viz.cli.parser import (
     SAVE_SUFFIXES,
     build_parser,
 )
-from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, stderr_line
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, shown, stderr_line
 
 EXIT_STDOUT_CLOSED = 141
 """stdout closed early (``r2d2-viz --bag b --list | head``): quiet, with the status a shell gives ``seq`` or ``cat``
@@ -260,7 +260,7 @@ def _frames(text: str | None) -> tuple[str, ...] | None:
 
 def _no_display(serving: str, port: int, web_port: int) -> str:
     """The one line of the fallback to the web viewer: why, the URL, and how to reach it from another machine."""
-    forward = f"ssh -L {web_port}:localhost:{web_port} -L {port}:localhost:{port} THIS-HOST"
+    forward = f"ssh -L {web_port}:localhost:{web_port} THIS-HOST"  # one port: the page carries the recording
     how = serving.removeprefix("serving: ")
     why = "no display for a viewer window: serving the web viewer instead"
     return f"{why}; {how} (on your own machine first: {forward})"
@@ -276,7 +276,7 @@ def _list_bag(path: Path) -> int:
         rates = topic_rates(bag)
         for info in sorted(bag.topics.values(), key=lambda t: t.name):
             count = f"{info.count} message{'' if info.count == 1 else 's'}"
-            print(f"{info.name} [{info.msgtype}] {count}{rate_words(rates.get(info.name))}", flush=True)
+            print(shown(f"{info.name} [{info.msgtype}] {count}{rate_words(rates.get(info.name))}"), flush=True)
     return EXIT_OK
 
 
@@ -289,14 +289,14 @@ def _list_topics() -> int:
 
     topics, nodes, discovery = list_topics()
     for topic, msgtype, publishers in topics:
-        print(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}", flush=True)
+        print(shown(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}"), flush=True)
     for node in nodes:  # then ros2 node list, each with ros2 node info's topics
-        print(f"node {node.name}", flush=True)
+        print(shown(f"node {node.name}"), flush=True)
         for verb, ends in (("publishes", node.publishes), ("subscribes", node.subscribes)):
             for topic, msgtype in ends:
-                print(f"  {verb} {topic} [{msgtype}]", flush=True)
+                print(shown(f"  {verb} {topic} [{msgtype}]"), flush=True)
     if not topics:
         searched = f"no topics after {max(LIST_SECONDS, NODE_SECONDS):g} s of discovery on {discovery.searched()}"
-        print(f"r2d2-viz: {searched}", file=sys.stderr)  # what was searched, then how to check: two short lines
+        print(shown(f"r2d2-viz: {searched}"), file=sys.stderr)  # what was searched, then how to check: two short lines
         print(f"r2d2-viz: {EMPTY_GRAPH_HINT}; {EMPTY_LIST_NEXT}", file=sys.stderr, flush=True)
     return EXIT_OK

@@ -202,13 +202,11 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="URL",
         help=f"stream live to a running viewer (default {CONNECT_DEFAULT})",
     )
-    sinks.add_argument("--serve", action="store_true", help="serve a web viewer and stream live to it")
+    sinks.add_argument("--serve", action="store_true", help="serve a web viewer and stream live to it, until Ctrl-C")
     sinks.add_argument("--headless", action="store_true", help="compute everything, show nothing (checks a URDF)")
     sinks.add_argument("--realtime", action="store_true", help="pace --save to the wall clock like a live run")
     sinks.add_argument("--bind", default="127.0.0.1", metavar="ADDR", help="address --serve listens on")
-    sinks.add_argument(
-        "--port", type=int, default=None, help="gRPC port for --spawn / --serve (default 9876; --dataset: 51234)"
-    )
+    sinks.add_argument("--port", type=int, default=None, help="gRPC port for --spawn (default 9876; --dataset: 51234)")
     sinks.add_argument("--web-port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
     sinks.add_argument(
         "--tool-topic",

@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable, Mapping
 from typing import Any, Protocol
 
-from r2d2_viz.errors import R2d2VizError
+from r2d2_viz.errors import R2d2VizError, shown
 from r2d2_viz.msgs.typestore import typestore
 from r2d2_viz.ros_out.joint_states_out import JointStatesOut
 from r2d2_viz.rviz.tools import GOAL_POSE, MEASURE, MESSAGE_TYPES, POSE_ESTIMATE, PUBLISH_POINT, TELEOP, tool_topics
@@ -38,8 +38,9 @@ PICK_CALLBACKS: list[Callable[[Pick], None]] = []
 
 
 def say_line(line: str) -> None:
-    """The tools' lines go to stdout, one each (a script can read the clicked coordinates off it)."""
-    print(line, file=sys.stdout, flush=True)
+    """The tools' lines go to stdout, one each (a script can read the clicked coordinates off it); a frame name
+    from a bag shows its control characters (``\\x1b``), never sends them to the terminal."""
+    print(shown(line), file=sys.stdout, flush=True)
 
 
 class Publisher(Protocol):

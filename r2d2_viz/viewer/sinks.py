@@ -5,6 +5,7 @@ Part of the stream layer (with :mod:`r2d2_viz.viewer.stream`, the only modules t
 
 from __future__ import annotations
 
+import copy
 import os
 import shutil
 import signal
@@ -15,7 +16,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from urllib.parse import quote, urlsplit
+from urllib.parse import urlsplit
 
 import rerun as rr
 import rerun.blueprint as rrb
@@ -23,7 +24,8 @@ import rerun.blueprint as rrb
 from r2d2_viz.errors import DEBUG_ENV, SinkError, UsageError, one_line
 from r2d2_viz.viewer.entities import APP_ID
 from r2d2_viz.viewer.web.assets import viewer_static
-from r2d2_viz.viewer.web.server import PageServer
+from r2d2_viz.viewer.web.feed import RecordingFeed
+from r2d2_viz.viewer.web.server import RECORDING, PageServer
 
 DEFAULT_GRPC_PORT = 9876
 DEFAULT_WEB_PORT = 9090
@@ -114,34 +116,34 @@ def open_recording(
     rec = rr.RecordingStream(APP_ID, recording_id=config.recording_id, send_properties=True)
     for name, value in config.properties:
         rec.send_property(name, rr.AnyValues(value=value))
-    sinks: list[rr.FileSink | rr.GrpcSink] = []
-    server: subprocess.Popen[bytes] | None = None
+    sinks: list[rr.FileSink | rr.GrpcSink | rr.BinaryStream] = []
     page: PageServer | None = None
     if config.spawn:
         if not has_display():
             raise SinkError("--spawn: no display to open the viewer on; use --save FILE.rrd or --serve instead")
         sinks.append(rr.GrpcSink(_spawn_viewer(config.port)))
         if config.page and not config.serve:
-            page = PageServer(config.port, config.bind, config.web_port)
+            page = PageServer(None, config.bind, config.web_port)  # the sliders; the native viewer shows the robot
     if config.connect is not None:
         _probe(config.connect)
         sinks.append(rr.GrpcSink(config.connect))
+    feed: RecordingFeed | None = None
     if config.serve:
-        server, uri, page = serve(config)
-        sinks.append(rr.GrpcSink(uri))
+        stream = rr.binary_stream(recording=rec)
+        page, feed = serve(config, stream)
+        sinks.append(stream)
     if save_to is not None:
         sinks.append(rr.FileSink(save_to, write_footer=True))
     rec.set_sinks(*sinks, default_blueprint=blueprint)
+    if feed is not None and blueprint is not None:  # set_sinks gives a binary stream no default blueprint
+        rec.send_blueprint(following(blueprint), make_active=True, make_default=True)
     if config.layout_file is not None and blueprint is not None:
         blueprint.save(APP_ID, config.layout_file)
-    if config.serve and on_ready is not None:
-        host = "localhost" if config.bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else config.bind
-        public = uri.replace("127.0.0.1", host)
-        url = page.url() if page is not None else f"http://{host}:{config.web_port}/?url={quote(public, safe='')}"
-        on_ready(f"serving: open {url} in a browser, or run: rerun {public}")
+    if config.serve and page is not None and on_ready is not None:
+        on_ready(f"serving: open {page.url()} in a browser, or run: rerun {page.url()}{RECORDING}")
     elif page is not None and on_ready is not None:
         on_ready(f"the page with the sliders: open {page.url()} in a browser")
-    return Recording(rec, server, live=config.live, page=page)
+    return Recording(rec, live=config.live, page=page, feed=feed)
 
 
 def update_blueprint(recording: Recording, blueprint: rrb.Blueprint) -> None:
@@ -149,14 +151,25 @@ def update_blueprint(recording: Recording, blueprint: rrb.Blueprint) -> None:
     planned): the viewer makes it active and the default; a saved ``.rrd`` holds it after the first."""
     if rr.get_application_id(recording=recording.rec) is None:
         return  # a recording that goes nowhere (a live run saved as a bag, --headless): no viewer to lay out
-    recording.rec.send_blueprint(blueprint, make_active=True, make_default=True)
+    live = following(blueprint) if recording.feed is not None else blueprint
+    recording.rec.send_blueprint(live, make_active=True, make_default=True)
+
+
+def following(blueprint: rrb.Blueprint) -> rrb.Blueprint:
+    """``blueprint`` with a time panel that follows the latest data: the page's viewer opens the recording as an
+    HTTP ``.rrd``, which it would play from its start like a file (a gRPC stream it follows by itself)."""
+    live = copy.copy(blueprint)
+    panel = copy.copy(getattr(blueprint, "time_panel", None)) or rrb.TimePanel()
+    panel.play_state = rrb.components.PlayState.Following
+    live.time_panel = panel
+    return live
 
 
 def serve_recording(rec: rr.RecordingStream, config: SinkConfig) -> Recording:
     """``rec`` streamed to a served viewer (:func:`serve`) instead of its other sinks (the Python API's page)."""
-    server, uri, page = serve(config)
-    rec.set_sinks(rr.GrpcSink(uri))
-    return Recording(rec, server, live=True, page=page)
+    stream = rr.binary_stream(recording=rec)
+    page, feed = serve(config, stream)
+    return Recording(rec, live=True, page=page, feed=feed)
 
 
 def _spawn_viewer(port: int) -> str:
@@ -216,47 +229,20 @@ def _listening(host: str, port: int) -> bool:
         return probe.connect_ex((host, port)) == 0
 
 
-def serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str, PageServer | None]:
-    """Rerun's gRPC proxy (``rerun --serve-grpc``) and r2d2-viz's page (the web viewer with RViz's tools, see
-    :mod:`r2d2_viz.viewer.web`), both on ``--bind``. Without rerun-notebook, Rerun's own page (``--serve-web``).
+def serve(config: SinkConfig, stream: rr.BinaryStream) -> tuple[PageServer, RecordingFeed]:
+    """r2d2-viz's page (the web viewer with RViz's tools, see :mod:`r2d2_viz.viewer.web`) on ``--bind``, its
+    viewer reading the recording from ``stream`` through the page's server, under the page's token.
 
-    (The SDK's in-process ``serve_web_viewer`` always listens on every address; this one does not.)
+    (No Rerun gRPC server: it takes no token, and would hand the recording to any local process, and relay what
+    any process writes into it to the operator's viewer. The SDK's ``serve_web_viewer`` listens everywhere.)
     """
-    _check_port_free(config.bind, config.port, "gRPC server")
-    _check_port_free(config.bind, config.web_port, "web viewer")
-    executable = viewer_executable()
-    if executable is None:
-        raise SinkError("--serve: the 'rerun' binary that ships with rerun-sdk was not found; use --save FILE.rrd")
+    viewer_static()  # rerun-notebook is a dependency; a broken install is one line
+    feed = RecordingFeed(lambda: stream.read(flush=False))
     try:
-        viewer_static()
-        own_page = True
+        return PageServer(feed, config.bind, config.web_port), feed
     except SinkError:
-        own_page = False
-    command = [
-        executable,
-        "--serve-grpc" if own_page else "--serve-web",
-        "--bind",
-        config.bind,
-        "--port",
-        str(config.port),
-        *(() if own_page else ("--web-viewer-port", str(config.web_port))),
-    ]
-    output = _child_output()
-    server = subprocess.Popen(command, stdout=output, stderr=output, start_new_session=True)
-    local = "127.0.0.1" if config.bind in ("0.0.0.0", "::") else config.bind
-    deadline = time.monotonic() + SERVER_START_TIMEOUT_S
-    while time.monotonic() < deadline and server.poll() is None:
-        if _listening(local, config.port):
-            host = f"[{local}]" if ":" in local else local
-            try:
-                page = PageServer(config.port, config.bind, config.web_port) if own_page else None
-            except SinkError:
-                _stop(server)
-                raise
-            return server, f"rerun+http://{host}:{config.port}/proxy", page
-        time.sleep(0.05)
-    _stop(server)
-    raise SinkError(f"--serve: the Rerun server did not start on {config.bind}:{config.port}")
+        feed.close()
+        raise
 
 
 def _stop(process: subprocess.Popen[bytes]) -> None:
@@ -275,10 +261,13 @@ class Recording:
 
     rec: rr.RecordingStream
     server: subprocess.Popen[bytes] | None = None
+    """Kept for callers that start a Rerun process of their own (``--serve`` starts none)."""
     live: bool = False
     """A viewer takes the data (closing waits for it at most ``CLOSE_TIMEOUT_S``)."""
     page: PageServer | None = None
     """``--serve``'s page (the web viewer with RViz's tools), if any."""
+    feed: RecordingFeed | None = None
+    """What the page's viewer reads (``--serve``)."""
 
 
 def close_recording(recording: Recording) -> None:
@@ -293,6 +282,8 @@ def close_recording(recording: Recording) -> None:
             recording.rec.flush()
         recording.rec.disconnect()
     finally:
+        if recording.feed is not None:
+            recording.feed.close()
         if recording.page is not None:
             recording.page.close()
         if recording.server is not None:

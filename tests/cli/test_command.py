@@ -201,14 +201,15 @@ def test_without_a_display_the_default_viewer_is_the_web_viewer_on_loopback(tmp_
     """No sink flag on a machine without a display (a server, a container, SSH): the web viewer, served on
     127.0.0.1, and one line with its URL and the ``ssh -L`` that reaches it from another machine. (A typed
     ``--spawn`` still says it cannot: tests/test_bad_input.py.)"""
-    grpc, web = _free_ports(2)
+    [web] = _free_ports(1)
     env = {"DISPLAY": "", "WAYLAND_DISPLAY": ""}
-    result = cli("--duration", "1", "--port", str(grpc), "--web-port", str(web), env=env, cwd=tmp_path)
+    result = cli("--duration", "1", "--web-port", str(web), env=env, cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     [line] = [line for line in result.stderr.splitlines() if "no display" in line]
-    assert re.search(rf"open http://localhost:{web}/[A-Za-z0-9_-]{{32}}/ in a browser", line), line  # with its token
-    assert f"or run: rerun rerun+http://localhost:{grpc}/proxy" in line, line
-    assert f"ssh -L {web}:localhost:{web} -L {grpc}:localhost:{grpc} " in line, line
+    found = re.search(rf"open http://localhost:{web}/([A-Za-z0-9_-]{{32}})/ in a browser", line)  # with its token
+    assert found, line
+    assert f"or run: rerun http://localhost:{web}/{found.group(1)}/recording.rrd" in line, line
+    assert f"ssh -L {web}:localhost:{web} THIS-HOST" in line, line  # one port: the recording comes through the page
     assert "error" not in result.stderr and "30 samples" in result.stderr
     assert not list(tmp_path.iterdir())
 
@@ -222,13 +223,11 @@ def test_rerun_log_lines_only_with_r2d2_viz_debug(tmp_path: Path) -> None:
     debug = cli("--headless", "--duration", "0.2", env={"R2D2_VIZ_DEBUG": "1"}, cwd=tmp_path)
     assert debug.returncode == 0, debug.stderr
     assert "re_sdk::recording_stream" in debug.stderr
-    # the Rerun server --serve starts: silent, unless R2D2_VIZ_DEBUG ("Listening for gRPC connections" at INFO)
-    grpc, web = _free_ports(2)
-    serve = ["--serve", "--duration", "0.5", "--port", str(grpc), "--web-port", str(web)]
-    quiet = cli(*serve, cwd=tmp_path)
-    assert quiet.returncode == 0 and "Listening for gRPC" not in quiet.stderr, quiet.stderr
-    debug = cli(*serve, env={"R2D2_VIZ_DEBUG": "1", "RUST_LOG": "info"}, cwd=tmp_path)
-    assert debug.returncode == 0 and "Listening for gRPC" in debug.stderr, debug.stderr
+    # --serve starts no Rerun process (the page's server carries the recording): only the app's own lines
+    [web] = _free_ports(1)
+    quiet = cli("--serve", "--duration", "0.5", "--web-port", str(web), env={"RUST_LOG": "info"}, cwd=tmp_path)
+    assert quiet.returncode == 0, quiet.stderr
+    assert all(line.startswith(("warning: ", "r2d2-viz: ", "serving: ")) for line in quiet.stderr.splitlines())
 
 
 def _entry_points() -> list[str]:
@@ -338,7 +337,8 @@ def test_the_web_viewer_fallback_says_why_when_it_fails(tmp_path: Path) -> None:
         busy.bind(("127.0.0.1", 0))
         busy.listen()
         port = busy.getsockname()[1]
-        result = cli("--duration", "1", "--port", str(port), env={"DISPLAY": "", "WAYLAND_DISPLAY": ""}, cwd=tmp_path)
+        env = {"DISPLAY": "", "WAYLAND_DISPLAY": ""}
+        result = cli("--duration", "1", "--web-port", str(port), env=env, cwd=tmp_path)
     assert result.returncode == 2, result.stderr
     [line] = result.stderr.strip().splitlines()
     assert line.startswith("error: no display for a viewer window, and the web viewer instead failed: "), line

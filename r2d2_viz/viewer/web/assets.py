@@ -33,7 +33,21 @@ def viewer_static() -> Path:
         static = Path(folder) / "static"
         if (static / WASM).is_file() and all((static / name).is_file() for name in VIEWER_FILES):
             return static
-    raise SinkError("--serve: Rerun's web viewer (rerun-notebook) is not installed: pip install 'r2d2-viz[web]'")
+    raise SinkError("--serve: Rerun's web viewer (rerun-notebook) is not installed: reinstall r2d2-viz")
+
+
+FOLLOW_PATCH = (
+    'play_state: msg.play ? "playing" : "paused"',
+    'play_state: msg.play === "following" ? "following" : msg.play ? "playing" : "paused"',
+)
+"""widget.js's time control, taught to follow the latest data, as the viewer does for a gRPC stream: an HTTP
+``.rrd`` opens playing from its start (the page asks for ``following`` when the recording opens)."""
+
+
+def widget_js(static: Path) -> bytes:
+    """rerun-notebook's widget.js with :data:`FOLLOW_PATCH` (unchanged if that line is not there)."""
+    text = (static / "widget.js").read_text(encoding="utf-8")
+    return text.replace(*FOLLOW_PATCH, 1).encode()
 
 
 def cache_dir() -> Path:

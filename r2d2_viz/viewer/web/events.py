@@ -77,10 +77,11 @@ class Drive:
 
 
 def _number(value: Any, what: str, bound: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    finite = isinstance(value, int) or (isinstance(value, float) and math.isfinite(value))
+    if isinstance(value, bool) or not finite:
         raise ToolEventError(f"{what}: expected a finite number, got {str(value)[:40]!r}")
-    if abs(value) > bound:
-        raise ToolEventError(f"{what}: {value:g} is out of range (at most {bound:g})")
+    if abs(value) > bound:  # exact for an int of 400 digits too (which no float holds: never format it as one)
+        raise ToolEventError(f"{what}: {str(value)[:20]} is out of range (at most {bound:g})")
     return float(value)
 
 

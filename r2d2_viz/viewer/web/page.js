@@ -17,7 +17,7 @@ const say = (text) => { status.textContent = text; status.title = text; };
 // --- the anywidget model rerun-notebook's widget reads -------------------------------------------------------
 const listeners = new Map();
 const state = {
-  _url: `rerun+http://${location.hostname}:${config.grpc_port}/proxy`,
+  _url: config.recording ? new URL(config.recording, location.href).href : null, // the RRD stream, as it grows
   _panel_states: null,
   _width: "auto",
   _height: Math.max(200, window.innerHeight - TOOLBAR_PX),
@@ -80,11 +80,21 @@ async function viewEye() {
   }
 }
 
+// The recording comes as an HTTP .rrd, which the viewer plays from its start like a file: once its timeline is
+// there (the first time report of each recording), ask it to follow the latest data, as it does a live stream.
+const following = new Set();
+function followLive(event) {
+  if (event?.type !== "time_update" || following.has(event.recording_id)) return;
+  following.add(event.recording_id);
+  emit("msg:custom", { type: "time_ctrl", play: "following" }, []);
+}
+
 function onViewerEvent(message) {
   if (message === "ready") { window.r2d2.ready = true; return; }
   let event;
   try { event = typeof message === "string" ? JSON.parse(message) : message; } catch { return; }
   window.r2d2.events = [...window.r2d2.events.slice(-19), event]; // the last 20, for scripts and tests
+  followLive(event);
   if (event?.type !== "selection_change" || !active) return;
   const item = (event.items ?? []).find((i) => Array.isArray(i.position));
   if (!item) {

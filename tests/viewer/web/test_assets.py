@@ -23,9 +23,10 @@ def test_the_viewer_is_rerun_notebooks_and_matches_the_sdk() -> None:
     assert "rerun_notebook" not in sys.modules  # found, not imported (its package imports Jupyter)
 
 
-def test_missing_rerun_notebook_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_missing_rerun_notebook_says_to_reinstall(monkeypatch: pytest.MonkeyPatch) -> None:
+    """rerun-notebook is a dependency of every install: missing, the install is broken."""
     monkeypatch.setattr(importlib.util, "find_spec", lambda name: None)
-    with pytest.raises(SinkError, match=r"pip install 'r2d2-viz\[web\]'"):
+    with pytest.raises(SinkError, match=r"\(rerun-notebook\) is not installed: reinstall r2d2-viz"):
         assets.viewer_static()
 
 
@@ -56,3 +57,12 @@ def test_the_page_module_parses(tmp_path: Path) -> None:
     module.write_bytes((HERE / "page.js").read_bytes())
     done = subprocess.run([node, "--check", str(module)], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
+
+
+def test_the_served_widget_follows_the_latest_data() -> None:
+    """rerun-notebook 0.41.0's widget.js has the line the page's follow patch changes (the page asks the viewer
+    to follow the recording as it grows, as it does a gRPC stream)."""
+    static = assets.viewer_static()
+    original = (static / "widget.js").read_text()
+    assert original.count(assets.FOLLOW_PATCH[0]) == 1
+    assert assets.FOLLOW_PATCH[1].encode() in assets.widget_js(static)
