@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import os
 import struct
+import tracemalloc
 import zlib
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -364,3 +366,40 @@ def test_messages_outside_chunks_are_read_by_a_walk(tmp_path: Path) -> None:
 
 def _record_bytes(op: int, body: bytes) -> bytes:
     return bytes([op]) + struct.pack("<Q", len(body)) + body
+
+
+def _copied_while(read: Callable[[], list[Message]]) -> tuple[list[Message], int]:
+    """What ``read`` returns, and the most memory Python allocated beside it (tracemalloc: bytes objects and numpy
+    buffers alike), less the messages it returns (their ``bytes``, made by the test)."""
+    tracemalloc.start()
+    try:
+        got = read()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return got, peak
+
+
+def test_a_filtered_out_message_costs_its_index_entry_not_its_bytes(tmp_path: Path) -> None:
+    """Issue 38: on rosbag2's default, uncompressed chunks, a topic read alone must not copy the chunks' other
+    messages. Two bags by rosbags (uncompressed chunks): chunks that overlap in time (merged into one block) and
+    chunks that do not (each a view of the file's pages). Reading the small topic allocates a few kB, not the
+    megabytes of 600 kB strings beside it in the same chunks; what comes out is what rosbags' reader gives."""
+    spec = BagSpec(types={**TYPES, "/pad": "std_msgs/msg/String"})
+    pad = string("p" * 600_000)
+    spec.add("/robot_description", T0 + 10, string("first")).add("/pad", T0 + 100, pad).add("/pad", T0 + 100, pad)
+    spec.add("/pad", T0 + 50, pad).add("/robot_description", T0 + 80, string("later")).add("/pad", T0 + 90, pad)
+    overlap = storage_file(write_bag(tmp_path / "overlap", spec))
+    chunks, _ = _chunks(overlap)
+    assert [(c.message_start_time - T0, c.message_end_time - T0) for c in chunks[:2]] == [(10, 100), (50, 90)]
+    assert {c.compression for c in chunks} == {""}  # rosbags' default: uncompressed chunks
+    for file, topic in ((overlap, "/robot_description"), (_mixed(tmp_path), "/tf")):
+        scan = McapScan(file)
+        got, peak = _copied_while(lambda s=scan, t=topic: _read(s, [t]))  # type: ignore[misc]
+        assert got == _rosbags(file, {topic})
+        wanted = sum(len(d) for _, _, d in got)
+        assert peak < 2 * wanted + 256_000, (file.name, peak, wanted)  # the file's chunks: > 2.4 MB each bag
+        assert sum(c.chunk_length for c in _chunks(file)[0]) > 2_000_000
+        for block in scan.blocks([topic]):  # each block: views of the file's pages, or a copy of its own messages
+            assert block.buffer.obj is scan._map or len(block.buffer) == block.nbytes
+        scan.close()
