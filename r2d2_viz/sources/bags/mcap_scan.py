@@ -178,10 +178,9 @@ class McapScan:
         """The wanted messages of one chunk; a damaged chunk is counted in :attr:`problems` (once) and skipped."""
         if c.offset in self._damaged:
             return None
-        some = bool(c.index_offsets) and not c.index_offsets.keys() <= wanted.keys()  # some of its channels
         try:
             part = wanted_part(self._map, c, wanted, lo, hi)  # a compressed chunk: up to its last wanted message
-            data = part if part is not None else chunk_data(self._map, c.offset, c.offset + c.length, part=some)
+            data = part if part is not None else _records(self._map, c, wanted)
             found = indexed(self._map, c, order, wanted, data)
             if found is None and part is not None:  # its index does not fit that part: the whole chunk
                 data = chunk_data(self._map, c.offset, c.offset + c.length)
@@ -262,6 +261,13 @@ class McapScan:
     def close(self) -> None:
         with contextlib.suppress(BufferError):  # blocks still hold views of its pages: it closes when they go
             self._map.close()
+
+
+def _records(buf: mmap.mmap, c: ChunkIndex, wanted: dict[int, int]) -> memoryview:
+    """A chunk's records (:func:`chunk_data`): an uncompressed one of which only some channels are wanted is not
+    checked against its CRC, which would read its other messages' bytes too."""
+    some = bool(c.index_offsets) and not c.index_offsets.keys() <= wanted.keys()
+    return chunk_data(buf, c.offset, c.offset + c.length, part=some)
 
 
 def _topics(
