@@ -21,11 +21,15 @@ from collections.abc import Collection, Iterator
 from pathlib import Path
 from urllib.parse import quote
 
-from r2d2_viz.sources.bags.storage import Block, TopicInfo, block_of, other_types_note, topic_tuple
+import numpy as np
+
+from r2d2_viz.sources.bags.storage import Block, TopicInfo, in_time_order, other_types_note, topic_tuple
 
 BLOCK_ROWS = 4096
-BLOCK_BYTES = 16 << 20
-"""A block holds at most this many messages, or about this many bytes (a few images)."""
+BLOCK_BYTES = 8 << 20
+"""A block holds at most this many messages, or about this many bytes (a few images). Unlike an mmapped MCAP
+file's, a ``.db3`` block's bytes are the program's own (anonymous) memory: each row is appended to the block's
+buffer as it comes, and dropped, so a block costs its bytes once, not its rows and their joined copy."""
 
 
 def readonly_uri(path: Path) -> str:
@@ -113,16 +117,14 @@ class Db3:
         cursor = self._db.execute(
             f"SELECT timestamp, topic_id, data FROM messages WHERE {where} ORDER BY timestamp, id", args
         )
-        pending: list[tuple[int, str, bytes | memoryview]] = []
-        size = 0
+        rows = _Rows(order)
         for t, topic_id, data in cursor:  # row by row: a block ends at its bound, even with images of megabytes
-            pending.append((int(t), self._topic_of[int(topic_id)], data))
-            size += len(data)
-            if len(pending) >= BLOCK_ROWS or size >= BLOCK_BYTES:
-                yield block_of(pending, order)
-                pending, size = [], 0
-        if pending:
-            yield block_of(pending, order)
+            rows.add(int(t), self._topic_of[int(topic_id)], data)
+            if len(rows) >= BLOCK_ROWS or rows.size >= BLOCK_BYTES:
+                yield rows.block()
+                rows = _Rows(order)
+        if len(rows):
+            yield rows.block()
 
     def last(self, topic: str, *, before_ns: int | None = None) -> tuple[int, bytes] | None:
         if not self._ids.get(topic):
@@ -135,3 +137,34 @@ class Db3:
 
     def close(self) -> None:
         self._db.close()
+
+
+class _Rows:
+    """A block being gathered from rows: their bytes appended to one buffer as they come (no list of rows)."""
+
+    def __init__(self, order: tuple[str, ...]) -> None:
+        self.order, self.place = order, {t: k for k, t in enumerate(order)}
+        self.buffer = bytearray()
+        self.times: list[int] = []
+        self.index: list[int] = []
+        self.lengths: list[int] = []
+
+    def __len__(self) -> int:
+        return len(self.times)
+
+    @property
+    def size(self) -> int:
+        return len(self.buffer)
+
+    def add(self, t: int, topic: str, data: bytes) -> None:
+        self.times.append(t)
+        self.index.append(self.place[topic])
+        self.lengths.append(len(data))
+        self.buffer += data
+
+    def block(self) -> Block:
+        lengths = np.asarray(self.lengths, dtype=np.int64)
+        starts = np.zeros(len(lengths), dtype=np.int64)
+        np.cumsum(lengths[:-1], out=starts[1:])
+        times, index = np.asarray(self.times, dtype=np.int64), np.asarray(self.index, dtype=np.int32)
+        return in_time_order(Block(times, index, self.order, memoryview(self.buffer), starts, lengths))

@@ -199,16 +199,19 @@ def overlapping(chunks: list[ChunkIndex]) -> Iterator[list[ChunkIndex]]:
 
 
 def merge_blocks(parts: list[Block]) -> Block:
-    """Blocks of overlapping chunks as one block in time order (their bytes copied into one buffer)."""
-    offsets = np.cumsum([0] + [len(p.buffer) for p in parts[:-1]])
-    buffer = memoryview(b"".join(p.buffer for p in parts))
+    """Blocks of overlapping chunks as one block in time order: their messages' bytes copied into one buffer, and
+    only theirs (a chunk's other messages, filtered out, are neither read nor copied)."""
+    lengths = np.concatenate([p.lengths for p in parts])
+    starts = np.zeros(len(lengths), dtype=np.int64)
+    np.cumsum(lengths[:-1], out=starts[1:])
+    pieces = (p.buffer[a : a + n] for p in parts for a, n in zip(p.starts.tolist(), p.lengths.tolist(), strict=True))
     block = Block(
         np.concatenate([p.times_ns for p in parts]),
         np.concatenate([p.topic_index for p in parts]),
         parts[0].topics,
-        buffer,
-        np.concatenate([p.starts + o for p, o in zip(parts, offsets, strict=True)]),
-        np.concatenate([p.lengths for p in parts]),
+        memoryview(b"".join(pieces)),
+        starts,
+        lengths,
         sum(p.cost for p in parts),
     )
     return in_time_order(block)
@@ -240,8 +243,10 @@ def chunk_record(buf: mmap.mmap, start: int, end: int) -> tuple[int, int, str, m
     return uncompressed_size, crc, compression, memoryview(buf)[at + 8 : at + 8 + size]
 
 
-def chunk_data(buf: mmap.mmap, start: int, end: int) -> memoryview:
-    """A chunk record's messages, decompressed and checked."""
+def chunk_data(buf: mmap.mmap, start: int, end: int, *, part: bool = False) -> memoryview:
+    """A chunk record's messages, decompressed and checked. ``part``: only some of its messages are wanted — an
+    uncompressed chunk is then not checked against its CRC, which would read every byte of it (its other messages'
+    pages never touched); a compressed one, decompressed whole anyway, still is."""
     uncompressed_size, crc, compression, raw = chunk_record(buf, start, end)
     if compression == "lz4":
         from lz4.frame import decompress as lz4_decompress
@@ -255,7 +260,7 @@ def chunk_data(buf: mmap.mmap, start: int, end: int) -> memoryview:
         data = raw
     if len(data) != uncompressed_size:
         raise BrokenError("a chunk's size is not what it says")
-    if crc and zlib.crc32(data) != crc:
+    if crc and (compression or not part) and zlib.crc32(data) != crc:
         raise BrokenError("a chunk fails its CRC check")
     return data
 

@@ -6,8 +6,9 @@ killed leaves none) is walked once when opened, record by record, up to the firs
 and channels of its chunks noted: later reads go through that index as through the file's own. What a valid summary
 lacks (every summary record is optional) is found in the data section by :mod:`.mcap_summary`, reading only what
 that needs; no chunk index: the data section is walked once as for a file without a summary. The file is mmapped:
-uncompressed chunks are handed on as views of the file's pages, not copies. MCAP: https://mcap.dev/spec; lz4 and zstd
-come with ``rosbags``.
+uncompressed chunks are handed on as views of the file's pages, not copies, and one of which only some channels are
+wanted is not checked against its CRC, which would read its other messages too (a message filtered out costs its
+index entry, not its bytes). MCAP: https://mcap.dev/spec; lz4 and zstd come with ``rosbags``.
 
 A damaged chunk (bad CRC, unknown compression, an index pointing past the end) is skipped and counted in
 :attr:`McapScan.problems`; the bag says it once. Measured against the ``mcap`` library (the format's reference
@@ -179,7 +180,7 @@ class McapScan:
             return None
         try:
             part = wanted_part(self._map, c, wanted, lo, hi)  # a compressed chunk: up to its last wanted message
-            data = part if part is not None else chunk_data(self._map, c.offset, c.offset + c.length)
+            data = part if part is not None else _records(self._map, c, wanted)
             found = indexed(self._map, c, order, wanted, data)
             if found is None and part is not None:  # its index does not fit that part: the whole chunk
                 data = chunk_data(self._map, c.offset, c.offset + c.length)
@@ -260,6 +261,13 @@ class McapScan:
     def close(self) -> None:
         with contextlib.suppress(BufferError):  # blocks still hold views of its pages: it closes when they go
             self._map.close()
+
+
+def _records(buf: mmap.mmap, c: ChunkIndex, wanted: dict[int, int]) -> memoryview:
+    """A chunk's records (:func:`chunk_data`): an uncompressed one of which only some channels are wanted is not
+    checked against its CRC, which would read its other messages' bytes too."""
+    some = bool(c.index_offsets) and not c.index_offsets.keys() <= wanted.keys()
+    return chunk_data(buf, c.offset, c.offset + c.length, part=some)
 
 
 def _topics(

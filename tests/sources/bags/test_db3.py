@@ -160,3 +160,40 @@ def test_blocks_are_bounded_in_rows_and_bytes(tmp_path: Path, monkeypatch: pytes
     for parts in (blocks, by_bytes):
         assert [(t, bytes(d)) for b in parts for t, d in b.pairs()] == whole
     assert [t for t, _ in whole] == TIMES
+
+
+def test_a_block_holds_its_rows_bytes_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 38: a .db3 block's bytes are the program's own memory (not a file's pages, as an mmapped MCAP's are), so
+    gathering one must not hold its rows and their joined copy at once. 24 strings of 200 kB by rosbags' writer, read
+    in blocks of about 1 MB: while one is read, Python allocates (tracemalloc) the block being gathered and the one
+    before it (still held by the generators' frames until the next is handed out), not also the new block's rows
+    beside their joined copy (three blocks, as before); the messages are rosbags' reader's."""
+    import tracemalloc
+
+    from bagmaker import string
+    from rosbags.rosbag2 import Reader
+
+    import r2d2_viz.sources.bags.db3 as db3
+
+    spec = BagSpec(types={"/pad": "std_msgs/msg/String"})
+    for k in range(24):
+        spec.add("/pad", T0 + k, string(chr(65 + k) * 200_000))
+    bag_dir = write_bag(tmp_path / "b", spec, storage="sqlite3")
+    with Reader(bag_dir) as reader:
+        expected = [(t, bytes(d)) for _, t, d in reader.messages()]
+    monkeypatch.setattr(db3, "BLOCK_BYTES", 1_000_000)
+    with open_bag(storage_file(bag_dir)) as bag:
+        peaks, got = [], []
+        tracemalloc.start()
+        try:
+            for block in bag.blocks(["/pad"]):  # each block dropped before the next is read
+                peaks.append(tracemalloc.get_traced_memory()[1] - sum(len(d) for _, d in got))
+                got += [(t, bytes(d)) for t, d in block.pairs()]
+                del block
+                tracemalloc.reset_peak()
+        finally:
+            tracemalloc.stop()
+    assert got == expected and len(peaks) == 5  # 200,008-byte messages: 5 a block
+    sizes = [5 * 200_008] * 4 + [4 * 200_008]
+    # the previous block and this one (its buffer's growth: up to an eighth more) and the row being read; not three
+    assert all(p < 2.3 * s + 250_000 for p, s in zip(peaks, sizes, strict=True)), peaks

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import os
 import struct
+import tracemalloc
 import zlib
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -151,7 +153,7 @@ def test_chunks_without_a_wanted_topic_are_never_read(tmp_path: Path, monkeypatc
     scan = McapScan(file)
     reads: list[int] = []
     chunk_data = mcap_scan.chunk_data  # decompresses and checks one chunk
-    monkeypatch.setattr(mcap_scan, "chunk_data", lambda buf, a, b: reads.append(a) or chunk_data(buf, a, b))
+    monkeypatch.setattr(mcap_scan, "chunk_data", lambda buf, a, b, **kw: reads.append(a) or chunk_data(buf, a, b, **kw))
     assert _read(scan, ["/joint_states"]) == expected and scan.problems == {}
     assert sorted(reads) == [c.chunk_start_offset for c, h in zip(chunks, holds, strict=True) if "/joint_states" in h]
     # a stretch within one chunk reads that chunk alone
@@ -227,7 +229,7 @@ def test_a_damaged_or_absent_summary_falls_back_to_the_scan(
     assert _read(scan, ["/joint_states", "/tf", "/robot_description"]) == everything
     reads: list[int] = []
     chunk_data = mcap_scan.chunk_data  # decompresses and checks one chunk
-    monkeypatch.setattr(mcap_scan, "chunk_data", lambda buf, a, b: reads.append(a) or chunk_data(buf, a, b))
+    monkeypatch.setattr(mcap_scan, "chunk_data", lambda buf, a, b, **kw: reads.append(a) or chunk_data(buf, a, b, **kw))
     assert _read(scan, ["/tf"], start_ns=T0 + 10 * MS, stop_ns=T0 + 20 * MS) == [
         m for m in everything if m[1] == "/tf" and T0 + 10 * MS <= m[0] < T0 + 20 * MS
     ]
@@ -364,3 +366,73 @@ def test_messages_outside_chunks_are_read_by_a_walk(tmp_path: Path) -> None:
 
 def _record_bytes(op: int, body: bytes) -> bytes:
     return bytes([op]) + struct.pack("<Q", len(body)) + body
+
+
+def _copied_while(read: Callable[[], list[Message]]) -> tuple[list[Message], int]:
+    """What ``read`` returns, and the most memory Python allocated beside it (tracemalloc: bytes objects and numpy
+    buffers alike), less the messages it returns (their ``bytes``, made by the test)."""
+    tracemalloc.start()
+    try:
+        got = read()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return got, peak
+
+
+def test_a_filtered_out_message_costs_its_index_entry_not_its_bytes(tmp_path: Path) -> None:
+    """Issue 38: on rosbag2's default, uncompressed chunks, a topic read alone must not copy the chunks' other
+    messages. Two bags by rosbags (uncompressed chunks): chunks that overlap in time (merged into one block) and
+    chunks that do not (each a view of the file's pages). Reading the small topic allocates a few kB, not the
+    megabytes of 600 kB strings beside it in the same chunks; what comes out is what rosbags' reader gives."""
+    spec = BagSpec(types={**TYPES, "/pad": "std_msgs/msg/String"})
+    pad = string("p" * 600_000)
+    spec.add("/robot_description", T0 + 10, string("first")).add("/pad", T0 + 100, pad).add("/pad", T0 + 100, pad)
+    spec.add("/pad", T0 + 50, pad).add("/robot_description", T0 + 80, string("later")).add("/pad", T0 + 90, pad)
+    overlap = storage_file(write_bag(tmp_path / "overlap", spec))
+    chunks, _ = _chunks(overlap)
+    assert [(c.message_start_time - T0, c.message_end_time - T0) for c in chunks[:2]] == [(10, 100), (50, 90)]
+    assert {c.compression for c in chunks} == {""}  # rosbags' default: uncompressed chunks
+    for file, topic in ((overlap, "/robot_description"), (_mixed(tmp_path), "/tf")):
+        scan = McapScan(file)
+        got, peak = _copied_while(lambda s=scan, t=topic: _read(s, [t]))  # type: ignore[misc]
+        assert got == _rosbags(file, {topic})
+        wanted = sum(len(d) for _, _, d in got)
+        assert peak < 2 * wanted + 256_000, (file.name, peak, wanted)  # the file's chunks: > 2.4 MB each bag
+        assert sum(c.chunk_length for c in _chunks(file)[0]) > 2_000_000
+        for block in scan.blocks([topic]):  # each block: views of the file's pages, or a copy of its own messages
+            assert block.buffer.obj is scan._map or len(block.buffer) == block.nbytes
+        scan.close()
+
+
+def test_a_topic_read_alone_does_not_read_its_chunks_for_their_crc(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Issue 38: rosbag2's recorder (the mcap library) writes each chunk's CRC, which covers all its records: checking
+    it reads every byte of the chunk, the messages filtered out too. rosbags' bag (uncompressed chunks, CRC 0) given
+    the CRCs the spec defines (CRC-32 of the chunk's records, zlib's): /tf alone is read without computing one, the
+    three topics with one per chunk, over the whole chunk; the messages are rosbags' reader's either way."""
+    import r2d2_viz.sources.bags.mcap_records as mcap_records
+
+    file = _mixed(tmp_path)
+    chunks, _ = _chunks(file)
+    data = bytearray(file.read_bytes())
+    for c in chunks:  # spec: Chunk = op, length, start, end, uncompressed size, uncompressed crc u32, compression, ...
+        at = c.chunk_start_offset + 9
+        (name,) = struct.unpack_from("<I", data, at + 28)
+        assert name == 0  # uncompressed
+        records = data[at + 40 : at + 40 + c.compressed_size]
+        struct.pack_into("<I", data, at + 24, zlib.crc32(records))
+    file.write_bytes(bytes(data))
+    checked: list[int] = []
+
+    def crc32(buffer: memoryview) -> int:
+        checked.append(len(buffer))
+        return zlib.crc32(buffer)
+
+    monkeypatch.setattr(mcap_records, "zlib", type("Zlib", (), {"crc32": staticmethod(crc32)}))
+    scan = McapScan(file)
+    assert _read(scan, ["/tf"]) == _rosbags(file, {"/tf"}) and checked == []
+    topics = ["/joint_states", "/tf", "/robot_description"]
+    assert _read(scan, topics) == _rosbags(file, set(topics)) and scan.problems == {}
+    assert sorted(checked) == sorted(c.uncompressed_size for c in chunks) and len(chunks) > 3
