@@ -26,12 +26,19 @@ from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, stderr_line
 
 
 def main(argv: list[str] | None = None) -> int:
+    from r2d2_viz.signals import stoppable
+
+    stoppable()
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         return _main(args, parser)
     except R2d2VizError as exc:
         print(stderr_line(f"error: {exc}"), file=sys.stderr)
+        if getattr(exc, "stuck", False):  # Rerun's file sink deadlocked (a full disk): its threads would hold the exit
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(EXIT_BAD_INPUT)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("r2d2-viz: interrupted; nothing saved", file=sys.stderr)

@@ -9,6 +9,7 @@ alone, since a dying worker also takes down the other conversions in flight in i
 
 from __future__ import annotations
 
+import atexit
 import dataclasses
 import glob
 import json
@@ -23,7 +24,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import R2d2VizError, UsageError, one_line
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, one_line
 from r2d2_viz.fleet.identity import BagId, identify, is_up_to_date, output_path
 from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.signals import sigterm_raises
@@ -158,8 +159,10 @@ def convert_one(job: Job) -> Outcome:
         if tmp_layout.exists():  # beside its recording: the dataset's layout when served (viewer/catalog.py)
             os.replace(tmp_layout, layout)
         os.replace(tmp, job.out)
-    except R2d2VizError as exc:
-        return Outcome(job, one_line(exc), time.perf_counter() - start)
+    except R2d2VizError as exc:  # named after the output, not the hidden file the runner was given
+        if getattr(exc, "stuck", False):  # Rerun's file sink deadlocked on a full disk: its threads would hold
+            atexit.register(os._exit, 0)  # this worker's exit for ever (run before Rerun's own exit handler)
+        return Outcome(job, one_line(exc).replace(str(tmp), str(job.out)), time.perf_counter() - start)
     except Exception as exc:
         return Outcome(job, f"unexpected {type(exc).__name__}: {one_line(exc)}", time.perf_counter() - start)
     finally:
@@ -181,6 +184,8 @@ def remove_partials(jobs: Iterable[Job]) -> None:
 
 def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:
     """Convert ``jobs`` in ``workers`` processes; False if interrupted (finished outputs kept)."""
+    if not os.environ.get(DEBUG_ENV):  # Rerun's own log lines (a full disk's raw ERROR) off in the workers too:
+        os.environ["RUST_LOG"] = "off"  # its filter is read when they import rerun; our line names bag and cause
     try:
         with sigterm_raises():  # SIGTERM stops it as Ctrl-C does
             broken = _pool(jobs, workers, on_done)

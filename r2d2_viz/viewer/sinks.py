@@ -5,6 +5,8 @@ Part of the stream layer (with :mod:`r2d2_viz.viewer.stream`, the only modules t
 
 from __future__ import annotations
 
+import ctypes
+import importlib.util
 import os
 import shutil
 import signal
@@ -22,6 +24,7 @@ import rerun.blueprint as rrb
 
 from r2d2_viz.errors import DEBUG_ENV, SinkError, UsageError, one_line
 from r2d2_viz.viewer.entities import APP_ID
+from r2d2_viz.viewer.files.whole import flush_file
 from r2d2_viz.viewer.web.assets import viewer_static
 from r2d2_viz.viewer.web.server import PageServer
 
@@ -72,7 +75,14 @@ def current_recording(recording: rr.RecordingStream | None = None) -> rr.Recordi
 
 
 def viewer_executable() -> str | None:
-    """The ``rerun`` viewer binary that ships with rerun-sdk (next to this Python), else on PATH."""
+    """The ``rerun`` viewer binary that ships with rerun-sdk (rerun_cli's own, not the Python script in front of it:
+    a signal to that script ends it and leaves the binary running), else the script next to this Python, else on
+    PATH."""
+    spec = importlib.util.find_spec("rerun_cli")
+    if spec is not None and spec.origin is not None:
+        binary = Path(spec.origin).parent / "rerun"
+        if binary.is_file() and os.access(binary, os.X_OK):
+            return str(binary)
     beside = Path(sys.executable).parent / "rerun"
     if beside.is_file() and os.access(beside, os.X_OK):
         return str(beside)
@@ -82,6 +92,19 @@ def viewer_executable() -> str | None:
 def _child_output() -> int | None:
     """Where the Rerun processes we start write their log lines: nowhere, unless ``R2D2_VIZ_DEBUG`` is set."""
     return None if os.environ.get(DEBUG_ENV) else subprocess.DEVNULL
+
+
+def ends_with_us() -> None:
+    """``preexec_fn`` of every process the app starts: it gets SIGTERM when the app ends, however the app ends
+    (Linux; SIGKILL included), and SIGINT back at its default (a parent that ignores SIGINT, ``nohup … &``)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    if _PRCTL is not None:
+        _PRCTL(PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
+PR_SET_PDEATHSIG = 1
+_PRCTL = ctypes.CDLL(None).prctl if sys.platform.startswith("linux") else None
+"""Looked up before any fork: a ``preexec_fn`` should do as little as it can."""
 
 
 def _check_port_free(bind: str, port: int, what: str) -> None:
@@ -134,7 +157,7 @@ def open_recording(
         public = uri.replace("127.0.0.1", host)
         url = page.url() if page is not None else f"http://{host}:{config.web_port}/?url={quote(public, safe='')}"
         on_ready(f"serving: open {url} in a browser, or run: rerun {public}")
-    return Recording(rec, server, live=config.live, page=page)
+    return Recording(rec, server, live=config.live, page=page, file=save_to)
 
 
 def update_blueprint(recording: Recording, blueprint: rrb.Blueprint) -> None:
@@ -235,7 +258,7 @@ def serve(config: SinkConfig) -> tuple[subprocess.Popen[bytes], str, PageServer 
         *(() if own_page else ("--web-viewer-port", str(config.web_port))),
     ]
     output = _child_output()
-    server = subprocess.Popen(command, stdout=output, stderr=output, start_new_session=True)
+    server = subprocess.Popen(command, stdout=output, stderr=output, start_new_session=True, preexec_fn=ends_with_us)
     local = "127.0.0.1" if config.bind in ("0.0.0.0", "::") else config.bind
     deadline = time.monotonic() + SERVER_START_TIMEOUT_S
     while time.monotonic() < deadline and server.poll() is None:
@@ -272,6 +295,8 @@ class Recording:
     """A viewer takes the data (closing waits for it at most ``CLOSE_TIMEOUT_S``)."""
     page: PageServer | None = None
     """``--serve``'s page (the web viewer with RViz's tools), if any."""
+    file: Path | None = None
+    """The ``.rrd`` written, if any."""
 
 
 def close_recording(recording: Recording) -> None:
@@ -283,7 +308,7 @@ def close_recording(recording: Recording) -> None:
             except (RuntimeError, TimeoutError) as exc:
                 raise SinkError(f"the viewer did not take the last data: {one_line(exc)}") from None
         else:
-            recording.rec.flush()
+            flush_file(recording.rec, recording.file)  # a file sink that deadlocked on a full disk: not for ever
         recording.rec.disconnect()
     finally:
         if recording.page is not None:
