@@ -24,7 +24,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, one_line
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, listed, one_line, warn
 from r2d2_viz.fleet.identity import BagId, identify, is_up_to_date, output_path
 from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.signals import sigterm_raises
@@ -33,6 +33,10 @@ from r2d2_viz.viewer.catalog import MARKER_PROPERTY, TOPICS_PROPERTY, recording_
 TASKS_PER_WORKER = 32
 """Bags a worker converts before a fresh one takes its place (see :func:`convert_all`'s pool)."""
 KILL_ENV = "R2D2_VIZ_FLEET_KILL"
+STALL_S = 60.0
+"""No bag finished for this long: the ones being converted are named (a bag on a hung mount never finishes)."""
+STALL_ENV = "R2D2_VIZ_FLEET_STALL_S"
+"""Overrides :data:`STALL_S` (the tests: a second or two)."""
 """Fault injection for the tests: a worker converting the bag of this name kills itself (SIGKILL)."""
 
 
@@ -64,6 +68,8 @@ class FleetReport:
     failed: list[tuple[Path, str]] = field(default_factory=list)
     """(bag, why): bad input found before converting and conversions that failed."""
     up_to_date: list[Path] = field(default_factory=list)
+    duplicates: list[tuple[Path, Path]] = field(default_factory=list)
+    """(given, first): a path given after another that is the same bag (the same path twice, or a link to it)."""
     interrupted: bool = False
 
 
@@ -84,11 +90,12 @@ def plan_jobs(
     made_by = version() + (f"+video-{video}" if video else "")
     check_out_dir(out_dir)
     found: dict[str, list[BagId]] = {}
-    seen: set[Path] = set()
+    seen: dict[Path, Path] = {}
     for path in bags:
-        if (resolved := path.resolve()) in seen:  # one bag given twice (a shell glob and a name): converted once
+        if (resolved := path.resolve()) in seen:  # one bag given twice (a glob and a name, a link): converted once
+            report.duplicates.append((path, seen[resolved]))
             continue
-        seen.add(resolved)
+        seen[resolved] = path
         try:
             bag = identify(path)
         except UsageError as exc:
@@ -231,9 +238,14 @@ def _pool(jobs: list[Job], workers: int, on_done: Progress) -> list[Job]:
     else:
         pool = ProcessPoolExecutor(size, mp_context=context, initializer=_ignore_sigint)
     pending: dict[Future[Outcome], Job] = {pool.submit(_convert_in_pool, job): job for job in jobs}
+    stall_s = float(os.environ.get(STALL_ENV) or STALL_S)
     try:
         while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            done, _ = wait(pending, timeout=stall_s, return_when=FIRST_COMPLETED)
+            if not done:  # none finished for a while: name the ones being converted (a hung mount, a FIFO)
+                stalled = [str(job.bag) for future, job in pending.items() if future.running()]
+                if stalled:
+                    warn(f"no bag finished in {stall_s:g} s; still converting {listed(stalled)} (Ctrl-C stops)")
             for future in done:
                 job = pending.pop(future)
                 try:
