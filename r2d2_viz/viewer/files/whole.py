@@ -34,6 +34,10 @@ WRITER_DIED = "File-writer thread shut down prematurely"
 """Rerun's RuntimeError when its file sink stopped writing (rerun 0.41)."""
 
 
+_STUCK: list[object] = []
+"""Recording streams whose file sink deadlocked, kept until the process ends (the caller then ends it at once)."""
+
+
 class Flushable(Protocol):
     def flush(self, *, timeout_sec: float = ...) -> None: ...
 
@@ -120,6 +124,7 @@ def flush_file(rec: Flushable, path: Path | None) -> None:
                 raise
         grown = path.stat().st_size if path.exists() else -1
         if grown == size and cannot_grow(path):
+            _STUCK.append(rec)  # never dropped: its finaliser would flush the deadlocked sink and hang there
             raise WriterStuckError(f"{WRITER_DIED} (stalled)")
         size = grown
 
