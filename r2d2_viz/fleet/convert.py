@@ -191,6 +191,7 @@ def remove_partials(jobs: Iterable[Job]) -> None:
 
 def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:
     """Convert ``jobs`` in ``workers`` processes; False if interrupted (finished outputs kept)."""
+    saved = os.environ.get("RUST_LOG")
     if not os.environ.get(DEBUG_ENV):  # Rerun's own log lines (a full disk's raw ERROR) off in the workers too:
         os.environ["RUST_LOG"] = "off"  # its filter is read when they import rerun; our line names bag and cause
     try:
@@ -204,13 +205,21 @@ def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:
         return False
     finally:
         remove_partials(jobs)
+        if saved is None:  # as it was for the caller (a test, a script calling this in-process)
+            os.environ.pop("RUST_LOG", None)
+        else:
+            os.environ["RUST_LOG"] = saved
     return True
 
 
 def _ignore_sigint() -> None:
     """A pool worker ignores Ctrl-C (a terminal sends it to every process of the run): the main process stops the
-    workers itself, with SIGTERM, so that none starts another conversion."""
+    workers itself, with SIGTERM, so that none starts another conversion. A worker whose app ended without
+    stopping it (SIGKILL, a crash) gets SIGTERM: no worker lives on."""
+    from r2d2_viz.viewer.sinks import die_with_parent
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent()
 
 
 def _convert_in_pool(job: Job) -> Outcome:

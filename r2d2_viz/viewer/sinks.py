@@ -98,6 +98,11 @@ def ends_with_us() -> None:
     """``preexec_fn`` of every process the app starts: it gets SIGTERM when the app ends, however the app ends
     (Linux; SIGKILL included), and SIGINT back at its default (a parent that ignores SIGINT, ``nohup … &``)."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+    die_with_parent()
+
+
+def die_with_parent() -> None:
+    """SIGTERM to this process when the one that started it ends (Linux's parent-death signal; elsewhere nothing)."""
     if _PRCTL is not None:
         _PRCTL(PR_SET_PDEATHSIG, signal.SIGTERM)
 

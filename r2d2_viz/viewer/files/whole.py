@@ -113,13 +113,17 @@ def cannot_grow(path: Path) -> bool:
 
 def flush_file(rec: Flushable, path: Path | None) -> None:
     """``rec.flush()`` in slices of ``FLUSH_SLICE_S``: one that stalls while ``path`` cannot grow raises
-    :class:`WriterStuckError` instead of waiting for ever (Rerun's file sink can deadlock when its writer dies)."""
+    :class:`WriterStuckError` instead of waiting for ever (Rerun's file sink can deadlock when its writer dies), as
+    does one that says the writer died (the stream's finaliser would then flush it again, and may hang there)."""
     size = -1
     while True:
         try:
             rec.flush(timeout_sec=FLUSH_SLICE_S if path is not None else 1e38)
             return
         except RuntimeError as exc:
+            if path is not None and WRITER_DIED in str(exc):  # dead, and dropping the stream may hang as well
+                _STUCK.append(rec)
+                raise WriterStuckError(str(exc)) from None
             if path is None or "timed out" not in str(exc):
                 raise
         grown = path.stat().st_size if path.exists() else -1
