@@ -44,6 +44,7 @@ from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import LiveFields
+from r2d2_viz.viewer.files.whole import saved_rrd
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
@@ -246,14 +247,13 @@ class _Output:
         return self.recording
 
     def close(self) -> None:
-        if self.recording is not None:
-            close_recording(self.recording)
-            self.recording = None
+        with saved_rrd(self.tmp, self.rrd):  # renamed over ``--save`` only when whole; removed otherwise
+            if self.recording is not None:
+                recording, self.recording = self.recording, None
+                close_recording(recording)
         if self.bag is not None:
             self.bag.close()
             self.bag = None
-        if self.tmp is not None and self.rrd is not None:
-            os.replace(self.tmp, self.rrd)
 
     def abort(self) -> None:
         """Nothing half-written: the partial recording and bag removed."""

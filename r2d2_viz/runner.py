@@ -35,6 +35,7 @@ from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, r
 from r2d2_viz.sources.robots import SHARED_FRAMES
 from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import FieldsRun, fields_run, undecoded_line
+from r2d2_viz.viewer.files.whole import flush_file, saved_rrd
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
 from r2d2_viz.viewer.notices import Notices
@@ -210,7 +211,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     layout = dataclasses.replace(view.layout, field_plots=config.plots, tf_graph=config.tf_tree)
     view = dataclasses.replace(view, layout=layout)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
-    try:
+    with saved_rrd(tmp, save):  # renamed over ``save`` only when whole; removed otherwise
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         tools = attach_view_tools(recording, view, dict(config.tool_topics), source=plan.source)
         try:
@@ -255,7 +256,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     samples, interrupted = paced(streamer, windows, feeds, speed=config.speed, progress=shown)
                 else:
                     with sigterm_raises():
-                        samples = _batch(streamer, windows, feeds, rec.flush, shown)
+                        samples = _batch(streamer, windows, feeds, lambda: flush_file(rec, tmp), shown)
             keep_serving(config.sink.serve and config.bag is not None and not interrupted, rec.flush)
             if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
                 notices.report(f"{config.bag}: {line}")
@@ -268,12 +269,6 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
         finally:
             detach_tools(recording, tools)
             close_recording(recording)
-        if tmp is not None and save is not None:
-            os.replace(tmp, save)
-    except BaseException:
-        if tmp is not None:
-            tmp.unlink(missing_ok=True)
-        raise
     return RunResult(samples=samples, interrupted=interrupted, saved=save)
 
 
@@ -374,7 +369,12 @@ def _check_numbers(config: RunConfig) -> None:
     save = config.sink.save
     if save is not None:
         parent = save.parent if str(save.parent) else Path(".")
-        if save.is_dir():
+        if save.is_dir() and save.suffix == ".mcap":
+            from r2d2_viz.ros_out.bag_write import written_by_us
+
+            if not written_by_us(save):  # a bag r2d2-viz wrote is replaced, as an .rrd is; nothing else
+                raise UsageError(f"--save {save}: a directory that is not a bag r2d2-viz wrote; not replacing it")
+        elif save.is_dir():
             raise UsageError(f"--save {save}: is a directory; give a file name such as out.rrd")
         if not parent.is_dir():
             raise UsageError(f"--save {save}: directory {str(parent)!r} does not exist")

@@ -1,5 +1,5 @@
-"""Signals during a run: SIGINT and SIGTERM end a live run cleanly (the recording is finalised); SIGTERM
-interrupts a batch run like Ctrl-C (its partial file is removed)."""
+"""Signals during a run: SIGINT, SIGTERM and SIGHUP (a dropped ssh session) end a live run cleanly (the recording
+is finalised); SIGTERM and SIGHUP interrupt a batch run like Ctrl-C (its partial file is removed)."""
 
 from __future__ import annotations
 
@@ -12,12 +12,19 @@ from types import FrameType
 
 
 class StopRequested(KeyboardInterrupt):  # a signal, not an error
-    """Raised in a batch run by SIGTERM so the partial file is removed."""
+    """Raised in a batch run by SIGTERM or SIGHUP so the partial file is removed."""
+
+
+def stoppable() -> None:
+    """Ctrl-C stops the app even when its parent ignored SIGINT (``nohup … &``, CI runners: Python then keeps it
+    ignored) — the suite and the user send it to stop a run."""
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @contextmanager
 def signals_set(stop: threading.Event) -> Iterator[None]:
-    """SIGINT and SIGTERM end a live run cleanly (the recording is finalised)."""
+    """SIGINT, SIGTERM and SIGHUP end a live run cleanly (the recording is finalised)."""
 
     def handler(signum: int, frame: FrameType | None) -> None:
         stop.set()
@@ -34,14 +41,14 @@ def sigterm_raises() -> Iterator[None]:
             return
         raise StopRequested
 
-    with _handlers(handler, signals=(signal.SIGTERM,)):
+    with _handlers(handler, signals=(signal.SIGTERM, signal.SIGHUP)):
         yield
 
 
 @contextmanager
 def _handlers(
     handler: Callable[[int, FrameType | None], None],
-    signals: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM),
+    signals: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP),
 ) -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():  # tests may run us in a thread
         yield

@@ -1,12 +1,21 @@
-"""SIGINT/SIGTERM during a run: a live run stops cleanly, a batch run is interrupted; handlers restored."""
+"""SIGINT/SIGTERM/SIGHUP during a run: a live run stops cleanly, a batch run is interrupted; handlers restored;
+no process the app started outlives it."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
+import socket
+import subprocess
+import sys
 import threading
+import time
+from pathlib import Path
 
+import psutil
 import pytest
+from conftest import listening_addresses
 
 from r2d2_viz.signals import StopRequested, signals_set, sigterm_raises
 
@@ -49,3 +58,96 @@ def test_a_stop_that_comes_during_a_finaliser_is_not_lost() -> None:
         Dropped()
         for _ in range(200):  # up to 10 s: the re-sent signal stops it well before
             time.sleep(0.05)
+
+
+# Issue 36, finding 4: the real CLI in its own process group, started as `nohup … &` starts it (SIGINT ignored),
+# and real signals to that group, as a dropped ssh session (SIGHUP) or a terminal's Ctrl-C sends them.
+
+EXE = str(Path(sys.executable).parent / "r2d2-viz")
+VIEWER = str(Path(sys.executable).parent / "rerun")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _sigint_ignored() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # as `nohup … &` and CI runners leave it
+
+
+def _start(*args: str, cwd: Path, until: str) -> tuple[subprocess.Popen[str], str]:
+    """``r2d2-viz ARGS`` in its own session with SIGINT ignored, read until a line starts with ``until``."""
+    proc = subprocess.Popen(
+        [EXE, *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        cwd=cwd,
+        start_new_session=True,
+        preexec_fn=_sigint_ignored,
+    )
+    assert proc.stdout is not None
+    lines = []
+    deadline = time.monotonic() + 90
+    while time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        lines.append(line)
+        if line.startswith(until) or not line:
+            break
+    return proc, "".join(lines)
+
+
+def _gone(processes: list[psutil.Process], timeout: float = 15) -> list[str]:
+    """The ones still running after ``timeout`` s (zombies count as gone)."""
+    _, alive = psutil.wait_procs(processes, timeout=timeout)
+    return [" ".join(p.cmdline()) for p in alive if p.status() != psutil.STATUS_ZOMBIE]
+
+
+@pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGINT], ids=["ssh-dropped", "ctrl-c-under-nohup"])
+def test_a_live_save_is_finalised_by_a_dropped_session(tmp_path: Path, signum: signal.Signals) -> None:
+    """``--realtime --save run.rrd`` (one lap at the robot's pace: 48 s) ended after a few seconds."""
+    proc = subprocess.Popen(
+        [EXE, "--realtime", "--save", "run.rrd"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=tmp_path,
+        start_new_session=True,
+        preexec_fn=_sigint_ignored,
+    )
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not any(p.stat().st_size > 0 for p in tmp_path.glob(".run.rrd.*.partial")):
+        time.sleep(0.2)
+    time.sleep(1.0)
+    os.killpg(proc.pid, signum)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 0, stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.rrd"], stderr  # no hidden partial beside it
+    verify = subprocess.run([VIEWER, "rrd", "verify", "run.rrd"], cwd=tmp_path, capture_output=True, text=True)
+    assert verify.returncode == 0, verify.stderr  # Rerun's own judge: footer and all
+
+
+@pytest.mark.parametrize("stop", ["sighup", "two-ctrl-c"])
+def test_serve_leaves_no_server_behind(tmp_path: Path, stop: str) -> None:
+    port, web = _free_port(), _free_port()
+    proc, said = _start("--serve", "--port", str(port), "--web-port", str(web), cwd=tmp_path, until="serving")
+    children = psutil.Process(proc.pid).children(recursive=True)
+    try:
+        assert "serving" in said and children, said
+        if stop == "sighup":
+            os.killpg(proc.pid, signal.SIGHUP)
+        else:
+            os.killpg(proc.pid, signal.SIGINT)
+            time.sleep(0.05)
+            os.killpg(proc.pid, signal.SIGINT)
+        proc.wait(timeout=60)
+        assert _gone(children) == []
+        assert not listening_addresses(port) and not listening_addresses(web)
+    finally:
+        for child in children:
+            with contextlib.suppress(psutil.NoSuchProcess):
+                child.kill()
+        proc.kill()
+        proc.wait()

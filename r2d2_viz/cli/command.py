@@ -30,6 +30,9 @@ killed by SIGPIPE (128 + 13), so ``set -o pipefail`` sees it as it sees theirs."
 
 
 def main(argv: list[str] | None = None) -> int:
+    from r2d2_viz.signals import stoppable
+
+    stoppable()
     try:
         return _checked_main(argv)
     except BrokenPipeError:
@@ -50,6 +53,10 @@ def _checked_main(argv: list[str] | None) -> int:
         raise
     except R2d2VizError as exc:
         print(stderr_line(f"error: {exc}"), file=sys.stderr)
+        if getattr(exc, "stuck", False):  # Rerun's file sink deadlocked (a full disk): its threads would hold the exit
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(EXIT_BAD_INPUT)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("r2d2-viz: interrupted; nothing saved", file=sys.stderr)

@@ -14,7 +14,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from r2d2_viz.errors import UsageError
+from r2d2_viz.errors import UsageError, listed
 from r2d2_viz.fleet.convert import FleetReport, Outcome, Progress, plan_jobs, run_local
 from r2d2_viz.msgs.images import EncoderName, require_av
 
@@ -86,6 +86,9 @@ def convert_command(
     work = plan_jobs(bags, out_dir, force=force, report=report, video=video)
     for path, why in report.failed:
         _say(f"error: {why}" if str(path) in why else f"error: {path}: {why}")
+    for path, first in report.duplicates:
+        link = " (a link to it)" if path.is_symlink() else ""
+        _say(f"note: {path}: the same bag as {first}{link}; converted once")
     total = sum(job.size for job in work)
     with _progress(len(work), total) as advance:
 
@@ -114,8 +117,14 @@ def convert_command(
         parts.append(f"{len(report.up_to_date)} up to date")
     if report.failed:
         parts.append(f"{len(report.failed)} failed")
+    if report.duplicates:
+        parts.append(f"{len(report.duplicates)} given twice")
     if report.interrupted:
-        parts.append(f"{len(work) - len(report.converted) - len(report.failed)} not done (interrupted)")
+        ended = {o.job.bag for o in report.converted} | {path for path, _ in report.failed}
+        not_done = [str(job.bag) for job in work if job.bag not in ended]
+        parts.append(f"{len(not_done)} not done (interrupted)")
+        if not_done:
+            _say(f"not done (interrupted): {listed(not_done)}")
     _say(f"r2d2-viz: {', '.join(parts)} → {out_dir} in {seconds:.1f} s")
     if report.interrupted:
         return EXIT_INTERRUPTED

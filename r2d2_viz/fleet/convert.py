@@ -9,6 +9,7 @@ alone, since a dying worker also takes down the other conversions in flight in i
 
 from __future__ import annotations
 
+import atexit
 import dataclasses
 import glob
 import json
@@ -22,7 +23,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from r2d2_viz.errors import R2d2VizError, UsageError, one_line
+from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, listed, one_line, warn
 from r2d2_viz.fleet.identity import BagId, identify, is_up_to_date, output_path
 from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.signals import sigterm_raises
@@ -31,6 +32,10 @@ from r2d2_viz.viewer.catalog import MARKER_PROPERTY, TOPICS_PROPERTY, recording_
 TASKS_PER_WORKER = 32
 """Bags a worker converts before a fresh one takes its place (see :func:`convert_all`'s pool)."""
 KILL_ENV = "R2D2_VIZ_FLEET_KILL"
+STALL_S = 60.0
+"""No bag finished for this long: the ones being converted are named (a bag on a hung mount never finishes)."""
+STALL_ENV = "R2D2_VIZ_FLEET_STALL_S"
+"""Overrides :data:`STALL_S` (the tests: a second or two)."""
 """Fault injection for the tests: a worker converting the bag of this name kills itself (SIGKILL)."""
 
 
@@ -62,6 +67,8 @@ class FleetReport:
     failed: list[tuple[Path, str]] = field(default_factory=list)
     """(bag, why): bad input found before converting and conversions that failed."""
     up_to_date: list[Path] = field(default_factory=list)
+    duplicates: list[tuple[Path, Path]] = field(default_factory=list)
+    """(given, first): a path given after another that is the same bag (the same path twice, or a link to it)."""
     interrupted: bool = False
 
 
@@ -82,11 +89,12 @@ def plan_jobs(
     made_by = version() + (f"+video-{video}" if video else "")
     check_out_dir(out_dir)
     found: dict[str, list[BagId]] = {}
-    seen: set[Path] = set()
+    seen: dict[Path, Path] = {}
     for path in bags:
-        if (resolved := path.resolve()) in seen:  # one bag given twice (a shell glob and a name): converted once
+        if (resolved := path.resolve()) in seen:  # one bag given twice (a glob and a name, a link): converted once
+            report.duplicates.append((path, seen[resolved]))
             continue
-        seen.add(resolved)
+        seen[resolved] = path
         try:
             bag = identify(path)
         except UsageError as exc:
@@ -157,8 +165,10 @@ def convert_one(job: Job) -> Outcome:
         if tmp_layout.exists():  # beside its recording: the dataset's layout when served (viewer/catalog.py)
             os.replace(tmp_layout, layout)
         os.replace(tmp, job.out)
-    except R2d2VizError as exc:
-        return Outcome(job, one_line(exc), time.perf_counter() - start)
+    except R2d2VizError as exc:  # named after the output, not the hidden file the runner was given
+        if getattr(exc, "stuck", False):  # Rerun's file sink deadlocked on a full disk: its threads would hold
+            atexit.register(os._exit, 0)  # this worker's exit for ever (run before Rerun's own exit handler)
+        return Outcome(job, one_line(exc).replace(str(tmp), str(job.out)), time.perf_counter() - start)
     except Exception as exc:
         return Outcome(job, f"unexpected {type(exc).__name__}: {one_line(exc)}", time.perf_counter() - start)
     finally:
@@ -180,6 +190,9 @@ def remove_partials(jobs: Iterable[Job]) -> None:
 
 def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:
     """Convert ``jobs`` in ``workers`` processes; False if interrupted (finished outputs kept)."""
+    saved = os.environ.get("RUST_LOG")
+    if not os.environ.get(DEBUG_ENV):  # Rerun's own log lines (a full disk's raw ERROR) off in the workers too:
+        os.environ["RUST_LOG"] = "off"  # its filter is read when they import rerun; our line names bag and cause
     try:
         with sigterm_raises():  # SIGTERM stops it as Ctrl-C does
             broken = _pool(jobs, workers, on_done)
@@ -191,13 +204,21 @@ def run_local(jobs: list[Job], *, workers: int, on_done: Progress) -> bool:
         return False
     finally:
         remove_partials(jobs)
+        if saved is None:  # as it was for the caller (a test, a script calling this in-process)
+            os.environ.pop("RUST_LOG", None)
+        else:
+            os.environ["RUST_LOG"] = saved
     return True
 
 
 def _ignore_sigint() -> None:
     """A pool worker ignores Ctrl-C (a terminal sends it to every process of the run): the main process stops the
-    workers itself, with SIGTERM, so that none starts another conversion."""
+    workers itself, with SIGTERM, so that none starts another conversion. A worker whose app ended without
+    stopping it (SIGKILL, a crash) gets SIGTERM: no worker lives on."""
+    from r2d2_viz.viewer.sinks import die_with_parent
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent()
 
 
 def _convert_in_pool(job: Job) -> Outcome:
@@ -222,9 +243,14 @@ def _pool(jobs: list[Job], workers: int, on_done: Progress) -> list[Job]:
         size, mp_context=context, initializer=_ignore_sigint, max_tasks_per_child=TASKS_PER_WORKER
     )
     pending: dict[Future[Outcome], Job] = {pool.submit(_convert_in_pool, job): job for job in jobs}
+    stall_s = float(os.environ.get(STALL_ENV) or STALL_S)
     try:
         while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            done, _ = wait(pending, timeout=stall_s, return_when=FIRST_COMPLETED)
+            if not done:  # none finished for a while: name the ones being converted (a hung mount, a FIFO)
+                stalled = [str(job.bag) for future, job in pending.items() if future.running()]
+                if stalled:
+                    warn(f"no bag finished in {stall_s:g} s; still converting {listed(stalled)} (Ctrl-C stops)")
             for future in done:
                 job = pending.pop(future)
                 try:

@@ -22,7 +22,7 @@ from r2d2_viz.errors import SinkError, UsageError
 from r2d2_viz.fleet.summary import summarise
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.viewer.catalog import catalog_server, read_fleet, register_layout, server_url
-from r2d2_viz.viewer.sinks import viewer_executable
+from r2d2_viz.viewer.sinks import _check_port_free, ends_with_us, viewer_executable
 
 DEFAULT_PORT = 51234
 Say = Callable[[str], None]
@@ -95,10 +95,17 @@ def _start_viewer(viewer: str, url: str, *, bind: str, web_port: int, say: Say) 
     if viewer == "spawn":
         command = [executable, url]
     else:
+        _check_port_free(bind, web_port, "web viewer")  # else Rerun's viewer dies at once, after we said "serving"
         command = [executable, "--serve-web", "--bind", bind, "--web-viewer-port", str(web_port), url]
         host = "localhost" if bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else bind
         say(f"open http://{host}:{web_port}/?url={quote(url, safe='')} in a browser")
     try:
-        return subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        return subprocess.Popen(
+            command,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            preexec_fn=ends_with_us,  # no viewer left holding its port, however the app ends
+        )
     except OSError as exc:
         raise SinkError(f"the viewer did not start ({exc.strerror})") from None

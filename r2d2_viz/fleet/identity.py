@@ -62,7 +62,8 @@ def identify(path: Path) -> BagId:
         stats = [p.stat() for p in files]
     except OSError as exc:
         raise UsageError(f"{path}: not readable ({exc.strerror})") from None
-    name = path.name if path.is_dir() else (path.stem if path.suffix in BAG_SUFFIXES else path.name)
+    named = Path(os.path.abspath(path))  # `--bag .` or `--bag ..`: named after the folder they stand for
+    name = named.name if path.is_dir() else (named.stem if named.suffix in BAG_SUFFIXES else named.name)
     return BagId(path, name, sum(s.st_size for s in stats), max(s.st_mtime_ns for s in stats))
 
 

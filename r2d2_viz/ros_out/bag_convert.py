@@ -5,24 +5,24 @@ Atomic: written into a temporary folder beside the target and renamed when compl
 
 from __future__ import annotations
 
-import os
 import shutil
 import tempfile
 from pathlib import Path
 
 from r2d2_viz.errors import BagError
 from r2d2_viz.msgs.typestore import typestore
+from r2d2_viz.ros_out.bag_write import cause, move_into_place, written_by_us
 from r2d2_viz.sources.bags.bag import Bag
 
 
 def convert_bag(bag: Bag, path: Path) -> int:
     """Write every message of ``bag`` to the ROS 2 bag ``path``; how many were written."""
-    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
     from r2d2_viz.msgs.definitions import own_store
 
-    if path.exists():
-        raise BagError(f"{path}: exists; not overwriting it")
+    if path.exists() and not written_by_us(path):
+        raise BagError(f"{path}: exists and is not a bag r2d2-viz wrote; not replacing it")
     if not path.parent.is_dir():
         raise BagError(f"{path}: directory {path.parent} does not exist")
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
@@ -40,9 +40,9 @@ def convert_bag(bag: Bag, path: Path) -> int:
                 for t, topic, data in block.messages():
                     writer.write(connections[topic], t, bytes(data))
                     written += 1
-        os.replace(out, path)
-    except OSError as exc:
-        raise BagError(f"{path}: cannot write: {exc.strerror or exc}") from None
+        move_into_place(out, path, aside=tmp / "replaced")  # the bag r2d2-viz wrote there before, replaced
+    except (OSError, WriterError) as exc:
+        raise BagError(f"{path}: not saved: {cause(exc)}") from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return written

@@ -13,6 +13,7 @@ failure it is removed and an existing bag at the target is left as it was. Pure:
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import tempfile
 import time
@@ -24,7 +25,7 @@ from typing import Literal, NamedTuple, Protocol
 import numpy as np
 import numpy.typing as npt
 from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
 from r2d2_viz.arrays import F64
 from r2d2_viz.errors import BagError
@@ -206,30 +207,25 @@ class BagWriter:
                 self._start(self.start_ns or time.time_ns())
             self._writer.close()
             bag_dir = next(p for p in self._tmp.iterdir() if p.is_dir())
-            if not self.path.exists():
-                os.replace(bag_dir, self.path)
-            else:  # a bag already there: moved aside, and back if the new one cannot take its place
-                old = self._tmp / "replaced"
-                os.replace(self.path, old)
-                try:
-                    os.replace(bag_dir, self.path)
-                except OSError:
-                    os.replace(old, self.path)
-                    raise
-        except OSError as exc:
+            move_into_place(bag_dir, self.path, aside=self._tmp / "replaced")
+        except (OSError, WriterError) as exc:
             self.abort()
-            raise BagError(f"{self.path}: cannot write: {exc.strerror or exc}") from None
+            raise BagError(f"{self.path}: not saved: {cause(exc)}") from None
         shutil.rmtree(self._tmp, ignore_errors=True)
         return self.path
 
     def abort(self) -> None:
         """Drop everything written; the target is untouched."""
         writer = getattr(self, "_writer", None)
-        if writer is not None:
-            writer.abort()
-        tmp = getattr(self, "_tmp", None)
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
+        try:
+            if writer is not None:
+                writer.abort()  # rosbags closes the file again: on a full disk that raises again
+        except (OSError, WriterError):
+            pass  # the error being handled says more; the temporary bag goes all the same
+        finally:
+            tmp = getattr(self, "_tmp", None)
+            if tmp is not None:
+                shutil.rmtree(tmp, ignore_errors=True)
 
     def __enter__(self) -> BagWriter:
         return self
@@ -241,6 +237,43 @@ class BagWriter:
             self.close()
         else:
             self.abort()
+
+
+def move_into_place(bag_dir: Path, path: Path, *, aside: Path) -> None:
+    """``bag_dir`` renamed to ``path``; a bag already there is moved ``aside`` first, and back if the new one
+    cannot take its place."""
+    if not path.exists():
+        os.replace(bag_dir, path)
+        return
+    os.replace(path, aside)
+    try:
+        os.replace(bag_dir, path)
+    except OSError:
+        os.replace(aside, path)
+        raise
+
+
+MARKS = ("recorded_by", "converted_by")
+"""The custom data every bag r2d2-viz writes carries (``r2d2-viz`` or ``r2d2-viz --ros``) in its metadata."""
+
+
+def written_by_us(path: Path) -> bool:
+    """Whether ``path`` is a rosbag2 bag that r2d2-viz wrote (``--save X.mcap`` run again replaces it)."""
+    try:
+        text = (path / "metadata.yaml").read_text(errors="replace")
+    except OSError:
+        return False
+    return any(re.search(rf"^\s+{mark}:\s*['\"]?r2d2-viz", text, re.MULTILINE) for mark in MARKS)
+
+
+def cause(exc: BaseException) -> str:
+    """What the file system said ("no space left on device"), found under rosbags' own errors."""
+    seen: BaseException | None = exc
+    while seen is not None:
+        if isinstance(seen, OSError) and seen.strerror:
+            return seen.strerror.lower()
+        seen = seen.__cause__ or seen.__context__
+    return str(exc) or type(exc).__name__
 
 
 def _tf_message(items: Sequence[tuple[int, str, str, Sequence[float], Sequence[float]]]) -> bytes:

@@ -6,6 +6,8 @@ Part of the stream layer (with :mod:`r2d2_viz.viewer.stream`, the only modules t
 from __future__ import annotations
 
 import copy
+import ctypes
+import importlib.util
 import os
 import shutil
 import signal
@@ -23,6 +25,7 @@ import rerun.blueprint as rrb
 
 from r2d2_viz.errors import DEBUG_ENV, SinkError, UsageError, one_line
 from r2d2_viz.viewer.entities import APP_ID
+from r2d2_viz.viewer.files.whole import flush_file
 from r2d2_viz.viewer.web.assets import viewer_static
 from r2d2_viz.viewer.web.feed import RecordingFeed
 from r2d2_viz.viewer.web.server import RECORDING, PageServer
@@ -77,7 +80,14 @@ def current_recording(recording: rr.RecordingStream | None = None) -> rr.Recordi
 
 
 def viewer_executable() -> str | None:
-    """The ``rerun`` viewer binary that ships with rerun-sdk (next to this Python), else on PATH."""
+    """The ``rerun`` viewer binary that ships with rerun-sdk (rerun_cli's own, not the Python script in front of it:
+    a signal to that script ends it and leaves the binary running), else the script next to this Python, else on
+    PATH."""
+    spec = importlib.util.find_spec("rerun_cli")
+    if spec is not None and spec.origin is not None:
+        binary = Path(spec.origin).parent / "rerun"
+        if binary.is_file() and os.access(binary, os.X_OK):
+            return str(binary)
     beside = Path(sys.executable).parent / "rerun"
     if beside.is_file() and os.access(beside, os.X_OK):
         return str(beside)
@@ -87,6 +97,24 @@ def viewer_executable() -> str | None:
 def _child_output() -> int | None:
     """Where the Rerun processes we start write their log lines: nowhere, unless ``R2D2_VIZ_DEBUG`` is set."""
     return None if os.environ.get(DEBUG_ENV) else subprocess.DEVNULL
+
+
+def ends_with_us() -> None:
+    """``preexec_fn`` of every process the app starts: it gets SIGTERM when the app ends, however the app ends
+    (Linux; SIGKILL included), and SIGINT back at its default (a parent that ignores SIGINT, ``nohup … &``)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    die_with_parent()
+
+
+def die_with_parent() -> None:
+    """SIGTERM to this process when the one that started it ends (Linux's parent-death signal; elsewhere nothing)."""
+    if _PRCTL is not None:
+        _PRCTL(PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
+PR_SET_PDEATHSIG = 1
+_PRCTL = ctypes.CDLL(None).prctl if sys.platform.startswith("linux") else None
+"""Looked up before any fork: a ``preexec_fn`` should do as little as it can."""
 
 
 def _check_port_free(bind: str, port: int, what: str) -> None:
@@ -143,7 +171,7 @@ def open_recording(
         on_ready(f"serving: open {page.url()} in a browser, or run: rerun {page.url()}{RECORDING}")
     elif page is not None and on_ready is not None:
         on_ready(f"the page with the sliders: open {page.url()} in a browser")
-    return Recording(rec, live=config.live, page=page, feed=feed)
+    return Recording(rec, live=config.live, page=page, feed=feed, file=save_to)
 
 
 def update_blueprint(recording: Recording, blueprint: rrb.Blueprint) -> None:
@@ -268,6 +296,8 @@ class Recording:
     """``--serve``'s page (the web viewer with RViz's tools), if any."""
     feed: RecordingFeed | None = None
     """What the page's viewer reads (``--serve``)."""
+    file: Path | None = None
+    """The ``.rrd`` written, if any."""
 
 
 def close_recording(recording: Recording) -> None:
@@ -279,7 +309,7 @@ def close_recording(recording: Recording) -> None:
             except (RuntimeError, TimeoutError) as exc:
                 raise SinkError(f"the viewer did not take the last data: {one_line(exc)}") from None
         else:
-            recording.rec.flush()
+            flush_file(recording.rec, recording.file)  # a file sink that deadlocked on a full disk: not for ever
         recording.rec.disconnect()
     finally:
         if recording.feed is not None:

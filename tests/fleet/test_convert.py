@@ -295,7 +295,9 @@ def test_the_same_bag_given_twice_is_converted_once(tmp_path: Path) -> None:
     again = tmp_path / "runs" / ".." / "runs" / "alpha"
     result = cli("--bag", str(alpha), str(alpha), str(again), "--save-dir", str(out))
     assert result.returncode == 0, result.stderr
-    assert "r2d2-viz: 1 converted →" in result.stderr
+    assert "r2d2-viz: 1 converted, 2 given twice →" in result.stderr  # each named (issue 36, finding 6)
+    assert f"note: {alpha}: the same bag as {alpha}; converted once" in result.stderr
+    assert f"note: {again}: the same bag as {alpha}; converted once" in result.stderr
     assert sorted(p.name for p in out.iterdir()) == ["alpha.rbl", "alpha.rrd"]
     assert _recording_id(out / "alpha.rrd") == _expected_id(alpha)
 

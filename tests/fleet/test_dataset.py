@@ -4,6 +4,7 @@ on 127.0.0.1 only; ``--serve`` adds a web viewer; Ctrl-C stops both — and bad 
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import socket
@@ -133,3 +134,58 @@ def test_the_example_sums_up_the_fleet(fleet: Path, tmp_path: Path) -> None:
     # still_bag: no transforms, so the base never moves (0 m); 3 samples 0.1 s apart
     assert result.stdout.splitlines()[0] == "2 runs, 0.00 h, the robots' bases travelled 0.0 m in all"
     assert "alpha" in result.stdout and "beta" in result.stdout and (tmp_path / "f.csv").exists()
+
+
+def _sigint_ignored() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # as `nohup … &` and CI runners start it
+
+
+def test_sigterm_leaves_no_web_viewer_behind(fleet: Path) -> None:
+    """Issue 36, finding 4: ``--dataset --serve`` stopped with SIGTERM left Rerun's web viewer holding its port
+    (the console script in front of the viewer binary died, the binary lived on with parent 1)."""
+    import psutil
+
+    port, web = _free_port(), _free_port()
+    proc = subprocess.Popen(
+        [EXE, "--dataset", str(fleet), "--serve", "--port", str(port), "--web-port", str(web)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=_sigint_ignored,
+    )
+    assert proc.stderr is not None
+    said = ""
+    while not said.startswith("serving dataset"):
+        said = proc.stderr.readline()
+        assert said, "the app ended before serving"
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline and not listening_addresses(web):
+        time.sleep(0.1)
+    children = psutil.Process(proc.pid).children(recursive=True)
+    try:
+        assert listening_addresses(web) and children
+        assert _stop(proc, signal.SIGTERM) == 0
+        _, alive = psutil.wait_procs(children, timeout=15)
+        assert [p for p in alive if p.status() != psutil.STATUS_ZOMBIE] == []
+        assert not listening_addresses(web) and not listening_addresses(port)
+    finally:
+        for child in children:
+            with contextlib.suppress(psutil.NoSuchProcess):
+                child.kill()
+        proc.kill()
+        proc.wait()
+
+
+def test_a_busy_web_port_is_one_line(fleet: Path) -> None:
+    """Issue 36, finding 4: it said "serving" while its web viewer had died on the busy port."""
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        web = taken.getsockname()[1]
+        result = cli("--dataset", str(fleet), "--serve", "--port", str(_free_port()), "--web-port", str(web))
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.splitlines() == [
+        f"error: --serve: cannot listen on 127.0.0.1:{web} for the web viewer: Address already in use"
+    ]
+    assert "serving" not in result.stderr

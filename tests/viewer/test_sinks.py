@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import socket
-import sys
 from pathlib import Path
 
 import pytest
@@ -13,9 +12,14 @@ from r2d2_viz.errors import SinkError
 from r2d2_viz.viewer.sinks import SinkConfig, _check_port_free, viewer_executable
 
 
-def test_the_viewer_is_the_one_beside_this_python() -> None:
+def test_the_viewer_is_the_binary_that_ships_with_this_python() -> None:
+    """rerun_cli's own binary, not the console script in front of it (issue 36, finding 4: a signal to that
+    script ended it and left the binary serving its port)."""
+    import rerun_cli
+
     exe = viewer_executable()
-    assert exe is not None and Path(exe) == Path(sys.executable).parent / "rerun" and os.access(exe, os.X_OK)
+    assert exe is not None and Path(exe) == Path(rerun_cli.__file__).parent / "rerun" and os.access(exe, os.X_OK)
+    assert Path(exe).read_bytes()[:4] == b"\x7fELF"  # a program, not a script
 
 
 def test_live_sinks() -> None:
