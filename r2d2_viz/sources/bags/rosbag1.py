@@ -175,12 +175,13 @@ class Rosbag1:
         view = memoryview(buf)
         out: list[tuple[int, str, bytes | memoryview]] = []
         columns = (rows[:, 0].tolist(), conn_ids.tolist(), starts.tolist(), ends.tolist())
-        kept = [
+        left_out = [
             i
             for i, (t, c, s, e) in enumerate(zip(*columns, strict=True))
-            if self._convert(out, t, c, conns[c], view[s:e], done.get(i))
+            if not self._convert(out, t, c, conns[c], view[s:e], done.get(i))
         ]
-        return out, self._seq(np.frombuffer(buf, dtype=np.uint8), conn_ids, starts, ends)[np.array(kept, np.int64)]
+        seq = self._seq(np.frombuffer(buf, dtype=np.uint8), conn_ids, starts, ends)
+        return out, np.delete(seq, left_out) if left_out else seq
 
     def _seq(self, buf: np.ndarray, conn_ids: I64, starts: I64, ends: I64) -> I64:
         """The ``header.seq`` of the messages ``buf[starts[i]:ends[i]]`` on ``conn_ids`` (-1 where none)."""
