@@ -84,8 +84,7 @@ class Rosbag1:
             )
         self._converters: dict[int, Convert] = {}
         self._conn_types: dict[int, tuple[str, str]] = {}
-        self._headed: set[int] = set()
-        """Connections whose messages start with a ``std_msgs/Header`` (their first 4 bytes: its ``seq``)."""
+        self._headed: set[int] = set()  # connections whose messages start with a header (bytes 0-3: its seq)
         self.bad_messages: dict[str, tuple[int, str]] = {}
         """Per topic: messages left out because they do not fit their definition (how many, the first error)."""
         self.topics: dict[str, TopicInfo] = {}
@@ -116,8 +115,7 @@ class Rosbag1:
                 notes.append(f"{topic}: {exc}")
                 continue
             ids = [k.id for k in same]
-            if _starts_with_header(first.msgtype, first.definition):
-                self._headed.update(ids)
+            self._headed.update(ids if _starts_with_header(first.msgtype, first.definition) else ())
             self._conn_types.update(dict.fromkeys(ids, (first.msgtype, first.definition)))
             self._converters.update(dict.fromkeys(ids, convert))
             self._topic_conns[topic] = ids
@@ -134,9 +132,8 @@ class Rosbag1:
     def _messages(
         self, chunk: Chunk, conns: dict[int, str], start: int, stop: int
     ) -> tuple[list[tuple[int, str, bytes | memoryview]], I64]:
-        """``(time, topic, CDR bytes)`` of the messages in ``chunk`` on ``conns`` received in ``[start, stop)``, and
-        their ``header.seq`` (-1: none); one that does not fit its definition is left out and counted in
-        :attr:`bad_messages`."""
+        """``(time, topic, CDR bytes)`` of the messages in ``chunk`` on ``conns`` received in ``[start, stop)``, their
+        ``header.seq`` (-1: none); one that does not fit its definition is left out, counted in :attr:`bad_messages`."""
         buf = self._records.chunk_data(chunk.pos, partial=True)
         index = self._records.chunk_index(chunk)
         if index is not None:
@@ -175,22 +172,12 @@ class Rosbag1:
         view = memoryview(buf)
         out: list[tuple[int, str, bytes | memoryview]] = []
         columns = (rows[:, 0].tolist(), conn_ids.tolist(), starts.tolist(), ends.tolist())
-        left_out = [
-            i
-            for i, (t, c, s, e) in enumerate(zip(*columns, strict=True))
-            if not self._convert(out, t, c, conns[c], view[s:e], done.get(i))
-        ]
-        seq = self._seq(np.frombuffer(buf, dtype=np.uint8), conn_ids, starts, ends)
+        left_out = []
+        for i, (t, c, s, e) in enumerate(zip(*columns, strict=True)):
+            if not self._convert(out, t, c, conns[c], view[s:e], done.get(i)):
+                left_out.append(i)
+        seq = _header_seq(np.frombuffer(buf, dtype=np.uint8), np.isin(conn_ids, list(self._headed)), starts, ends)
         return out, np.delete(seq, left_out) if left_out else seq
-
-    def _seq(self, buf: np.ndarray, conn_ids: I64, starts: I64, ends: I64) -> I64:
-        """The ``header.seq`` of the messages ``buf[starts[i]:ends[i]]`` on ``conn_ids`` (-1 where none)."""
-        headed = np.isin(conn_ids, list(self._headed)) & (ends - starts >= 4)
-        if not headed.any():
-            return np.full(len(starts), -1, np.int64)
-        at = np.where(headed, starts, 0)[:, None] + np.arange(4)
-        seq = np.ascontiguousarray(buf[at]).view("<u4")[:, 0].astype(np.int64)
-        return np.where(headed, seq, -1)
 
     def _convert(self, out: list[Any], t: int, conn: int, topic: str, raw: memoryview, cdr: Any = None) -> bool:
         """Appends ``(t, topic, CDR bytes)`` (``cdr`` when converted already); a message that does not fit its
@@ -198,21 +185,18 @@ class Rosbag1:
         try:
             out.append((t, topic, self._converters[conn](raw) if cdr is None else cdr))
         except MsgError as exc:
-            self._bad(topic, str(exc))
-            return False
+            return self._bad(topic, str(exc))
         return True
 
-    def _bad(self, topic: str, why: str) -> None:
+    def _bad(self, topic: str, why: str) -> bool:
         n, first = self.bad_messages.get(topic, (0, why))
         self.bad_messages[topic] = (n + 1, first)
+        return False
 
     @property
     def span(self) -> tuple[int, int] | None:
         """``(first, last)`` receive time in ns, from the index."""
-        chunks = [c for c in self._records.chunks if c.counts]
-        if not chunks:
-            return None
-        return min(c.start_ns for c in chunks), max(c.end_ns for c in chunks)
+        return _span(self._records.chunks)
 
     def blocks(
         self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
@@ -236,10 +220,8 @@ class Rosbag1:
         for chunk in [*chunks, None]:
             if group and (chunk is None or chunk.start_ns >= group_end):
                 read = [self._messages(g, conns, start, stop) for g in group]
-                messages = [m for got, _ in read for m in got]
-                if messages:
-                    seq = np.concatenate([seqs for _, seqs in read])
-                    yield block_of(messages, names, seq if self._headed & conns.keys() else None)
+                if messages := [m for got, _ in read for m in got]:
+                    yield block_of(messages, names, np.concatenate([seqs for _, seqs in read]))
                 group = []
             if chunk is not None:
                 group_end = max(group_end, chunk.end_ns + 1) if group else chunk.end_ns + 1
@@ -249,13 +231,8 @@ class Rosbag1:
         """The last message on ``topic`` received before ``before_ns``, through the chunk infos."""
         conns = self._wanted([topic])
         before = 1 << 63 if before_ns is None else before_ns
-        chunks = sorted(
-            (c for c in self._records.chunks if any(k in conns for k in c.counts) and c.start_ns < before),
-            key=lambda c: c.end_ns,
-            reverse=True,
-        )
         best: tuple[int, bytes] | None = None
-        for chunk in chunks:
+        for chunk in _latest_first(self._records.chunks, conns, before):
             if best is not None and best[0] >= chunk.end_ns:
                 break
             for t, _, data in self._messages(chunk, conns, -(1 << 63), before)[0]:
@@ -274,3 +251,31 @@ def _starts_with_header(msgtype: str, definition: str) -> bool:
     except (MsgError, KeyError):
         return False
     return bool(fields) and fields[0][1] == (2, "std_msgs/msg/Header")
+
+
+def _header_seq(buf: np.ndarray, headed: np.ndarray, starts: I64, ends: I64) -> I64:
+    """The ``header.seq`` of the messages ``buf[starts[i]:ends[i]]`` (their first 4 bytes) where ``headed`` (-1
+    elsewhere)."""
+    headed = headed & (ends - starts >= 4)
+    if not headed.any():
+        return np.full(len(starts), -1, np.int64)
+    at = np.where(headed, starts, 0)[:, None] + np.arange(4)
+    seq = np.ascontiguousarray(buf[at]).view("<u4")[:, 0].astype(np.int64)
+    out: I64 = np.where(headed, seq, -1)
+    return out
+
+
+def _latest_first(chunks: list[Chunk], conns: dict[int, str], before: int) -> list[Chunk]:
+    """The chunks holding messages on ``conns`` that start before ``before``, the latest ending first."""
+    return sorted(
+        (c for c in chunks if any(k in conns for k in c.counts) and c.start_ns < before),
+        key=lambda c: c.end_ns,
+        reverse=True,
+    )
+
+
+def _span(chunks: list[Chunk]) -> tuple[int, int] | None:
+    with_messages = [c for c in chunks if c.counts]
+    if not with_messages:
+        return None
+    return min(c.start_ns for c in with_messages), max(c.end_ns for c in with_messages)

@@ -50,8 +50,8 @@ class Block:
     file: int = -1
     """Which of its bag's storage files the messages come from (-1: several, or not said): their definitions."""
     seq: I64 | None = None
-    """Each message's ROS 1 ``header.seq`` (-1: none), which the conversion to CDR drops; None: no message has one
-    (a ROS 2 storage)."""
+    """Each message's ROS 1 ``header.seq`` (-1: none), which the conversion to CDR drops; None: not read (a ROS 2
+    storage)."""
 
     def __len__(self) -> int:
         return len(self.times_ns)
