@@ -11,7 +11,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from r2d2_viz.errors import BagError, listed
-from r2d2_viz.msgs.generic.decoder import FieldDecoder, topic_store
+from r2d2_viz.msgs.generic.decoder import SEQ, FieldDecoder, topic_store
 from r2d2_viz.msgs.generic.fields import Columns
 from r2d2_viz.msgs.generic.message_path import MessagePath, check_field, field_names, parse_path
 from r2d2_viz.msgs.typestore import MsgError
@@ -95,7 +95,8 @@ class FieldsPass:
                 buf = np.frombuffer(block.buffer, dtype=np.uint8)
             starts, lengths = block.starts[rows], block.lengths[rows]
             decoder = self.variants.get((topic, block.file), decoder)
-            out += [(topic, c) for c in decoder.decode(buf, starts, lengths, block.times_ns[rows]) if len(c)]
+            seq = None if block.seq is None else block.seq[rows]
+            out += [(topic, c) for c in decoder.decode(buf, starts, lengths, block.times_ns[rows], seq) if len(c)]
         return out
 
     def finish(self) -> None:
@@ -134,7 +135,7 @@ def plot_paths(bag: Bag, texts: Sequence[str]) -> tuple[MessagePath, ...]:
             raise BagError(f"--plot {text}: {exc}") from None
         msgtype = bag.topics[path.topic].msgtype
         whys = [
-            check_field(store, msgtype, path.field),
+            None if path.field == SEQ and has_seq(bag, path.topic) else check_field(store, msgtype, path.field),
             *(check_field(store, msgtype, f.field, text=True) for f in path.filters),
         ]
         if (why := next((w for w in whys if w is not None), None)) is not None:
@@ -142,3 +143,15 @@ def plot_paths(bag: Bag, texts: Sequence[str]) -> tuple[MessagePath, ...]:
             raise BagError(f"--plot {text}: {why}; {path.topic}'s fields: {listed(names, first=8)}")
         out.append(path)
     return tuple(out)
+
+
+def has_seq(bag: Bag, topic: str) -> bool:
+    """Whether ``topic``'s messages carry ROS 1's ``header.seq`` (a ROS 1 type that starts with a header)."""
+    info = bag.topics[topic]
+    if info.encoding != "ros1msg" or not info.definition:
+        return False
+    try:
+        fields = topic_store(info.msgtype, info.definition, info.encoding).fielddefs[info.msgtype][1]
+    except (MsgError, KeyError):
+        return False
+    return bool(fields) and fields[0][1] == (2, "std_msgs/msg/Header")

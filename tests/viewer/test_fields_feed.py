@@ -181,3 +181,28 @@ def test_with_header_time_rows_go_to_their_header_stamps_in_order(tmp_path: Path
     rows = read_recording(out)["/topics/x"]
     assert rows.times == [3_000_000_000, 5_000_000_007]
     assert rows.temporal["my_msgs/msg/X:value"] == [[2.0], [1.0]]
+
+
+def test_ros1_header_seq_is_a_field_and_plottable(tmp_path: Path) -> None:
+    """A ROS 1 bag written with rosbags: ``/ref`` (``sensor_msgs/TimeReference``, no display draws it) shows
+    ``header.seq`` among its fields, as rosbags' ``deserialize_ros1`` gives it (0, 1, 2, 4, 5, 9, 10: gaps where
+    messages were lost), and ``--plot /ref.header.seq`` plots it; a type without a header has none."""
+    import seqbags
+
+    path = seqbags.write(tmp_path / "seq.bag")
+    want = seqbags.seqs(path, "/ref")
+    assert [s for _, s in want] == list(seqbags.REF_SEQ)
+    out = tmp_path / "seq.rrd"
+    done = cli("--bag", str(path), "--save", str(out), "--plot", "/ref.header.seq", "--plot", "/temp.header.seq")
+    assert done.returncode == 0, done.stderr
+    recording = read_recording(out)
+    rows = recording["/topics/ref"]
+    assert rows.times == [t for t, _ in want]
+    assert [v[0] for v in rows.temporal["sensor_msgs/msg/TimeReference:header.seq"]] == [s for _, s in want]
+    plot = recording["/plot/0/\\/ref.header.seq"]
+    assert [v[0] for v in plot.temporal["Scalars:scalars"]] == pytest.approx([float(s) for _, s in want])
+    temp = seqbags.seqs(path, "/temp")  # a display draws /temp: its seq only where --plot asks
+    plot = recording["/plot/1/\\/temp.header.seq"]
+    assert plot.times == [t for t, _ in temp]
+    assert [v[0] for v in plot.temporal["Scalars:scalars"]] == pytest.approx([float(s) for _, s in temp])
+    assert "/topics/value" not in recording or not any("seq" in k for k in recording["/topics/value"].temporal)

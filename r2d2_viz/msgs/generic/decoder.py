@@ -18,6 +18,8 @@ from r2d2_viz.msgs.typestore import MsgError, typestore
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
+SEQ = "header.seq"
+"""ROS 1's header field that the conversion to CDR drops; given beside the messages (:attr:`Block.seq`)."""
 KEPT_LAYOUTS = 8
 """Layouts remembered per topic (tried first on the next messages)."""
 MIN_MATCHED = 4
@@ -57,9 +59,17 @@ class FieldDecoder:
         self.problems = Problems()
         self.decoded = 0
 
-    def decode(self, buf: np.ndarray, starts: np.ndarray, lengths: np.ndarray, times_ns: np.ndarray) -> list[Columns]:
+    def decode(
+        self,
+        buf: np.ndarray,
+        starts: np.ndarray,
+        lengths: np.ndarray,
+        times_ns: np.ndarray,
+        seq: np.ndarray | None = None,
+    ) -> list[Columns]:
         """The fields of the messages ``buf[starts[i] : starts[i] + lengths[i]]`` received at ``times_ns`` (in
-        order), as columns: one per group of messages sharing their field names, rows in time order."""
+        order), as columns: one per group of messages sharing their field names, rows in time order. ``seq``: their
+        ROS 1 ``header.seq`` (-1: none), a field first where every message has one."""
         left = np.ones(len(starts), dtype=bool)
         order = np.argsort(lengths, kind="stable")  # a layout has one size: its candidates are one run of these
         sorted_lengths = lengths[order]
@@ -92,7 +102,9 @@ class FieldDecoder:
             if len(rows) < MIN_MATCHED:
                 break
         groups += self._one_by_one(buf, starts, lengths, np.flatnonzero(left))
-        return self._columns(buf, starts, times_ns, groups)
+        if seq is None or (self.wanted is not None and SEQ not in self.keep) or not bool(np.all(seq >= 0)):
+            seq = None
+        return self._columns(buf, starts, times_ns, groups, seq)
 
     def _walk(self, buf: np.ndarray, start: int, length: int) -> Layout | None:
         try:
@@ -117,7 +129,12 @@ class FieldDecoder:
         return [(np.array(r, dtype=np.int64), ls) for r, ls in by_names.values()]
 
     def _columns(
-        self, buf: np.ndarray, starts: np.ndarray, times_ns: np.ndarray, groups: list[tuple[np.ndarray, list[Layout]]]
+        self,
+        buf: np.ndarray,
+        starts: np.ndarray,
+        times_ns: np.ndarray,
+        groups: list[tuple[np.ndarray, list[Layout]]],
+        seq: np.ndarray | None,
     ) -> list[Columns]:
         """Groups of one layout each (or of several, one per message) merged where their names agree."""
         merged: dict[object, list[tuple[np.ndarray, list[Layout]]]] = {}
@@ -127,7 +144,10 @@ class FieldDecoder:
         for parts in merged.values():
             columns = []
             for rows, layouts in parts:
-                columns.append(read_columns(buf, starts[rows], times_ns[rows], layouts, self.problems, self.wanted))
+                got = read_columns(buf, starts[rows], times_ns[rows], layouts, self.problems, self.wanted)
+                if seq is not None:
+                    got.numbers = {SEQ: seq[rows].astype(np.uint32), **got.numbers}
+                columns.append(got)
                 self.decoded += len(rows)
             out.append(_joined(columns))
         return out

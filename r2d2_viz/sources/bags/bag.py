@@ -173,16 +173,16 @@ class Bag:
     def _converted(self, block: Block) -> Block:
         """``block`` with its messages of non-Humble layouts converted (those that cannot be: left out, counted)."""
         out: list[tuple[int, str, bytes | memoryview]] = []
-        for t, topic, data in block.messages():
+        kept: list[int] = []
+        for i, (t, topic, data) in enumerate(block.messages()):
             convert = self._convert.get(topic)
-            if convert is None:
-                out.append((t, topic, data))
-                continue
             try:
-                out.append((t, topic, convert(data)))
+                out.append((t, topic, data if convert is None else convert(data)))
+                kept.append(i)
             except MsgError:
                 self._bad[topic] = self._bad.get(topic, 0) + 1
-        return dataclasses.replace(block_of(out, block.topics), read_nbytes=block.cost)
+        seq = None if block.seq is None else block.seq[kept]
+        return dataclasses.replace(block_of(out, block.topics, seq), read_nbytes=block.cost)
 
     def _problems(self, f: Storage) -> list[str]:
         """The damaged chunks (each counted once, on the pass that met it) and messages that do not fit their
@@ -271,7 +271,8 @@ def _merged_topics(
                 continue
             names.setdefault(topic, []).append(own)
             count = (old.count if old else 0) + info.count
-            topics[topic] = dataclasses.replace(old or info, name=topic, count=count)
+            publishers = max(old.publishers if old else 0, info.publishers)  # split files: the same publishers
+            topics[topic] = dataclasses.replace(old or info, name=topic, count=count, publishers=publishers)
         out.append(names)
     if other_types:
         warn(f"{path}: topics with another type in another file: {listed(sorted(other_types.values()))}")

@@ -91,5 +91,8 @@ def joined(parts: Sequence[Block]) -> Block:
         memoryview(b"".join(pieces)),
         np.concatenate(starts),
         np.concatenate([p.lengths for p in parts]),
+        seq=None
+        if all(p.seq is None for p in parts)
+        else np.concatenate([np.full(len(p), -1, np.int64) if p.seq is None else p.seq for p in parts]),
     )
     return in_time_order(block)

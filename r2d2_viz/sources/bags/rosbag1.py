@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from r2d2_viz.msgs.definitions import Convert, from_ros1
+from r2d2_viz.arrays import I64
+from r2d2_viz.msgs.definitions import Convert, from_ros1, own_store
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bags.rosbag1_cdr import convert_runs
 from r2d2_viz.sources.bags.rosbag1_records import (
@@ -83,6 +84,7 @@ class Rosbag1:
             )
         self._converters: dict[int, Convert] = {}
         self._conn_types: dict[int, tuple[str, str]] = {}
+        self._headed: set[int] = set()  # connections whose messages start with a header (bytes 0-3: its seq)
         self.bad_messages: dict[str, tuple[int, str]] = {}
         """Per topic: messages left out because they do not fit their definition (how many, the first error)."""
         self.topics: dict[str, TopicInfo] = {}
@@ -113,11 +115,12 @@ class Rosbag1:
                 notes.append(f"{topic}: {exc}")
                 continue
             ids = [k.id for k in same]
+            self._headed.update(ids if _starts_with_header(first.msgtype, first.definition) else ())
             self._conn_types.update(dict.fromkeys(ids, (first.msgtype, first.definition)))
             self._converters.update(dict.fromkeys(ids, convert))
             self._topic_conns[topic] = ids
             self.topics[topic] = TopicInfo(
-                topic, first.msgtype, sum(counts.get(k, 0) for k in ids), first.definition, "ros1msg"
+                topic, first.msgtype, sum(counts.get(k, 0) for k in ids), first.definition, "ros1msg", len(ids)
             )
         return notes
 
@@ -128,15 +131,16 @@ class Rosbag1:
 
     def _messages(
         self, chunk: Chunk, conns: dict[int, str], start: int, stop: int
-    ) -> list[tuple[int, str, bytes | memoryview]]:
-        """``(time, topic, CDR bytes)`` of the messages in ``chunk`` on ``conns`` received in ``[start, stop)``; one
-        that does not fit its definition is left out and counted in :attr:`bad_messages`."""
+    ) -> tuple[list[tuple[int, str, bytes | memoryview]], I64]:
+        """``(time, topic, CDR bytes)`` of the messages in ``chunk`` on ``conns`` received in ``[start, stop)``, their
+        ``header.seq`` (-1: none); one that does not fit its definition is left out, counted in :attr:`bad_messages`."""
         buf = self._records.chunk_data(chunk.pos, partial=True)
         index = self._records.chunk_index(chunk)
         if index is not None:
             return self._indexed_messages(buf, index, conns, start, stop)
         view = memoryview(buf)
         out: list[tuple[int, str, bytes | memoryview]] = []
+        seqs: list[int] = []
         for header, s, e in chunk_records(buf):
             if header.get(b"op") != b"\x02":
                 continue
@@ -145,17 +149,17 @@ class Rosbag1:
             if c not in conns:
                 continue
             t = time_ns(header.get(b"time", b""))
-            if start <= t < stop:
-                self._convert(out, t, c, conns[c], view[s:e])
-        return out
+            if start <= t < stop and self._convert(out, t, c, conns[c], view[s:e]):
+                seqs.append(_U32.unpack_from(buf, s)[0] if c in self._headed and e - s >= 4 else -1)
+        return out, np.array(seqs, dtype=np.int64)
 
     def _indexed_messages(
         self, buf: bytes, index: dict[int, IndexRows], conns: dict[int, str], start: int, stop: int
-    ) -> list[tuple[int, str, bytes | memoryview]]:
+    ) -> tuple[list[tuple[int, str, bytes | memoryview]], I64]:
         """As :meth:`_messages`, the records found through the chunk's index records (no header parsed)."""
         wanted = [c for c in index if c in conns]
         if not wanted:
-            return []
+            return [], np.zeros(0, np.int64)
         rows = np.concatenate([index[c] for c in wanted])
         conn_ids = np.repeat(np.array(wanted, dtype=np.int64), [len(index[c]) for c in wanted])
         keep = (rows[:, 0] >= start) & (rows[:, 0] < stop)
@@ -168,29 +172,31 @@ class Rosbag1:
         view = memoryview(buf)
         out: list[tuple[int, str, bytes | memoryview]] = []
         columns = (rows[:, 0].tolist(), conn_ids.tolist(), starts.tolist(), ends.tolist())
+        left_out = []
         for i, (t, c, s, e) in enumerate(zip(*columns, strict=True)):
-            self._convert(out, t, c, conns[c], view[s:e], done.get(i))
-        return out
+            if not self._convert(out, t, c, conns[c], view[s:e], done.get(i)):
+                left_out.append(i)
+        seq = _header_seq(np.frombuffer(buf, dtype=np.uint8), np.isin(conn_ids, list(self._headed)), starts, ends)
+        return out, np.delete(seq, left_out) if left_out else seq
 
-    def _convert(self, out: list[Any], t: int, conn: int, topic: str, raw: memoryview, cdr: Any = None) -> None:
+    def _convert(self, out: list[Any], t: int, conn: int, topic: str, raw: memoryview, cdr: Any = None) -> bool:
         """Appends ``(t, topic, CDR bytes)`` (``cdr`` when converted already); a message that does not fit its
-        definition is counted instead."""
+        definition is counted instead (False)."""
         try:
             out.append((t, topic, self._converters[conn](raw) if cdr is None else cdr))
         except MsgError as exc:
-            self._bad(topic, str(exc))
+            return self._bad(topic, str(exc))
+        return True
 
-    def _bad(self, topic: str, why: str) -> None:
+    def _bad(self, topic: str, why: str) -> bool:
         n, first = self.bad_messages.get(topic, (0, why))
         self.bad_messages[topic] = (n + 1, first)
+        return False
 
     @property
     def span(self) -> tuple[int, int] | None:
         """``(first, last)`` receive time in ns, from the index."""
-        chunks = [c for c in self._records.chunks if c.counts]
-        if not chunks:
-            return None
-        return min(c.start_ns for c in chunks), max(c.end_ns for c in chunks)
+        return _span(self._records.chunks)
 
     def blocks(
         self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
@@ -213,9 +219,9 @@ class Rosbag1:
         group_end = 0
         for chunk in [*chunks, None]:
             if group and (chunk is None or chunk.start_ns >= group_end):
-                messages = [m for g in group for m in self._messages(g, conns, start, stop)]
-                if messages:
-                    yield block_of(messages, names)
+                read = [self._messages(g, conns, start, stop) for g in group]
+                if messages := [m for got, _ in read for m in got]:
+                    yield block_of(messages, names, np.concatenate([seqs for _, seqs in read]))
                 group = []
             if chunk is not None:
                 group_end = max(group_end, chunk.end_ns + 1) if group else chunk.end_ns + 1
@@ -225,19 +231,51 @@ class Rosbag1:
         """The last message on ``topic`` received before ``before_ns``, through the chunk infos."""
         conns = self._wanted([topic])
         before = 1 << 63 if before_ns is None else before_ns
-        chunks = sorted(
-            (c for c in self._records.chunks if any(k in conns for k in c.counts) and c.start_ns < before),
-            key=lambda c: c.end_ns,
-            reverse=True,
-        )
         best: tuple[int, bytes] | None = None
-        for chunk in chunks:
+        for chunk in _latest_first(self._records.chunks, conns, before):
             if best is not None and best[0] >= chunk.end_ns:
                 break
-            for t, _, data in self._messages(chunk, conns, -(1 << 63), before):
+            for t, _, data in self._messages(chunk, conns, -(1 << 63), before)[0]:
                 if best is None or t >= best[0]:
                     best = (t, bytes(data))
         return best
 
     def close(self) -> None:
         self._bio.close()
+
+
+def _starts_with_header(msgtype: str, definition: str) -> bool:
+    """Whether ``msgtype``'s ROS 1 ``definition`` starts with a ``std_msgs/Header`` (False when it cannot be read)."""
+    try:
+        fields = own_store(msgtype, definition, "ros1msg").fielddefs[msgtype][1]
+    except (MsgError, KeyError):
+        return False
+    return bool(fields) and fields[0][1] == (2, "std_msgs/msg/Header")
+
+
+def _header_seq(buf: np.ndarray, headed: np.ndarray, starts: I64, ends: I64) -> I64:
+    """The ``header.seq`` of the messages ``buf[starts[i]:ends[i]]`` (their first 4 bytes) where ``headed`` (-1
+    elsewhere)."""
+    headed = headed & (ends - starts >= 4)
+    if not headed.any():
+        return np.full(len(starts), -1, np.int64)
+    at = np.where(headed, starts, 0)[:, None] + np.arange(4)
+    seq = np.ascontiguousarray(buf[at]).view("<u4")[:, 0].astype(np.int64)
+    out: I64 = np.where(headed, seq, -1)
+    return out
+
+
+def _latest_first(chunks: list[Chunk], conns: dict[int, str], before: int) -> list[Chunk]:
+    """The chunks holding messages on ``conns`` that start before ``before``, the latest ending first."""
+    return sorted(
+        (c for c in chunks if any(k in conns for k in c.counts) and c.start_ns < before),
+        key=lambda c: c.end_ns,
+        reverse=True,
+    )
+
+
+def _span(chunks: list[Chunk]) -> tuple[int, int] | None:
+    with_messages = [c for c in chunks if c.counts]
+    if not with_messages:
+        return None
+    return min(c.start_ns for c in with_messages), max(c.end_ns for c in with_messages)

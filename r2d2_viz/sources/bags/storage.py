@@ -29,6 +29,8 @@ class TopicInfo:
     """The message definition the file carries for this topic ("" where it carries none: ``.db3`` files)."""
     encoding: str = ""
     """The definition's format: ``ros2msg``, ``ros2idl`` or ``ros1msg`` ("" without one)."""
+    publishers: int = 0
+    """Its publishers, where the file says (a ROS 1 bag's connections); 0: not said."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,6 +49,9 @@ class Block:
     compressed chunk, decompressed whole for a few of its messages); 0: just theirs."""
     file: int = -1
     """Which of its bag's storage files the messages come from (-1: several, or not said): their definitions."""
+    seq: I64 | None = None
+    """Each message's ROS 1 ``header.seq`` (-1: none), which the conversion to CDR drops; None: not read (a ROS 2
+    storage)."""
 
     def __len__(self) -> int:
         return len(self.times_ns)
@@ -81,6 +86,7 @@ class Block:
             self.lengths[rows],
             self.read_nbytes,
             self.file,
+            None if self.seq is None else self.seq[rows],
         )
 
     def compacted(self) -> Block:
@@ -91,7 +97,15 @@ class Block:
         gather = np.repeat(self.starts - starts, self.lengths) + np.arange(self.nbytes, dtype=np.int64)
         data = np.frombuffer(self.buffer, dtype=np.uint8)[gather]
         return Block(
-            self.times_ns, self.topic_index, self.topics, data.data, starts, self.lengths, self.cost, self.file
+            self.times_ns,
+            self.topic_index,
+            self.topics,
+            data.data,
+            starts,
+            self.lengths,
+            self.cost,
+            self.file,
+            self.seq,
         )
 
     def messages(self) -> Iterator[tuple[int, str, memoryview]]:
@@ -104,8 +118,11 @@ class Block:
         return [(int(self.times_ns[i]), self.data(i)) for i in range(len(self))]
 
 
-def block_of(messages: list[tuple[int, str, bytes | memoryview]], topics: tuple[str, ...]) -> Block:
-    """A block from separate messages (storages without one buffer per stretch): their bytes joined once."""
+def block_of(
+    messages: list[tuple[int, str, bytes | memoryview]], topics: tuple[str, ...], seq: I64 | None = None
+) -> Block:
+    """A block from separate messages (storages without one buffer per stretch): their bytes joined once; ``seq``:
+    their ROS 1 ``header.seq`` (:attr:`Block.seq`)."""
     index = {t: k for k, t in enumerate(topics)}
     lengths = np.fromiter((len(m[2]) for m in messages), dtype=np.int64, count=len(messages))
     starts = np.zeros(len(messages), dtype=np.int64)
@@ -113,8 +130,8 @@ def block_of(messages: list[tuple[int, str, bytes | memoryview]], topics: tuple[
         np.cumsum(lengths[:-1], out=starts[1:])
     times = np.fromiter((m[0] for m in messages), dtype=np.int64, count=len(messages))
     topic_index = np.fromiter((index[m[1]] for m in messages), dtype=np.int32, count=len(messages))
-    block = Block(times, topic_index, topics, memoryview(b"".join(m[2] for m in messages)), starts, lengths)
-    return in_time_order(block)
+    data = memoryview(b"".join(m[2] for m in messages))
+    return in_time_order(Block(times, topic_index, topics, data, starts, lengths, seq=seq))
 
 
 def in_time_order(block: Block) -> Block:
@@ -173,7 +190,14 @@ def renamed(block: Block, order: tuple[str, ...]) -> Block:
         return block
     places = np.array([order.index(topic_name(t)) for t in block.topics], dtype=np.int32)
     return Block(
-        block.times_ns, places[block.topic_index], order, block.buffer, block.starts, block.lengths, file=block.file
+        block.times_ns,
+        places[block.topic_index],
+        order,
+        block.buffer,
+        block.starts,
+        block.lengths,
+        file=block.file,
+        seq=block.seq,
     )
 
 

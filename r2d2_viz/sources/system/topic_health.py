@@ -1,8 +1,9 @@
-"""Each topic's health over time, from a bag: its rate (Hz) and bandwidth (B/s) over a sliding window, and, for
-messages that start with a ``std_msgs/Header``, their mean latency (receive time − header stamp) over the same
-window, sampled every :data:`PERIOD_NS` from the topic's first message to its last. One pass over the storage
-blocks (headers read from the bytes, :func:`~.tf_read.header_columns`), then cumulative sums and ``searchsorted``
-per topic. Pure; no rerun import."""
+"""Each topic's health over time, from a bag: its rate (Hz) and bandwidth (B/s) over a sliding window, for
+messages that start with a ``std_msgs/Header`` their mean latency (receive time − header stamp) over the same
+window, and, for a ROS 1 topic of one publisher, its drops (``header.seq`` numbers missing, counted at the message
+after them) in the window; sampled every :data:`PERIOD_NS` from the topic's first message to its last. One pass over
+the storage blocks (headers read from the bytes, :func:`~.tf_read.header_columns`), then cumulative sums and
+``searchsorted`` per topic. Pure; no rerun import."""
 
 from __future__ import annotations
 
@@ -22,20 +23,26 @@ OTHER_CLOCK_NS = 3600 * 1_000_000_000
 
 @dataclass(frozen=True)
 class TopicHealth:
-    """One topic's samples: at ``times_ns``, the rate and bandwidth over the window before, and the mean latency
-    (s; NaN where no message of the window had a header, or its type has none)."""
+    """One topic's samples: at ``times_ns``, the rate and bandwidth over the window before, the mean latency
+    (s; NaN where no message of the window had a header, or its type has none), and the drops (NaN: not known)."""
 
     topic: str
     times_ns: I64
     rate_hz: F64
     bandwidth: F64
     latency_s: F64
+    drops: F64 | None = None
+    """Sequence numbers missing in the window (:func:`seq_gaps`); None: not known (no ROS 1 ``seq``, several
+    publishers, each counting its own, or numbers that do not grow)."""
 
 
-def read_messages(bag: Bag, start_ns: int | None = None, stop_ns: int | None = None) -> dict[str, tuple[I64, I64, I64]]:
-    """topic → (receive times, sizes, header stamps or -1) of every message, in time order."""
+def read_messages(
+    bag: Bag, start_ns: int | None = None, stop_ns: int | None = None
+) -> dict[str, tuple[I64, I64, I64, I64]]:
+    """topic → (receive times, sizes, header stamps or -1, ROS 1 ``header.seq`` or -1) of every message, in time
+    order."""
     headed = {t for t, info in bag.topics.items() if has_header(info.msgtype)}
-    parts: dict[str, list[tuple[I64, I64, I64]]] = {}
+    parts: dict[str, list[tuple[I64, I64, I64, I64]]] = {}
     for block in bag.blocks(sorted(bag.topics), start_ns=start_ns, stop_ns=stop_ns):
         for k, topic in enumerate(block.topics):
             rows = np.flatnonzero(block.topic_index == k)
@@ -45,14 +52,34 @@ def read_messages(bag: Bag, start_ns: int | None = None, stop_ns: int | None = N
             if topic in headed:
                 _, got, ok = header_columns(block, rows)
                 stamps[ok] = got[ok]
-            parts.setdefault(topic, []).append((block.times_ns[rows], block.lengths[rows], stamps))
+            seq = np.full(len(rows), -1, np.int64) if block.seq is None else block.seq[rows]
+            parts.setdefault(topic, []).append((block.times_ns[rows], block.lengths[rows], stamps, seq))
     return {t: tuple(np.concatenate(c) for c in zip(*p, strict=True)) for t, p in parts.items()}  # type: ignore[misc]
 
 
+def seq_gaps(seq: I64) -> I64 | None:
+    """Per message (in receive order), the sequence numbers missing since the one before: ``seq[i] - seq[i-1] - 1``
+    (0 for the first); None when the numbers ever fail to grow: several publishers share the topic (a ROS 1 bag
+    records them on one connection, as ``/rosout``), one restarted, or none sets its ``seq``."""
+    steps = np.diff(seq)
+    if (steps < 1).any():
+        return None
+    gaps: I64 = np.r_[0, steps - 1].astype(np.int64)
+    return gaps
+
+
 def health(
-    topic: str, times: I64, sizes: I64, stamps: I64, *, period_ns: int = PERIOD_NS, window_ns: int = WINDOW_NS
+    topic: str,
+    times: I64,
+    sizes: I64,
+    stamps: I64,
+    seq: I64 | None = None,
+    *,
+    period_ns: int = PERIOD_NS,
+    window_ns: int = WINDOW_NS,
 ) -> TopicHealth:
-    """``topic``'s series from its messages' receive times, sizes and header stamps (-1: none)."""
+    """``topic``'s series from its messages' receive times, sizes, header stamps (-1: none) and, where known, the
+    ``header.seq`` of its one publisher (None or any -1: no drops)."""
     order = np.argsort(times, kind="stable")
     times, sizes, stamps = times[order], sizes[order], stamps[order]
     grid = np.arange(int(times[0]), int(times[-1]) + 1, period_ns, dtype=np.int64)
@@ -72,9 +99,17 @@ def health(
         latency = np.where(heads[hi] > heads[lo], (lags[hi] - lags[lo]) / (heads[hi] - heads[lo]), np.nan)
     rate = np.where(grid > times[0], count / span, np.nan)  # nothing to divide by at the first message
     bandwidth = np.where(grid > times[0], sent / span, np.nan)
-    return TopicHealth(topic, grid, rate, bandwidth, latency)
+    drops = None
+    if seq is not None and len(seq) and bool(np.all(seq >= 0)) and (gaps := seq_gaps(seq[order])) is not None:
+        missing = np.r_[0, np.cumsum(gaps)]
+        drops = (missing[hi] - missing[lo]).astype(np.float64)  # counted at the message after them
+    return TopicHealth(topic, grid, rate, bandwidth, latency, drops)
 
 
 def bag_health(bag: Bag, start_ns: int | None = None, stop_ns: int | None = None) -> list[TopicHealth]:
     """Every topic's :class:`TopicHealth` over the stretch (the whole bag by default)."""
-    return [health(t, *cols) for t, cols in sorted(read_messages(bag, start_ns, stop_ns).items())]
+    out = []
+    for t, (times, sizes, stamps, seq) in sorted(read_messages(bag, start_ns, stop_ns).items()):
+        one = bag.topics[t].publishers == 1  # several publishers count each its own
+        out.append(health(t, times, sizes, stamps, seq if one else None))
+    return out

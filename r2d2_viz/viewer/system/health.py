@@ -1,6 +1,7 @@
 """Every topic's health in the recording (``--tf-tree`` with a sink, on a bag): ``/health/<topic>/rate`` (Hz),
-``…/bandwidth`` (B/s) and, for messages with a header, ``…/latency`` (s, receive time − header stamp) as time
-series (:mod:`r2d2_viz.sources.system.topic_health`), logged once before the replay, beside the TF graph."""
+``…/bandwidth`` (B/s), for messages with a header ``…/latency`` (s, receive time − header stamp) and, for a ROS 1
+topic of one publisher, ``…/drops`` (``header.seq`` numbers missing in the window) as time series
+(:mod:`r2d2_viz.sources.system.topic_health`), logged once before the replay, beside the TF graph."""
 
 from __future__ import annotations
 
@@ -25,7 +26,8 @@ def log_health(rec: rr.RecordingStream, series: list[TopicHealth], clock: Clock)
     """Each topic's series (NaN samples left out); the number of samples logged."""
     logged = 0
     for h in series:
-        for name, values in (("rate", h.rate_hz), ("bandwidth", h.bandwidth), ("latency", h.latency_s)):
+        named = [("rate", h.rate_hz), ("bandwidth", h.bandwidth), ("latency", h.latency_s)]
+        for name, values in named if h.drops is None else [*named, ("drops", h.drops)]:
             keep = np.isfinite(values)
             if not keep.any():
                 continue

@@ -3,6 +3,7 @@ its receive times and the sizes of the raw messages it hands out."""
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -67,3 +68,43 @@ def test_list_prints_rate_and_bandwidth(tmp_path: Path) -> None:
         "/points [geometry_msgs/msg/PointStamped] 1 message",
         f"/tf [tf2_msgs/msg/TFMessage] 21 messages, 20 Hz, {si(size, 'B/s')}",
     ]
+
+
+def test_ros1_drops_from_seq_gaps(tmp_path: Path) -> None:
+    """A ROS 1 bag written with rosbags whose ``/temp`` lost 4 messages (``/ref``: 4 seq numbers skipped): the drops
+    are the seq numbers missing between the messages rosbags deserialises; unknown (None) without a header
+    (``/value``) and with two publishers each counting its own (``/pair``)."""
+    from seqbags import DROPPED, REF_SEQ, seqs, write
+
+    path = write(tmp_path / "seq.bag")
+    with open_bag(path) as b:
+        rates = topic_rates(b)
+    for topic in ("/temp", "/ref"):
+        got = [s for _, s in seqs(path, topic)]
+        assert rates[topic].drops == sum(b - a - 1 for a, b in itertools.pairwise(got))
+    assert rates["/temp"].drops == len(DROPPED) and rates["/ref"].drops == 4 == REF_SEQ[-1] + 1 - len(REF_SEQ)
+    assert rates["/value"].drops is None and rates["/pair"].drops is None
+
+
+def test_list_says_ros1_drops(tmp_path: Path) -> None:
+    from seqbags import write
+
+    done = cli("--bag", str(write(tmp_path / "seq.bag")), "--list")
+    assert done.returncode == 0, done.stderr
+    lines = {line.split(" ")[0]: line for line in done.stdout.splitlines()}
+    assert lines["/temp"].endswith(", 4 dropped") and lines["/ref"].endswith(", 4 dropped")
+    assert "dropped" not in lines["/value"] + lines["/pair"]
+    assert rate_words(TopicRate(11, 3300, 0, 1_000_000_000, 2)) == ", 10 Hz, 3.3 kB/s, 2 dropped"
+    assert rate_words(TopicRate(1, 100, 5, 5, 0)) == ", 0 dropped"
+
+
+def test_the_real_turtlesim_rosout_has_no_drops_to_speak_of() -> None:
+    """The real ROS 1 bag's ``/rosout`` holds several nodes' messages on one connection: its seq goes back (rosbags
+    deserialises 3..10, then 2, 0), so no drops are claimed."""
+    from seqbags import seqs
+
+    path = Path(__file__).parents[2] / "data/bags/ros1/example-lz4.bag"
+    got = [s for _, s in seqs(path, "/rosout")]
+    assert any(b <= a for a, b in itertools.pairwise(got))
+    with open_bag(path) as b:
+        assert topic_rates(b)["/rosout"].drops is None

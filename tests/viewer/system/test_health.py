@@ -37,3 +37,23 @@ def test_health_series_per_topic(tmp_path: Path) -> None:
     assert all(v[0] == pytest.approx(0.03) for v in latency)
     views = blueprint_components(out).values()
     assert any(v.get("ViewBlueprint:display_name") == ["Topic rates (Hz)"] for v in views)
+
+
+def test_ros1_drops_series(tmp_path: Path) -> None:
+    """``--tf-tree --save`` on a ROS 1 bag written with rosbags whose ``/temp`` lost slots 5, 6, 7 and 20 (seq as
+    rosbags deserialises): ``/health/temp/drops``, by hand 3 in the 2 s up to 1 s, 4 up to 2.5 s, 1 up to 3 s; no
+    drops for two publishers (``/pair``) or a type without a header (``/value``)."""
+    from seqbags import MS as SMS
+    from seqbags import T0 as ST0
+    from seqbags import seqs, write
+
+    path = write(tmp_path / "seq.bag")
+    assert [s for _, s in seqs(path, "/temp")][4:6] == [104, 108]
+    out = tmp_path / "seq.rrd"
+    done = cli("--bag", str(path), "--tf-tree", "--save", str(out))
+    assert done.returncode == 0, done.stderr
+    recording = read_recording(out)
+    assert {k for k in recording if k.endswith("/drops")} == {"/health/temp/drops", "/health/ref/drops"}
+    drops = recording["/health/temp/drops"]
+    at = {(t - ST0) // SMS: v[0] for t, v in zip(drops.times, drops.temporal["Scalars:scalars"], strict=True)}
+    assert (at[0], at[1000], at[2500], at[3000]) == (0, 3, 4, 1)
