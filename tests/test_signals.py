@@ -135,7 +135,7 @@ def test_serve_leaves_no_server_behind(tmp_path: Path, stop: str) -> None:
     proc, said = _start("--serve", "--port", str(port), "--web-port", str(web), cwd=tmp_path, until="serving")
     children = psutil.Process(proc.pid).children(recursive=True)
     try:
-        assert "serving" in said and children, said
+        assert "serving" in said, said  # (no Rerun server of its own since issue 36's door: children may be none)
         if stop == "sighup":
             os.killpg(proc.pid, signal.SIGHUP)
         else:

@@ -70,7 +70,8 @@ class RecordingFeed:
         self._dropped = 0  # reads dropped (after the first) to keep within the history
         self._size = 0
         self._changed = threading.Condition()
-        self._closed = threading.Event()
+        self._stopping = threading.Event()  # the pump stops…
+        self._closed = threading.Event()  # …then, once the last bytes are kept, the followers end
         self._thread = threading.Thread(target=self._pump, name="r2d2-viz-feed", daemon=True)
         self._thread.start()
 
@@ -94,7 +95,7 @@ class RecordingFeed:
                 self._changed.notify_all()
 
     def _pump(self) -> None:
-        while not self._closed.wait(self._period):
+        while not self._stopping.wait(self._period):
             self._take()
 
     def follow(self) -> Iterator[bytes]:
@@ -113,10 +114,11 @@ class RecordingFeed:
 
     def close(self) -> None:
         """Takes the last bytes, then ends every follower (after what it has not yet sent)."""
-        if self._closed.is_set():
+        if self._stopping.is_set():
             return
-        self._closed.set()
+        self._stopping.set()
         self._thread.join(timeout=5)
-        self._take()
+        self._take()  # (a follower that saw the feed closed before these bytes were kept would never send them)
         with self._changed:
+            self._closed.set()
             self._changed.notify_all()
