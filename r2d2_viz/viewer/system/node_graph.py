@@ -1,0 +1,83 @@
+"""The graph of nodes and topics in a live recording (``--ros --tf-tree`` with a sink): ``/node_graph`` holds Rerun
+``GraphNodes`` (a vertex per ROS node, blue, and per topic, grey) and ``GraphEdges`` (publisher → topic →
+subscriber), logged whenever the graph changes, at that time: a node that left is gone from the snapshot logged
+when it left, so scrubbing the timeline shows the graph as it was. :class:`NodeGraphLog` compares snapshots
+(:meth:`~NodeGraphLog.update`, testable with stand-in node lists); :meth:`~NodeGraphLog.watch` polls a live
+graph's discovery (:class:`~r2d2_viz.sources.system.node_graph.NodeWatch`) on a thread of its own."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import rerun as rr
+
+from r2d2_viz.sources.base import Clock
+from r2d2_viz.sources.live.dds import LiveGraph, Node
+from r2d2_viz.sources.system.node_graph import Graph, NodeWatch, graph_parts
+from r2d2_viz.viewer import entities
+from r2d2_viz.viewer.columns import encoded, send, time_array
+
+ENTITY = "/node_graph"
+NODE_COLOR, TOPIC_COLOR = 0x1E88E5FF, 0x90A4AEFF
+POLL_SECONDS = 1.0
+"""How often the watching thread reads discovery."""
+
+
+class NodeGraphLog:
+    """Logs the node graph each time it differs from the last one logged."""
+
+    def __init__(self, rec: rr.RecordingStream, *, clock: Clock, timeline: str = entities.TIMELINE) -> None:
+        self.rec, self.clock, self.timeline = rec, clock, timeline
+        self.last: Graph | None = None
+        self.snapshots = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def update(self, time_ns: int, nodes: Sequence[Node]) -> bool:
+        """The graph of ``nodes`` at ``time_ns``: logged if it changed (True)."""
+        graph = graph_parts(nodes)
+        if graph == self.last:
+            return False
+        self.last = graph
+        n, m = len(graph.ids), len(graph.edges)
+        colors = np.array([NODE_COLOR if is_node else TOPIC_COLOR for is_node in graph.is_node], np.uint32)
+        columns = [
+            *rr.GraphNodes.columns(node_ids=list(graph.ids), labels=list(graph.labels), colors=colors).partition([n]),
+            *rr.GraphEdges.columns(edges=list(graph.edges), graph_type=["directed"] * m).partition([m]),
+            *rr.GraphNodes.columns(show_labels=[True]),
+        ]
+        send(self.rec, ENTITY, self.timeline, time_array(np.array([time_ns], np.int64), self.clock), encoded(columns))
+        self.snapshots += 1
+        return True
+
+    def watch(
+        self, graph: object, *, period: float = POLL_SECONDS, wall_ns: Callable[[], int] = time.time_ns
+    ) -> NodeGraphLog:
+        """Poll ``graph``'s discovery every ``period`` s until :meth:`stop` (nothing when it is not a live
+        :class:`LiveGraph`, as in tests with stand-in graphs); each change logged at ``wall_ns()`` (the clock of
+        the writers' source timestamps, the live run's timeline)."""
+        if isinstance(graph, LiveGraph):
+            watch = NodeWatch(graph)
+            self._thread = threading.Thread(target=self._loop, args=(watch, period, wall_ns), daemon=True)
+            self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop watching, after one last look."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+            self._thread = None
+
+    def _loop(self, watch: NodeWatch, period: float, wall_ns: Callable[[], int]) -> None:
+        while True:
+            stopping = self._stop.wait(period)
+            try:
+                self.update(wall_ns(), watch.poll())
+            except Exception:  # the run is ending (the recording or the graph closed): nothing more to log
+                return
+            if stopping:
+                return
