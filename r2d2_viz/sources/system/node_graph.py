@@ -42,6 +42,30 @@ def graph_parts(nodes: Sequence[Node], hidden: frozenset[str] = DEBUG_TOPICS) ->
     return Graph(ids, (*names, *topics), (True,) * len(names) + (False,) * len(topics), tuple(sorted(edges)))
 
 
+SPACING = (230.0, 50.0)
+"""Across (layers) and down (within a layer), in the graph view's units."""
+
+
+def positions(graph: Graph) -> list[tuple[float, float]]:
+    """Left to right as rqt_graph (dot) draws it: each vertex one layer after the furthest vertex with an edge into
+    it (publishers, then their topics, then the topics' subscribers…), by name within a layer. A cycle (a node
+    subscribing to what it publishes) stops growing after as many rounds as there are vertices."""
+    layer = dict.fromkeys(graph.ids, 0)
+    for _ in graph.ids:
+        grown = False
+        for a, b in graph.edges:
+            if layer[b] <= layer[a] and layer[a] + 1 < len(graph.ids):
+                layer[b], grown = layer[a] + 1, True
+        if not grown:
+            break
+    rows: dict[int, int] = {}
+    out = []
+    for vertex in graph.ids:
+        row = rows[layer[vertex]] = rows.get(layer[vertex], -1) + 1
+        out.append((layer[vertex] * SPACING[0], row * SPACING[1]))
+    return out
+
+
 def nodes_of(infos: Iterable[Any], endpoints: Mapping[bytes, tuple[str, str, bool]]) -> list[Node]:
     """The nodes of ``infos`` (ParticipantEntitiesInfo messages, deserialised) with their topics: each node's writer
     and reader GIDs (first 16 bytes: the DDS GUID) looked up in ``endpoints`` (GUID → topic, type, is a writer)."""

@@ -16,7 +16,7 @@ import rerun as rr
 
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.sources.live.dds import LiveGraph, Node
-from r2d2_viz.sources.system.node_graph import Graph, NodeWatch, graph_parts
+from r2d2_viz.sources.system.node_graph import Graph, NodeWatch, graph_parts, positions
 from r2d2_viz.viewer import entities
 from r2d2_viz.viewer.columns import encoded, send, time_array
 
@@ -31,7 +31,8 @@ class NodeGraphLog:
 
     def __init__(self, rec: rr.RecordingStream, *, clock: Clock, timeline: str = entities.TIMELINE) -> None:
         self.rec, self.clock, self.timeline = rec, clock, timeline
-        self.last: Graph | None = None
+        self.last: Graph = graph_parts([])
+        """The graph last logged (at first, the empty one: nothing is logged until a node is seen)."""
         self.snapshots = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -45,7 +46,9 @@ class NodeGraphLog:
         n, m = len(graph.ids), len(graph.edges)
         colors = np.array([NODE_COLOR if is_node else TOPIC_COLOR for is_node in graph.is_node], np.uint32)
         columns = [
-            *rr.GraphNodes.columns(node_ids=list(graph.ids), labels=list(graph.labels), colors=colors).partition([n]),
+            *rr.GraphNodes.columns(
+                node_ids=list(graph.ids), labels=list(graph.labels), colors=colors, positions=positions(graph)
+            ).partition([n]),
             *rr.GraphEdges.columns(edges=list(graph.edges), graph_type=["directed"] * m).partition([m]),
             *rr.GraphNodes.columns(show_labels=[True]),
         ]

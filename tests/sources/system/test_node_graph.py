@@ -7,7 +7,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 from r2d2_viz.sources.live.dds import Node
-from r2d2_viz.sources.system.node_graph import graph_parts, nodes_of
+from r2d2_viz.sources.system.node_graph import graph_parts, nodes_of, positions
 
 JS = "sensor_msgs/msg/JointState"
 LOG = "rcl_interfaces/msg/Log"
@@ -54,3 +54,14 @@ def test_nodes_of_discovery_info_matched_by_guid() -> None:
         Node("/robot1/listener", (), (("/chatter", "std_msgs/msg/String"),)),
         Node("/talker", (("/chatter", "std_msgs/msg/String"),), ()),
     ]
+
+
+def test_positions_left_to_right_publishers_topics_subscribers() -> None:
+    talker = Node("/talker", (("/chatter", "std_msgs/msg/String"),), ())
+    relay = Node("/relay", (("/out", "std_msgs/msg/String"),), (("/chatter", "std_msgs/msg/String"),))
+    loop = Node("/loop", (("/self", "std_msgs/msg/String"),), (("/self", "std_msgs/msg/String"),))
+    graph = graph_parts([talker, relay, loop])
+    x = {v: p[0] for v, p in zip(graph.ids, positions(graph), strict=True)}
+    # by hand: talker → /chatter → relay → /out, one layer each
+    assert x["node /talker"] < x["topic /chatter"] < x["node /relay"] < x["topic /out"]
+    assert len(set(positions(graph))) == len(graph.ids)  # no two vertices on one spot (the loop's included)

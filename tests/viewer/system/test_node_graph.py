@@ -27,6 +27,7 @@ def test_nodes_appear_and_disappear_at_their_time(tmp_path: Path) -> None:
     log = NodeGraphLog(rec, clock="timestamp")
     robot = Node("/robot", (("/joint_states", JS),), ())
     viewer = Node("/viewer", (), (("/joint_states", JS),))
+    assert not log.update(T0 - S, [])  # nothing seen yet: nothing logged
     assert log.update(T0, [robot])
     assert log.update(T0 + S, [robot, viewer])
     assert not log.update(T0 + 2 * S, [viewer, robot])  # the same graph: nothing logged
@@ -74,7 +75,7 @@ def test_the_blueprint_has_the_node_graph_tab(tmp_path: Path) -> None:
 
 def test_a_real_node_and_its_topics_come_and_go_in_the_graph(tmp_path: Path) -> None:
     """``--ros --tf-tree --save``: two real rclpy nodes (Jazzy, Fast DDS) in a loopback-only namespace; the robot
-    node publishes for 10 s then exits while the run goes on. Expected from the nodes' own sources: publish_robot.py's
+    node publishes for 15 s then exits while the run goes on. Expected from the nodes' own sources: publish_robot.py's
     node publishes /robot_description and /joint_states; tool_listener.py's subscribes to /cmd_vel (among RViz's
     tools' topics) and publishes /map."""
     from sources.live import ros_node
@@ -84,9 +85,9 @@ def test_a_real_node_and_its_topics_come_and_go_in_the_graph(tmp_path: Path) -> 
     urdf = REPO / "assets" / "r2d2.urdf"
     exe = str(Path(sys.executable).parent / "r2d2-viz")
     out = tmp_path / "live.rrd"
-    robot = f'"{python}" "{nodes / "publish_robot.py"}" --urdf "{urdf}" --subscribers 0 --count 100 --rate 10'
+    robot = f'"{python}" "{nodes / "publish_robot.py"}" --urdf "{urdf}" --subscribers 0 --count 150 --rate 10'
     listener = f'"{python}" "{nodes / "tool_listener.py"}" --seconds 30'
-    run = f'sleep 2; "{exe}" --ros --tf-tree --duration 16 --save "{out}"; rc=$?; kill %1 %2 2>/dev/null; exit $rc'
+    run = f'sleep 2; "{exe}" --ros --tf-tree --duration 20 --save "{out}"; rc=$?; kill %1 %2 2>/dev/null; exit $rc'
     script = f"{robot} --linger 0 >/dev/null 2>&1 & {listener} >/dev/null 2>&1 & {run}"
     done = ros_node.in_netns(["sh", "-c", script], timeout=180)
     assert done.returncode == 0, done.stderr[-2000:]
@@ -102,7 +103,7 @@ def test_a_real_node_and_its_topics_come_and_go_in_the_graph(tmp_path: Path) -> 
     } <= both
     assert ("topic /cmd_vel", "node /tool_listener") in both and ("node /tool_listener", "topic /map") in both
     assert "topic /rosout" not in ids[with_robot[-1]]  # rqt_graph's "Hide Debug"
-    # the robot node exited (after 10 s of its 10 Hz): a later snapshot without it, the listener still there
+    # the robot node exited (after 15 s of its 10 Hz): a later snapshot without it, the listener still there
     assert with_robot[-1] < len(ids) - 1, ids
     assert "node /r2d2_viz_test_robot" not in ids[-1] and "node /tool_listener" in ids[-1], ids
     assert rows.times[with_robot[-1] + 1] - rows.times[with_robot[0]] > 3 * S  # it stayed a while before leaving
