@@ -295,7 +295,7 @@ class _Scene:
             self.notices.report(note)
         self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
         self.recorded.graph = TfGraph(rec, clock="timestamp") if config.tf_tree else None
-        self.nodes = NodeGraphLog(rec, clock="timestamp").watch(source.graph if config.tf_tree else None)
+        self.nodes = NodeGraphLog(rec, clock="timestamp").watch(source if config.tf_tree else None)
         self.feed = DisplayFeed(
             self.notices,
             clock="timestamp",

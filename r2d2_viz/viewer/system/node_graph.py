@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -17,13 +18,19 @@ import rerun as rr
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.sources.live.dds import LiveGraph, Node
 from r2d2_viz.sources.system.node_graph import Graph, NodeWatch, graph_parts, positions
+from r2d2_viz.sources.system.topic_health import LiveHealth
 from r2d2_viz.viewer import entities
 from r2d2_viz.viewer.columns import encoded, send, time_array
+from r2d2_viz.viewer.system.health import log_health
 
 ENTITY = "/node_graph"
 NODE_COLOR, TOPIC_COLOR = 0x1E88E5FF, 0x90A4AEFF
 POLL_SECONDS = 1.0
 """How often the watching thread reads discovery."""
+ARRIVALS = 1_000_000
+"""At most this many samples' (topic, time, bytes) wait for the thread (a second at 1 MHz)."""
+LATE_NS = 1_000_000_000
+"""Health samples are logged up to this long before now: a sample's writer stamped it before it reached us."""
 
 
 class NodeGraphLog:
@@ -34,6 +41,7 @@ class NodeGraphLog:
         self.last: Graph = graph_parts([])
         """The graph last logged (at first, the empty one: nothing is logged until a node is seen)."""
         self.snapshots = 0
+        self.health_samples = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -57,14 +65,19 @@ class NodeGraphLog:
         return True
 
     def watch(
-        self, graph: object, *, period: float = POLL_SECONDS, wall_ns: Callable[[], int] = time.time_ns
+        self, source: object, *, period: float = POLL_SECONDS, wall_ns: Callable[[], int] = time.time_ns
     ) -> NodeGraphLog:
-        """Poll ``graph``'s discovery every ``period`` s until :meth:`stop` (nothing when it is not a live
-        :class:`LiveGraph`, as in tests with stand-in graphs); each change logged at ``wall_ns()`` (the clock of
-        the writers' source timestamps, the live run's timeline)."""
+        """Poll the discovery of ``source``'s graph every ``period`` s until :meth:`stop` (nothing when it is not
+        a live :class:`LiveGraph`, as in tests with stand-in graphs); each change logged at ``wall_ns()`` (the clock
+        of the writers' source timestamps, the live run's timeline). The source's arrivals become each topic's
+        health series (``/health/<topic>/rate`` and ``bandwidth``), sampled up to a second before ``wall_ns()``."""
+        graph = getattr(source, "graph", None)
         if isinstance(graph, LiveGraph):
+            arrivals: deque[tuple[str, int, int]] = deque(maxlen=ARRIVALS)
+            source.arrivals = arrivals  # type: ignore[attr-defined]  # a LiveSource
             watch = NodeWatch(graph)
-            self._thread = threading.Thread(target=self._loop, args=(watch, period, wall_ns), daemon=True)
+            args = (watch, arrivals, period, wall_ns)
+            self._thread = threading.Thread(target=self._loop, args=args, daemon=True)
             self._thread.start()
         return self
 
@@ -75,11 +88,17 @@ class NodeGraphLog:
             self._thread.join(timeout=5)
             self._thread = None
 
-    def _loop(self, watch: NodeWatch, period: float, wall_ns: Callable[[], int]) -> None:
+    def _loop(
+        self, watch: NodeWatch, arrivals: deque[tuple[str, int, int]], period: float, wall_ns: Callable[[], int]
+    ) -> None:
+        topics = LiveHealth()
         while True:
             stopping = self._stop.wait(period)
             try:
-                self.update(wall_ns(), watch.poll())
+                now = wall_ns()
+                self.update(now, watch.poll())
+                got = [arrivals.popleft() for _ in range(len(arrivals))]
+                self.health_samples += log_health(self.rec, topics.add(got, now - LATE_NS), self.clock)
             except Exception:  # the run is ending (the recording or the graph closed): nothing more to log
                 return
             if stopping:

@@ -7,6 +7,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+import pytest
 import rerun as rr
 from conftest import REPO
 from rrd import blueprint_components, read_recording
@@ -74,10 +76,10 @@ def test_the_blueprint_has_the_node_graph_tab(tmp_path: Path) -> None:
 
 
 def test_a_real_node_and_its_topics_come_and_go_in_the_graph(tmp_path: Path) -> None:
-    """``--ros --tf-tree --save``: two real rclpy nodes (Jazzy, Fast DDS) in a loopback-only namespace; the robot
-    node publishes for 15 s then exits while the run goes on. Expected from the nodes' own sources: publish_robot.py's
-    node publishes /robot_description and /joint_states; tool_listener.py's subscribes to /cmd_vel (among RViz's
-    tools' topics) and publishes /map."""
+    """``--ros --tf-tree --save``: its graph of nodes and topics, and each topic's health. Two real rclpy nodes (Jazzy,
+    Fast DDS) in a loopback-only namespace; the robot node publishes for 15 s then exits while the run goes on. Expected
+    from the nodes' own sources: publish_robot.py's node publishes /robot_description and /joint_states;
+    tool_listener.py's subscribes to /cmd_vel (among RViz's tools' topics) and publishes /map."""
     from sources.live import ros_node
 
     python = ros_node.require_live("jazzy")
@@ -91,7 +93,12 @@ def test_a_real_node_and_its_topics_come_and_go_in_the_graph(tmp_path: Path) -> 
     script = f"{robot} --linger 0 >/dev/null 2>&1 & {listener} >/dev/null 2>&1 & {run}"
     done = ros_node.in_netns(["sh", "-c", script], timeout=180)
     assert done.returncode == 0, done.stderr[-2000:]
-    rows = read_recording(out)["/node_graph"]
+    recording = read_recording(out)
+    rows = recording["/node_graph"]
+    # live topic health: the robot publishes /joint_states at 10 Hz (its --rate), each message the same size
+    rate = [v[0] for v in recording["/health/joint_states/rate"].temporal["Scalars:scalars"]]
+    assert len(rate) >= 10 and float(np.median(rate)) == pytest.approx(10.0, rel=0.05), rate
+    assert "/health/joint_states/bandwidth" in recording
     ids = rows.temporal["GraphNodes:node_ids"]
     edges = [{(e["first"], e["second"]) for e in row or ()} for row in rows.temporal["GraphEdges:edges"]]
     with_robot = [k for k, row in enumerate(ids) if "node /r2d2_viz_test_robot" in row]
