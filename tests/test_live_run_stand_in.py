@@ -38,6 +38,7 @@ class Config:
     rviz: Path | None = None
     tool_topics: tuple[tuple[str, str], ...] = ()
     video: Any = None
+    tf_tree: bool = False
 
 
 def _image() -> bytes:
