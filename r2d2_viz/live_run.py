@@ -50,14 +50,14 @@ from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording, update_blueprint
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
+from r2d2_viz.viewer.system.node_graph import NodeGraphLog
 from r2d2_viz.viewer.system.tf_graph import TfGraph
 from r2d2_viz.viewer.tf_recorded import RecordedTf
 
 POLL_SECONDS = 0.02
 """At the latest this often, what arrived is taken from the graph and logged (one chunk per entity)…"""
 GATHER_SECONDS = 0.002
-"""…and as soon as samples arrive, after gathering for this long (a 1 kHz stream goes out 2 samples a chunk:
-lateness of a few ms without a send per sample)."""
+"""…and as soon as samples arrive, after gathering for this long (a 1 kHz stream: 2 samples a chunk, ms late)."""
 SETTLE_SECONDS = 1.5
 """Discovery and the latched topics (``/robot_description``, ``/tf_static``) before the view is planned."""
 TF_TOPICS = ("/tf", "/tf_static")
@@ -102,10 +102,9 @@ def run_live(
     on_ready: Callable[[str], None] | None = None,
     env: Mapping[str, str] | None = None,
 ) -> tuple[int, bool, Path | None]:
-    """Run until ``config.duration`` seconds have passed or a signal; returns (joint states shown, whether a
-    signal stopped it, the file saved)."""
+    """Run until ``config.duration`` s pass or a signal; returns (joint states shown, signalled, the file saved)."""
     stop = threading.Event()
-    with signals_set(stop), LiveGraph(env) as graph:
+    with signals_set(stop), LiveGraph(env, fast_dds_types=config.tf_tree) as graph:  # for NodeWatch
         return run_on(config, graph, stop, on_ready)
 
 
@@ -122,7 +121,7 @@ def run_on(
     batches = _settle(source, model, deadline)
     plan, view = _plan(config, model.robot, batches)
     # the graph's log, diagnostics, fixes and sensors when the view is planned: their views (later ones: below)
-    layout = dataclasses.replace(view.layout, tf_graph=config.tf_tree)
+    layout = dataclasses.replace(view.layout, tf_graph=config.tf_tree, node_graph=config.tf_tree)
     view = dataclasses.replace(view, layout=with_telemetry(layout, source.display_topics))
     output = _Output(config.sink)
     lateness = LatenessLog.from_env()
@@ -228,8 +227,7 @@ def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> 
 
 
 class _Output:
-    """Where a live run is written: the sinks, ``--save out.rrd`` (beside the target, renamed when done, with its
-    footer) or ``--save out.mcap`` (what was received)."""
+    """Where a live run is written: the sinks, ``--save out.rrd`` (renamed when done) or ``out.mcap`` (as received)."""
 
     def __init__(self, sink: SinkConfig) -> None:
         save = sink.save
@@ -270,8 +268,8 @@ class _Output:
 
 
 class _Scene:
-    """What a live run shows, batch by batch: the robot (reloaded when ``/robot_description`` changes; transforms
-    only while it does not parse), recorded transforms, display topics, the notes of the source."""
+    """What a live run shows, batch by batch: the robot (reloaded with each ``/robot_description``), recorded
+    transforms, display topics, the notes of the source; with ``--tf-tree``, the TF and node graphs."""
 
     def __init__(
         self,
@@ -295,6 +293,7 @@ class _Scene:
             self.notices.report(note)
         self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
         self.recorded.graph = TfGraph(rec, clock="timestamp") if config.tf_tree else None
+        self.nodes = NodeGraphLog(rec, clock="timestamp").watch(source if config.tf_tree else None)
         self.feed = DisplayFeed(
             self.notices,
             clock="timestamp",
@@ -384,6 +383,7 @@ class _Scene:
         if self.streamer is not None:
             self.streamer.finish()
         self.robots.finish()
+        self.nodes.stop()
 
 
 def _say_received(source: LiveSource, seconds: float) -> None:

@@ -97,8 +97,7 @@ def _deserialize(data: bytes | memoryview, msgtype: str) -> Any:
 
 
 class LiveSource:
-    """Subscribes to ``topics`` (names; None: every topic of a displayable type and the robot's own) as they appear
-    on ``graph``, and sorts what arrives (see the module docstring)."""
+    """Subscribes to ``topics`` (None: every displayable one, the robot's own) on ``graph``; sorts what arrives."""
 
     def __init__(
         self,
@@ -110,18 +109,17 @@ class LiveSource:
         shared_frames: Sequence[str] = SHARED_FRAMES,
         known_types: Container[str] = (),
     ) -> None:
-        self.graph, self.time, self.refresh_period = graph, time, refresh
-        self.known_types = known_types  # read for their fields though no display draws them
+        self.graph, self.time, self.refresh_period, self.known_types = graph, time, refresh, known_types  # (fields)
         self.wanted = None if topics is None else {*topics, *OURS}
         self.subscribed: dict[str, str] = {}
         self.received: dict[str, int] = {}
+        self.arrivals: deque[tuple[str, int, int]] | None = None  # set: each sample's (topic, time, bytes) added
         self._refused: set[tuple[str, str]] = set()
-        self._next_refresh = 0.0
         self._joints: JointStateDecoder | None = None
         self._pending: deque[tuple[int, bytes]] = deque(maxlen=PENDING_JOINT_STATES)
         self._tf = {t: TfDecoder(_deserialize, static=t == "/tf_static", time=time) for t in ("/tf", "/tf_static")}
         self._tf_nonfinite = {"/tf": 0, "/tf_static": 0}
-        self.shared_frames = tuple(shared_frames)
+        self._next_refresh, self.shared_frames = 0.0, tuple(shared_frames)
         self._robot_joints: dict[str, JointStateDecoder] = {}
         self._robot_pending: dict[str, deque[tuple[int, bytes]]] = {}
         self._dropped: dict[str, int] = {}
@@ -190,6 +188,8 @@ class LiveSource:
         robot_joints: dict[str, list[tuple[int, bytes]]] = {}
         for s in batch.samples:
             self.received[s.topic] = self.received.get(s.topic, 0) + 1
+            if self.arrivals is not None:
+                self.arrivals.append((s.topic, s.source_timestamp_ns, len(s.data)))
             namespace, name = robot_topic(s.topic) or ("", "")
             if s.topic == "/joint_states":
                 joints.append((s.source_timestamp_ns, s.data))

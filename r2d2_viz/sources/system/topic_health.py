@@ -7,6 +7,7 @@ the storage blocks (headers read from the bytes, :func:`~.tf_read.header_columns
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,3 +114,50 @@ def bag_health(bag: Bag, start_ns: int | None = None, stop_ns: int | None = None
         one = bag.topics[t].publishers == 1  # several publishers count each its own
         out.append(health(t, times, sizes, stamps, seq if one else None))
     return out
+
+
+class LiveHealth:
+    """Each live topic's rate and bandwidth as its messages arrive (source timestamps and sizes), sampled every
+    ``period_ns`` up to the time :meth:`add` is told, over the ``window_ns`` before (:func:`health`'s definitions;
+    no latency: a live sample's header is not read here). Keeps only the messages a later sample can still count."""
+
+    def __init__(self, *, period_ns: int = PERIOD_NS, window_ns: int = WINDOW_NS) -> None:
+        self.period_ns, self.window_ns = period_ns, window_ns
+        self._times: dict[str, I64] = {}
+        self._sizes: dict[str, I64] = {}
+        self._first: dict[str, int] = {}
+        self._next: int | None = None
+
+    def add(self, arrivals: Sequence[tuple[str, int, int]], upto_ns: int) -> list[TopicHealth]:
+        """``(topic, time, bytes)`` received since the last call; the samples due at or before ``upto_ns``."""
+        for topic in {a[0] for a in arrivals}:
+            rows = np.array([(t, n) for name, t, n in arrivals if name == topic], np.int64).reshape(-1, 2)
+            self._times[topic] = np.r_[self._times.get(topic, np.zeros(0, np.int64)), rows[:, 0]]
+            self._sizes[topic] = np.r_[self._sizes.get(topic, np.zeros(0, np.int64)), rows[:, 1]]
+            self._first[topic] = min(self._first.get(topic, int(rows[:, 0].min())), int(rows[:, 0].min()))
+        if not self._first:
+            return []
+        start = min(self._first.values()) if self._next is None else self._next
+        grid = np.arange(start, upto_ns + 1, self.period_ns, dtype=np.int64)
+        if not len(grid):
+            return []
+        self._next = int(grid[-1]) + self.period_ns
+        out = []
+        for topic, times in sorted(self._times.items()):
+            order = np.argsort(times, kind="stable")
+            times, sizes = times[order], self._sizes[topic][order]
+            first = self._first[topic]
+            g = grid[grid > first]
+            if len(g):
+                hi = np.searchsorted(times, g, side="right")
+                lo = np.searchsorted(times, g - self.window_ns, side="right")
+                partial = g - self.window_ns < first  # the first message starts the span
+                span = np.minimum(self.window_ns, g - first) / 1e9
+                nbytes = np.r_[0, np.cumsum(sizes)]
+                first_size = sizes[0] if len(times) and times[0] == first else 0  # (or trimmed)
+                rate = (hi - lo - partial) / span
+                bandwidth = (nbytes[hi] - nbytes[lo] - np.where(partial, first_size, 0)) / span
+                out.append(TopicHealth(topic, g, rate, bandwidth, np.full(len(g), np.nan)))
+            keep = times > int(grid[-1]) + self.period_ns - self.window_ns  # what later samples still count
+            self._times[topic], self._sizes[topic] = times[keep], sizes[keep]
+        return out

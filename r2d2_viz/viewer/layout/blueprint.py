@@ -75,6 +75,8 @@ class Layout:
     """``--plot`` paths: a time-series view per flag, of its paths (``/plot/<n>``)."""
     tf_graph: bool = False
     """``--tf-tree``: the TF tree as a graph view (``/tf_tree``) beside the 3D view."""
+    node_graph: bool = False
+    """``--ros --tf-tree``: the graph of nodes and topics (``/node_graph``), a tab beside the TF tree."""
 
 
 def _stable_id(part: rrb.View | rrb.Container, key: str) -> None:
@@ -98,7 +100,7 @@ def generate_blueprint(
         name=f"3D: {fixed} (Grid · TF · RobotModel)",
         origin="/",
         contents=["+ /**", "- /joints/**", f"- {WARNINGS}", *(f"- {topic}/**" for topic in layout.flat_images)]
-        + (["- /tf_tree/**", "- /health/**"] if layout.tf_graph else []),
+        + (["- /tf_tree/**", "- /health/**", "- /node_graph/**"] if layout.tf_graph or layout.node_graph else []),
         background=rrb.Background(color=spec.background),
         line_grid=_grid(spec),
         spatial_information=rrb.SpatialInformation(target_frame=fixed, show_axes=False, show_bounding_box=False),
@@ -156,7 +158,9 @@ def generate_blueprint(
         rates = rrb.TimeSeriesView(name="Topic rates (Hz)", origin="/health", contents="+ /health/**/rate")
         _stable_id(graph, "tf graph")
         _stable_id(rates, "topic rates")
-        parts["tf tree"] = rrb.Tabs(graph, rates)
+        if layout.node_graph:  # rqt_graph's, a third tab
+            parts["node graph"] = rrb.GraphView(name="Nodes and topics", origin="/node_graph")
+        parts["tf tree"] = rrb.Tabs(graph, rates, *([parts["node graph"]] if layout.node_graph else []))
         parts["root"] = rrb.Horizontal(scene, parts["tf tree"], parts["side"], column_shares=[2, 1.5, 1])
     below = _telemetry_views(layout)
     if below:  # a row under the 3D view and plots; none without such topics (the tutorial's layout unchanged)

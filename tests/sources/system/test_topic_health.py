@@ -84,3 +84,30 @@ def test_drops_by_hand() -> None:
     assert (h.drops[k - 1], h.drops[k], h.drops[k + 3]) == (0, 2, 2)  # windows (0.5, 2.5], (1, 3], (2.5, 4.5] s
     seq[10] = 3  # the count goes back (a restart, or two publishers on one connection): unknown
     assert health("/x", t, np.full(len(t), 50, np.int64), np.full(len(t), -1, np.int64), seq).drops is None
+
+
+def test_live_health_fed_in_pieces_by_hand() -> None:
+    """A live topic at 10 Hz of 100 B from t = 0 for 3 s, and one of a single 50 B message at 1.2 s, given in two
+    pieces as a live run's thread gets them. By hand: at 2.5 s the window (0.5, 2.5] holds 20 messages → 10 Hz and
+    2000 B / 2 s; at 1 s, 10 messages after the first over 1 s → 10 Hz, 1000 B/s; the lone message has no rate."""
+    from r2d2_viz.sources.system.topic_health import LiveHealth
+
+    s = 1_000_000_000
+    fast = [("/fast", k * s // 10, 100) for k in range(30)]
+    live = LiveHealth()
+    first = live.add([*fast[:14], ("/one", 12 * s // 10, 50)], upto_ns=s)  # samples at 0, 0.5, 1 s
+    later = live.add(fast[14:], upto_ns=3 * s)
+    last = live.add([], upto_ns=4 * s)  # nothing new: /one's message is no longer kept, /fast's last 2 s are
+    got = {
+        (h.topic, int(t)): (r, b)
+        for h in (*first, *later, *last)
+        for t, r, b in zip(h.times_ns, h.rate_hz, h.bandwidth, strict=True)
+    }
+    assert got[("/fast", 7 * s // 2)] == pytest.approx((7.0, 700.0))  # (1.5, 3.5]: 1.6 … 2.9 s, 14 messages
+    assert got[("/one", 4 * s)] == pytest.approx((0.0, 0.0))
+    assert got[("/fast", s)] == pytest.approx((10.0, 1000.0))
+    assert got[("/fast", 5 * s // 2)] == pytest.approx((10.0, 1000.0))
+    assert got[("/fast", 3 * s)] == pytest.approx((9.5, 950.0))  # (1, 3]: 19 messages (the last at 2.9 s)
+    assert ("/fast", 0) not in got  # nothing to divide by at the first message
+    assert got[("/one", 3 * s // 2)] == pytest.approx((0.0, 0.0))  # its first message starts the span: none after
+    assert sorted(t for topic, t in got if topic == "/fast") == [k * s // 2 for k in range(1, 9)]
