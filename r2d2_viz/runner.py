@@ -245,7 +245,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             feeds = Feeds(
                 TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None
             )
-            watching = watch_robot(streamer, plan.source, config, _packages(config)) if config.watch else None
+            watching = config.watch and watch_robot(recording, plan.source, streamer, config, _packages(config))
             for robot in streamers:
                 (watching or robot).log_static(view.spec.robot)
             with progress_bar(plan, config) as shown:

@@ -27,6 +27,7 @@ from r2d2_viz.rviz.spec import RobotModel
 from r2d2_viz.sources.base import Source
 from r2d2_viz.sources.motion import GeneratedMotion, SlidersMotion
 from r2d2_viz.sources.sliders import SliderBoard
+from r2d2_viz.viewer.sinks import Recording
 from r2d2_viz.viewer.stream import RobotStream
 
 
@@ -70,8 +71,11 @@ class Watching:
         description: Path,
         load: Callable[[list[Path]], Robot],
         poller: PollerFactory,
+        page_config: dict[str, Any] | None = None,
     ) -> None:
         self.stream, self.motion, self.description, self.load = stream, motion, description, load
+        self.page_config = page_config
+        """``--serve``'s page configuration: its sliders are the new robot's once the page is reloaded."""
         self.timed = _Timed(stream.rec, stream.timeline, stream.clock)
         self.display: RobotModel | None = None
         self.files = robot_files(description, stream.tree.robot, self._xacro_files())
@@ -141,6 +145,8 @@ class Watching:
             fresh: SliderBoard = motion.board
             vars(board).update({k: v for k, v in vars(fresh).items() if k != "_lock"})
             motion.board = board
+            if self.page_config is not None and "joints" in self.page_config:
+                self.page_config.update(joints=board.describe())
         old.finish()  # the old robot's pending plot values
         new = RobotStream(
             old.rec,
@@ -169,8 +175,9 @@ class Described(Protocol):
 
 
 def watch_robot(
-    stream: RobotStream | None,
+    recording: Recording,
     source: Source | None,
+    stream: RobotStream | None,
     config: Described,
     packages: PackageIndex,
     poller: PollerFactory | None = None,
@@ -184,7 +191,8 @@ def watch_robot(
     def load(read: list[Path]) -> Robot:
         return load_robot(description, mappings=mappings, packages=packages, read=read)
 
-    return Watching(stream, source, description, load, poller or POLLER)
+    page = recording.page.config if recording.page is not None else None
+    return Watching(stream, source, description, load, poller or POLLER, page)
 
 
 def _file_watcher(files: tuple[Path, ...]) -> Poller:

@@ -7,16 +7,24 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
+import rerun as rr
 from conftest import cli
 from rrd import read_recording
 
+from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.watch import FileWatcher
+from r2d2_viz.robot.xacro_load import load_robot
 from r2d2_viz.runner import RunConfig, run
+from r2d2_viz.sources.motion import SlidersMotion
 from r2d2_viz.viewer.sinks import SinkConfig
+from r2d2_viz.viewer.stream import RobotStream
 from r2d2_viz.viewer.workbench import watch
 
 NS = 1_000_000_000
@@ -40,8 +48,8 @@ class Script:
         self.watched.append(tuple(files))
         return self
 
-    def watch(self, files: object) -> None:
-        self.watched.append(tuple(files))  # type: ignore[call-overload]
+    def watch(self, files: Iterable[Path]) -> None:
+        self.watched.append(tuple(files))
 
     def changed(self) -> bool:
         self.asked += 1
@@ -198,3 +206,29 @@ def test_the_cli_refuses_watch_where_it_cannot_reload(tmp_path: Path) -> None:
         "error: --watch reloads a generated motion's robot in a live run, not with a batch --save (add --realtime)"
     )
     assert not (tmp_path / "o.rrd").exists()
+
+
+def test_sliders_keep_their_board_and_the_page_gets_the_new_joints(tmp_path: Path) -> None:
+    """``--motion sliders``: the page's event handler holds the board, so a reload re-makes it in place; the
+    page's configuration (what a reloaded page shows) lists the new robot's joints."""
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    two = EXTRA.replace('type="fixed"', 'type="continuous"').replace('<origin xyz="0 0 1"/>', '<axis xyz="1 0 0"/>')
+    robot = load_robot(urdf)
+    motion = SlidersMotion(robot, rate=10, n_samples=20)
+    board = motion.board
+    rec = rr.RecordingStream("r2d2_viz_test")
+    rec.memory_recording()
+    stream = RobotStream(rec, compile_tree(robot), frames=motion.frames)
+    page = SimpleNamespace(config={"joints": board.describe()})
+    recording = SimpleNamespace(page=page, rec=rec)
+    script = Script({})
+    watching = watch.watch_robot(recording, motion, stream, RunConfig(urdf=urdf), PackageIndex(), script)  # type: ignore[arg-type]
+    watching.log_static()
+    urdf.write_text(ROBOT.format(more=two))
+    assert watching.reload(3)
+    assert motion.board is board and [s.name for s in board.sliders] == ["j", "k"]
+    assert [j["name"] for j in page.config["joints"]] == ["j", "k"]
+    board.handle({"tool": "Joints", "joint": "k", "position": 0.5})  # the page's move of the new joint…
+    assert motion.at(np.array([3]))[0].tolist() == [[0.0, 0.5]]  # …is in the next sample
+    assert motion.joints == ("j", "k") and stream.tree.actuated == ("j", "k")
