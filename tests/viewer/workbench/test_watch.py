@@ -232,3 +232,17 @@ def test_sliders_keep_their_board_and_the_page_gets_the_new_joints(tmp_path: Pat
     board.handle({"tool": "Joints", "joint": "k", "position": 0.5})  # the page's move of the new joint…
     assert motion.at(np.array([3]))[0].tolist() == [[0.0, 0.5]]  # …is in the next sample
     assert motion.joints == ("j", "k") and stream.tree.actuated == ("j", "k")
+
+
+def test_a_new_robots_warnings_are_on_the_time_line_at_the_reload(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    missing = EXTRA.replace('<sphere radius="0.2"/>', '<mesh filename="gone.stl"/>')
+    monkeypatch.setattr(watch, "POLLER", Script({7: lambda: urdf.write_text(ROBOT.format(more=missing))}))
+    out = tmp_path / "out.rrd"
+    _run(urdf, out)
+    warnings = read_recording(out)["/warnings"]
+    assert warnings.times == [6 * NS // 10]  # where the Warnings view shows it (a row without a time: it does not)
+    assert "gone.stl" in warnings.temporal["TextLog:text"][0][0]
