@@ -43,6 +43,7 @@ from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_r
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.system.health import system_views
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
+from r2d2_viz.viewer.workbench.watch import watch_robot
 
 BATCH_CHUNK_SAMPLES = 20_000
 """Samples per columnar chunk in batch runs: memory stays flat however long the run."""
@@ -98,6 +99,7 @@ class RunConfig:
     """Encode 8-bit camera images as video (``--video``: av1 or h264); None: lossless ``Image`` s."""
     tf_tree: bool = False  # --tf-tree with a sink: the TF tree as a graph view (r2d2_viz/viewer/system/tf_graph.py)
     show: frozenset[str] = frozenset()  # --mass, --inertia, --link-axes: the RobotModel's "mass", "inertia", "axes"
+    watch: bool = False  # reload the robot when its files change (r2d2_viz/viewer/workbench/watch.py)
 
     @property
     def live(self) -> bool:
@@ -159,9 +161,7 @@ def _counted(config: RunConfig, plan: RunPlan, samples: int) -> str:
     """What a run without ``--ros`` counted: the robot's samples when some moved it, else the messages handed on."""
     if config.bag is None:
         return "samples"
-    if plan.moves_robot and samples:
-        return "joint states"
-    return "transforms and display messages"
+    return "joint states" if plan.moves_robot and samples else "transforms and display messages"
 
 
 def _packages(config: RunConfig) -> PackageIndex:
@@ -201,10 +201,8 @@ def _plan(config: RunConfig, inputs: ExitStack) -> RunPlan:
 
 
 def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | None) -> RunResult:
-    save = config.sink.save
-    tmp = _temp_path(save) if save is not None else None
-    samples, interrupted = 0, False
-    tree = plan.tree
+    tmp = _temp_path(save) if (save := config.sink.save) is not None else None
+    samples, interrupted, tree = 0, False, plan.tree
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame, show=config.show)
     fields = fields_run(plan, config.plots, clock, header_time=config.time == "header")
@@ -248,8 +246,9 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             feeds = Feeds(
                 TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None
             )
+            watching = config.watch and watch_robot(recording, plan.source, streamer, config, _packages(config))
             for robot in streamers:
-                robot.log_static(view.spec.robot)
+                (watching or robot).log_static(view.spec.robot)
             with progress_bar(plan, config) as shown:
                 windows = _windows(plan, config, displays, fields)
                 if config.live:

@@ -203,7 +203,11 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         plots=tuple(tuple(p) for p in args.plot),
         tf_tree=args.tf_tree is not None,
         show=frozenset(k for k, on in (("mass", args.mass), ("inertia", args.inertia), ("axes", args.link_axes)) if on),
+        watch=args.watch,
     )
+    if args.watch and (args.bag is not None or args.ros or not config.live):
+        why = "a bag's joints" if args.bag is not None else "--ros" if args.ros else "a batch --save (add --realtime)"
+        raise UsageError(f"--watch reloads a generated motion's robot in a live run, not with {why}")
 
     def on_ready(message: str) -> None:
         if fallback:

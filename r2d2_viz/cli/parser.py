@@ -164,6 +164,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--inertia", action="store_true", help="each link's box of equal inertia on its principal axes (as RViz)"
     )
     bench.add_argument("--link-axes", action="store_true", help="each link's axes (RViz's RobotModel Show Axes)")
+    bench.add_argument(
+        "--watch",
+        action="store_true",
+        help="reload the robot when the description, a file xacro read or a mesh changes (live runs)",
+    )
     parser.add_argument(
         "--list",
         action="store_true",

@@ -49,27 +49,40 @@ class Description(NamedTuple):
     """Where relative mesh paths resolve: the file's folder."""
     warnings: tuple[str, ...] = ()
     """xacro's own warnings (one line each)."""
+    files: tuple[Path, ...] = ()
+    """The files xacro read besides the description: includes, YAML it loaded (``--watch`` watches them)."""
 
 
 def load_description(
-    path: str | Path, *, mappings: Mapping[str, str] | None = None, packages: PackageIndex | None = None
+    path: str | Path,
+    *,
+    mappings: Mapping[str, str] | None = None,
+    packages: PackageIndex | None = None,
+    read: list[Path] | None = None,
 ) -> Description:
     """Read ``path``; expand it if it is xacro (``NAME:=VALUE`` arguments in ``mappings``; ``$(find)``
-    through ``packages``). Raises :class:`UrdfError` (:class:`XacroError` for xacro problems)."""
+    through ``packages``). Raises :class:`UrdfError` (:class:`XacroError` for xacro problems). ``read`` gets
+    the files xacro read, even when it fails (``--watch``)."""
     path = Path(path)
     data = read_bounded(path)
     if not is_xacro(path, data):
         return Description(data, path.name, path.parent)
     packages = packages or PackageIndex.from_environ(description=path)
-    text, notes = _expand(path, mappings or {}, packages)
-    return Description(text.encode("utf-8"), path.name, path.parent, notes)
+    files: list[Path] = [] if read is None else read
+    text, notes = _expand(path, mappings or {}, packages, files)
+    return Description(text.encode("utf-8"), path.name, path.parent, notes, tuple(files))
 
 
 def load_robot(
-    path: str | Path, *, mappings: Mapping[str, str] | None = None, packages: PackageIndex | None = None
+    path: str | Path,
+    *,
+    mappings: Mapping[str, str] | None = None,
+    packages: PackageIndex | None = None,
+    read: list[Path] | None = None,
 ) -> Robot:
     """A :class:`~r2d2_viz.robot.model.Robot` from a URDF or xacro file (xacro's warnings first in its warnings).
-    ``NAME:=VALUE`` ``mappings`` are for xacro files only (:class:`UsageError` otherwise)."""
+    ``NAME:=VALUE`` ``mappings`` are for xacro files only (:class:`UsageError` otherwise). ``read`` gets the
+    files xacro read (includes, YAML), even when it fails."""
     from r2d2_viz.robot.model import load_urdf, parse_urdf
 
     path = Path(path)
@@ -79,7 +92,7 @@ def load_robot(
             raise UsageError(f"{', '.join(f'{k}:={v}' for k, v in mappings.items())}: arguments for a xacro file, "
                              f"but {path.name} is not one")  # fmt: skip
         return load_urdf(path, packages=packages)  # its own one-line errors for unreadable files
-    description = load_description(path, mappings=mappings, packages=packages)
+    description = load_description(path, mappings=mappings, packages=packages, read=read)
     try:
         robot = parse_urdf(
             description.text, source=description.source, base_dir=description.base_dir, packages=packages
@@ -163,7 +176,9 @@ def read_bounded(path: Path) -> bytes:
 # --------------------------------------------------------------------------- the parent side
 
 
-def _expand(path: Path, mappings: Mapping[str, str], packages: PackageIndex) -> tuple[str, tuple[str, ...]]:
+def _expand(
+    path: Path, mappings: Mapping[str, str], packages: PackageIndex, read: list[Path] | None = None
+) -> tuple[str, tuple[str, ...]]:
     job = {
         "path": str(path.absolute()),
         "mappings": dict(mappings),
@@ -191,6 +206,8 @@ def _expand(path: Path, mappings: Mapping[str, str], packages: PackageIndex) -> 
         if done.returncode < 0 or "MemoryError" in done.stderr:
             why = f"xacro ran out of its limits (memory {MEMORY_BYTES >> 20} MiB, CPU {TIMEOUT_S:g} s)"
         raise XacroError(f"{path.name}: xacro expansion failed: {why}") from None
+    if read is not None:
+        read.extend(Path(f) for f in answer.get("files", ()) if Path(f) != path.absolute())
     if "error" in answer:
         raise XacroError(str(answer["error"]))
     return str(answer["urdf"]), tuple(str(w) for w in answer.get("warnings", ()))

@@ -66,8 +66,16 @@ def main(argv: list[str] | None = None) -> int:
         answer: dict[str, Any] = {"urdf": urdf, "warnings": captured.warnings()}
     except UrdfError as exc:
         answer = {"error": str(exc)}
+    answer["files"] = _files_read()
     sys.stdout.write(json.dumps(answer))
     return 0
+
+
+def _files_read() -> list[str]:
+    """Every file xacro read besides the description (includes, ``load_yaml`` files), for ``--watch``."""
+    import xacro
+
+    return sorted({str(Path(f).absolute()) for f in (*xacro.all_includes, *(xacro.filestack or ())) if f})
 
 
 def _limit_resources(cpu_seconds: float) -> None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -53,10 +53,16 @@ class GeneratedMotion(ABC):
         self.n_samples = n_samples
         self.joints: tuple[str, ...] = tuple(j.name for j in robot.actuated_joints)
         self.frames: tuple[tuple[str, str], ...] = ()
+        self.before_chunk: Callable[[int], None] | None = None
+        """``--watch`` (:mod:`r2d2_viz.viewer.workbench.watch`): called with the index of each chunk's first sample,
+        before it is computed (chunks are then a sample each); it may re-initialise this motion for a new robot."""
 
     def chunks(self, max_samples: int) -> Iterator[SampleChunk]:
         start = 0
         while self.n_samples is None or start < self.n_samples:
+            if self.before_chunk is not None:
+                self.before_chunk(start)
+                max_samples = 1
             n = max_samples if self.n_samples is None else min(max_samples, self.n_samples - start)
             k = np.arange(start, start + n, dtype=np.int64)
             positions, frames = self.at(k)

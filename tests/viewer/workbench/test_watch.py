@@ -1,0 +1,248 @@
+"""``--watch`` in a recording: the run's poller replaced by a script (or a :class:`FileWatcher` on a scripted clock)
+that edits the files at a known sample, so each test knows by hand when the reload happens; the recording read back
+with Rerun's reader. Runs at 10 Hz: sample k is at k × 0.1 s; the poller is asked before each sample is computed."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import rerun as rr
+from conftest import cli
+from rrd import read_recording
+
+from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.watch import FileWatcher
+from r2d2_viz.robot.xacro_load import load_robot
+from r2d2_viz.runner import RunConfig, run
+from r2d2_viz.sources.motion import SlidersMotion
+from r2d2_viz.viewer.sinks import SinkConfig
+from r2d2_viz.viewer.stream import RobotStream
+from r2d2_viz.viewer.workbench import watch
+
+NS = 1_000_000_000
+ROBOT = """<robot name="w">
+<link name="base"><visual><geometry><box size="1 1 0.2"/></geometry></visual></link>
+<link name="arm"><visual><geometry><box size="0.1 0.1 1"/></geometry></visual></link>
+<joint name="j" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+  <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+{more}</robot>"""
+EXTRA = """<link name="extra"><visual><geometry><sphere radius="0.2"/></geometry></visual></link>
+<joint name="k" type="fixed"><parent link="arm"/><child link="extra"/><origin xyz="0 0 1"/></joint>"""
+
+
+class Script:
+    """A poller that runs ``edits[n]`` at its n-th question (1-based) and then says the files changed."""
+
+    def __init__(self, edits: dict[int, Callable[[], None]]) -> None:
+        self.edits, self.asked, self.watched = edits, 0, []
+
+    def __call__(self, files: tuple[Path, ...]) -> Script:
+        self.watched.append(tuple(files))
+        return self
+
+    def watch(self, files: Iterable[Path]) -> None:
+        self.watched.append(tuple(files))
+
+    def changed(self) -> bool:
+        self.asked += 1
+        if self.asked in self.edits:
+            self.edits[self.asked]()
+            return True
+        return False
+
+
+class EditingClock:
+    """A clock for a real :class:`FileWatcher`: 0.25 s more at each call, running ``edit`` at call ``at``."""
+
+    def __init__(self, at: int, edit: Callable[[], None]) -> None:
+        self.at, self.edit, self.calls = at, edit, 0
+
+    def __call__(self) -> float:
+        self.calls += 1
+        if self.calls == self.at:
+            self.edit()
+        return self.calls * 0.25
+
+
+def _run(path: Path, out: Path, motion: str = "sweep", seconds: float = 2.0) -> None:
+    config = RunConfig(urdf=path, motion=motion, rate=10, duration=seconds, sink=SinkConfig(save=out), watch=True)
+    run(config)
+
+
+def test_a_link_added_appears_at_the_edit_and_not_before(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    monkeypatch.setattr(watch, "POLLER", Script({10: lambda: urdf.write_text(ROBOT.format(more=EXTRA))}))
+    out = tmp_path / "out.rrd"
+    _run(urdf, out)
+    rec = read_recording(out)
+    # asked the 10th time before sample 9: the new scene at 0.9 s; nothing of 'extra' before
+    assert rec["/robot/visual/extra/0"].times == [9 * NS // 10]
+    assert rec["/tf_static/extra"].times == [9 * NS // 10]
+    assert rec["/robot/visual/extra/0"].static == {}
+    assert rec["/robot/visual/arm/0"].times == [0, 9 * NS // 10]  # the links that stay: logged again
+    assert rec["/tf"].times[0] == 0  # the time line went on: a sample every 0.1 s, 20 in all
+    assert len(rec["/tf"].times) == 20
+
+
+def test_a_broken_edit_is_one_line_and_the_robot_stays_until_a_good_edit(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    renamed = ROBOT.format(more="").replace('"arm"', '"arm2"')
+    broken = renamed.replace('<parent link="base"/>', '<parent link="bse"/>')  # a joint's parent that is not there
+    script = Script({5: lambda: urdf.write_text(broken), 12: lambda: urdf.write_text(renamed)})
+    monkeypatch.setattr(watch, "POLLER", script)
+    out = tmp_path / "out.rrd"
+    _run(urdf, out)
+    err = [line for line in capsys.readouterr().err.splitlines() if "w.urdf" in line]
+    assert len(err) == 1, err
+    assert "w.urdf" in err[0] and "'bse'" in err[0] and "last good robot stays" in err[0]
+    rec = read_recording(out)
+    warnings = rec["/warnings"]
+    assert warnings.times == [4 * NS // 10]  # on the time line, where the Warnings view shows it
+    assert "'bse'" in warnings.temporal["TextLog:text"][0][0]
+    arm = rec["/robot/visual/arm/0"]
+    # the broken edit (sample 4) left 'arm' as it was; the good one (sample 11) cleared it and drew 'arm2'
+    assert arm.times == [0, 11 * NS // 10]
+    assert arm.temporal["Clear:is_recursive"][1] == [False]
+    assert rec["/robot/visual/arm2/0"].times == [11 * NS // 10]
+
+
+XACRO = """<robot name="w" xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <xacro:include filename="parts/arm.xacro"/>
+  <link name="base"><visual><geometry><mesh filename="meshes/base.stl"/></geometry></visual></link>
+  <xacro:arm parent="base"/>
+</robot>"""
+ARM = """<robot xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:macro name="arm" params="parent">
+  <link name="arm"><visual><geometry><box size="0.1 0.1 1"/></geometry></visual></link>
+  <joint name="j" type="revolute"><parent link="${{parent}}"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>{more}
+</xacro:macro></robot>"""
+STL = (
+    "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0"
+    "\nvertex {x} 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n"
+)
+
+
+def _xacro_tree(root: Path) -> Path:
+    (root / "parts").mkdir()
+    (root / "meshes").mkdir()
+    (root / "parts" / "arm.xacro").write_text(ARM.format(more=""))
+    (root / "meshes" / "base.stl").write_text(STL.format(x=1))
+    (root / "robot.xacro").write_text(XACRO)
+    return root / "robot.xacro"
+
+
+def _watcher_editing_at(monkeypatch: pytest.MonkeyPatch, at: int, edit: Callable[[], None]) -> None:
+    clock = EditingClock(at, edit)
+    monkeypatch.setattr(watch, "POLLER", lambda files: FileWatcher(files, clock=clock, period=0.25, settle=0.2))
+
+
+def test_an_included_xacro_file_edited_reloads(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = _xacro_tree(tmp_path)
+    include = tmp_path / "parts" / "arm.xacro"
+    _watcher_editing_at(monkeypatch, 5, lambda: include.write_text(ARM.format(more=EXTRA)))
+    out = tmp_path / "out.rrd"
+    _run(path, out)
+    rec = read_recording(out)
+    # edited at the 5th poll (before sample 4), seen unchanged at the 6th, 0.25 s later: reloaded for sample 5
+    assert rec["/robot/visual/extra/0"].times == [5 * NS // 10]
+
+
+def test_a_mesh_file_rewritten_reloads_with_its_new_bytes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = _xacro_tree(tmp_path)
+    mesh = tmp_path / "meshes" / "base.stl"
+    _watcher_editing_at(monkeypatch, 3, lambda: mesh.write_text(STL.format(x=25)))
+    out = tmp_path / "out.rrd"
+    _run(path, out, motion="still", seconds=1.0)
+    base = read_recording(out)["/robot/visual/base/0"]
+    assert base.times == [0, 3 * NS // 10]
+    blobs = [bytes(b[0]) for b in base.temporal["Asset3D:blob"]]
+    assert blobs == [STL.format(x=1).encode(), STL.format(x=25).encode()]  # the file's own bytes, before and after
+
+
+def test_the_cli_reloads_an_edit_made_while_it_records(tmp_path: Path) -> None:
+    """``r2d2-viz --urdf X --watch --save out.rrd --realtime --duration 4``, the file edited about 1.5 s after the
+    recording opened: no wall-clock figure is asserted, only that 'extra' is absent at the first sample and present
+    later."""
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    out = tmp_path / "out.rrd"
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    command = [str(exe)] if exe.exists() else [sys.executable, "-m", "r2d2_viz"]
+    args = ["--urdf", str(urdf), "--watch", "--save", str(out), "--realtime", "--duration", "4", "--rate", "10"]
+    with subprocess.Popen([*command, *args], stderr=subprocess.PIPE, text=True) as child:
+        partial = tmp_path / f".out.rrd.{child.pid}.partial"
+        deadline = time.monotonic() + 60
+        while not partial.exists() and child.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(1.5)
+        urdf.write_text(ROBOT.format(more=EXTRA))
+        _, err = child.communicate(timeout=60)
+    assert child.returncode == 0, err
+    rec = read_recording(out)
+    first = rec["/tf"].times[0]
+    extra = rec["/robot/visual/extra/0"].times
+    assert extra and min(extra) > first
+    assert first in rec["/robot/visual/arm/0"].times  # the robot before the edit, at the first sample
+
+
+def test_the_cli_refuses_watch_where_it_cannot_reload(tmp_path: Path) -> None:
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    result = cli("--urdf", str(urdf), "--watch", "--save", str(tmp_path / "o.rrd"))  # a batch save
+    assert result.returncode == 2
+    assert result.stderr.strip() == (
+        "error: --watch reloads a generated motion's robot in a live run, not with a batch --save (add --realtime)"
+    )
+    assert not (tmp_path / "o.rrd").exists()
+
+
+def test_sliders_keep_their_board_and_the_page_gets_the_new_joints(tmp_path: Path) -> None:
+    """``--motion sliders``: the page's event handler holds the board, so a reload re-makes it in place; the
+    page's configuration (what a reloaded page shows) lists the new robot's joints."""
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    two = EXTRA.replace('type="fixed"', 'type="continuous"').replace('<origin xyz="0 0 1"/>', '<axis xyz="1 0 0"/>')
+    robot = load_robot(urdf)
+    motion = SlidersMotion(robot, rate=10, n_samples=20)
+    board = motion.board
+    rec = rr.RecordingStream("r2d2_viz_test")
+    rec.memory_recording()
+    stream = RobotStream(rec, compile_tree(robot), frames=motion.frames)
+    page = SimpleNamespace(config={"joints": board.describe()})
+    recording = SimpleNamespace(page=page, rec=rec)
+    script = Script({})
+    watching = watch.watch_robot(recording, motion, stream, RunConfig(urdf=urdf), PackageIndex(), script)  # type: ignore[arg-type]
+    watching.log_static()
+    urdf.write_text(ROBOT.format(more=two))
+    assert watching.reload(3)
+    assert motion.board is board and [s.name for s in board.sliders] == ["j", "k"]
+    assert [j["name"] for j in page.config["joints"]] == ["j", "k"]
+    board.handle({"tool": "Joints", "joint": "k", "position": 0.5})  # the page's move of the new joint…
+    assert motion.at(np.array([3]))[0].tolist() == [[0.0, 0.5]]  # …is in the next sample
+    assert motion.joints == ("j", "k") and stream.tree.actuated == ("j", "k")
+
+
+def test_a_new_robots_warnings_are_on_the_time_line_at_the_reload(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    missing = EXTRA.replace('<sphere radius="0.2"/>', '<mesh filename="gone.stl"/>')
+    monkeypatch.setattr(watch, "POLLER", Script({7: lambda: urdf.write_text(ROBOT.format(more=missing))}))
+    out = tmp_path / "out.rrd"
+    _run(urdf, out)
+    warnings = read_recording(out)["/warnings"]
+    assert warnings.times == [6 * NS // 10]  # where the Warnings view shows it (a row without a time: it does not)
+    assert "gone.stl" in warnings.temporal["TextLog:text"][0][0]
