@@ -163,11 +163,13 @@ def paced(
     speed: float = 1.0,
     progress: Callable[[Window], None] | None = None,
     wall: WallClock | None = None,
+    stop: threading.Event | None = None,
 ) -> tuple[int, bool]:
-    """Send each robot sample and every feed item of each window when due on ``wall``, until done or signalled;
-    returns the samples sent (or, without a robot, the items) and whether a signal stopped it."""
+    """Send each robot sample and every feed item of each window when due on ``wall``, until done or signalled
+    (``stop``: set by a signal that came before); returns the samples sent (or, without a robot, the items) and
+    whether a signal stopped it."""
     wall = wall or WallClock()
-    stop = threading.Event()
+    stop = stop if stop is not None else threading.Event()
     sent = 0
     log_path = os.environ.get(PACING_LOG_ENV)
     clock: _Clock | None = None

@@ -1,7 +1,6 @@
 """One run of the app: model → source → kinematics → stream, batch or paced to the wall clock.
 
-No rerun import here: the recording is opened and closed by :mod:`r2d2_viz.viewer.sinks` and written by
-:mod:`r2d2_viz.viewer.stream` (and, for a bag's recorded transforms, :mod:`r2d2_viz.viewer.tf_recorded`).
+No rerun import here: :mod:`r2d2_viz.viewer.sinks` opens and closes the recording, :mod:`r2d2_viz.viewer` writes it.
 """
 
 from __future__ import annotations
@@ -10,8 +9,9 @@ import dataclasses
 import math
 import os
 import sys
+import threading
 from collections.abc import Callable, Iterator
-from contextlib import ExitStack
+from contextlib import ExitStack, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,7 +25,7 @@ from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
 from r2d2_viz.robot.xacro_load import is_xacro, load_description, load_robot, read_bounded
 from r2d2_viz.ros_out.tools_out import attach_view_tools, detach_tools
-from r2d2_viz.signals import sigterm_raises
+from r2d2_viz.signals import signals_set, sigterm_raises
 from r2d2_viz.sources.bag_joints import TimeSource
 from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.base import Clock, Source
@@ -209,7 +209,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     layout = dataclasses.replace(view.layout, field_plots=config.plots, tf_graph=config.tf_tree)
     view = dataclasses.replace(view, layout=layout)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
-    with saved_rrd(tmp, save):  # renamed over ``save`` only when whole; removed otherwise
+    stop = threading.Event()  # live: a signal that comes before the pacing (the viewer told where to look) stops too
+    with saved_rrd(tmp, save), signals_set(stop) if config.live else nullcontext():  # renamed when whole, or removed
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         tools = attach_view_tools(recording, view, dict(config.tool_topics), source=plan.source)
         try:
@@ -252,7 +253,9 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             with progress_bar(plan, config) as shown:
                 windows = _windows(plan, config, displays, fields)
                 if config.live:
-                    samples, interrupted = paced(streamer, windows, feeds, speed=config.speed, progress=shown)
+                    samples, interrupted = paced(
+                        streamer, windows, feeds, speed=config.speed, progress=shown, stop=stop
+                    )
                 else:
                     with sigterm_raises():
                         samples = _batch(streamer, windows, feeds, lambda: flush_file(rec, tmp), shown)
@@ -274,8 +277,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
 def _robot_streams(
     recording: Recording, plan: RunPlan, view: ViewPlan, clock: Clock, gather: bool = False
 ) -> list[RobotStream]:
-    """A stream per robot: the plan's one, or each of several (:mod:`r2d2_viz.sources.robots`), its shapes and
-    plots under ``/robots/<namespace>/`` when there are several."""
+    """A stream per robot: the plan's one, or each of several (shapes and plots under ``/robots/<namespace>/``)."""
     rec = recording.rec
     if plan.tree is None:
         return []
@@ -381,8 +383,7 @@ def _check_numbers(config: RunConfig) -> None:
             raise UsageError(f"--save {save}: directory {str(parent)!r} is not writable")
 
 
-def _temp_path(save: Path) -> Path:
-    """Beside the target, so the final rename is atomic."""
+def _temp_path(save: Path) -> Path:  # beside the target, so that the final rename is atomic
     return save.with_name(f".{save.name}.{os.getpid()}.partial")
 
 

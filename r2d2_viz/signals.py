@@ -53,6 +53,8 @@ def _handlers(
     if threading.current_thread() is not threading.main_thread():  # tests may run us in a thread
         yield
         return
+    # a hangup ignored from the start (``nohup``) stays ignored: the user asked the run to outlive the terminal
+    signals = tuple(s for s in signals if s != signal.SIGHUP or signal.getsignal(s) is not signal.SIG_IGN)
     previous = {s: signal.signal(s, handler) for s in signals}
     try:
         yield

@@ -75,6 +75,7 @@ def _free_port() -> int:
 
 def _sigint_ignored() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # as `nohup … &` and CI runners leave it
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)  # a terminal's process (the suite itself may run under nohup)
 
 
 def _start(*args: str, cwd: Path, until: str) -> tuple[subprocess.Popen[str], str]:
@@ -151,3 +152,32 @@ def test_serve_leaves_no_server_behind(tmp_path: Path, stop: str) -> None:
                 child.kill()
         proc.kill()
         proc.wait()
+
+
+def test_a_run_started_under_nohup_outlives_the_hangup(tmp_path: Path) -> None:
+    """``nohup r2d2-viz --realtime --save run.rrd &``: SIGHUP is ignored from the start, as the user asked, so a
+    hangup does not end the run; Ctrl-C still does, and finalises the file."""
+
+    def as_nohup() -> None:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+    proc = subprocess.Popen(
+        [EXE, "--realtime", "--save", "run.rrd"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=tmp_path,
+        start_new_session=True,
+        preexec_fn=as_nohup,
+    )
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not any(p.stat().st_size > 0 for p in tmp_path.glob(".run.rrd.*.partial")):
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGHUP)
+    with pytest.raises(subprocess.TimeoutExpired):  # still running (the lap takes 48 s)
+        proc.wait(timeout=2)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 0, stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.rrd"], stderr
