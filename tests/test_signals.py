@@ -11,6 +11,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import psutil
@@ -106,9 +107,8 @@ def _gone(processes: list[psutil.Process], timeout: float = 15) -> list[str]:
     return [" ".join(p.cmdline()) for p in alive if p.status() != psutil.STATUS_ZOMBIE]
 
 
-@pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGINT], ids=["ssh-dropped", "ctrl-c-under-nohup"])
-def test_a_live_save_is_finalised_by_a_dropped_session(tmp_path: Path, signum: signal.Signals) -> None:
-    """``--realtime --save run.rrd`` (one lap at the robot's pace: 48 s) ended after a few seconds."""
+def _live_save(tmp_path: Path, preexec: Callable[[], None]) -> subprocess.Popen[str]:
+    """``r2d2-viz --realtime --save run.rrd`` in its own session, once its partial file has data."""
     proc = subprocess.Popen(
         [EXE, "--realtime", "--save", "run.rrd"],
         stdout=subprocess.PIPE,
@@ -116,11 +116,18 @@ def test_a_live_save_is_finalised_by_a_dropped_session(tmp_path: Path, signum: s
         text=True,
         cwd=tmp_path,
         start_new_session=True,
-        preexec_fn=_sigint_ignored,
+        preexec_fn=preexec,
     )
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and not any(p.stat().st_size > 0 for p in tmp_path.glob(".run.rrd.*.partial")):
         time.sleep(0.2)
+    return proc
+
+
+@pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGINT], ids=["ssh-dropped", "ctrl-c-under-nohup"])
+def test_a_live_save_is_finalised_by_a_dropped_session(tmp_path: Path, signum: signal.Signals) -> None:
+    """``--realtime --save run.rrd`` (one lap at the robot's pace: 48 s) ended after a few seconds."""
+    proc = _live_save(tmp_path, _sigint_ignored)
     time.sleep(1.0)
     os.killpg(proc.pid, signum)
     _, stderr = proc.communicate(timeout=60)
@@ -162,18 +169,7 @@ def test_a_run_started_under_nohup_outlives_the_hangup(tmp_path: Path) -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGHUP, signal.SIG_IGN)
 
-    proc = subprocess.Popen(
-        [EXE, "--realtime", "--save", "run.rrd"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=tmp_path,
-        start_new_session=True,
-        preexec_fn=as_nohup,
-    )
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and not any(p.stat().st_size > 0 for p in tmp_path.glob(".run.rrd.*.partial")):
-        time.sleep(0.2)
+    proc = _live_save(tmp_path, as_nohup)
     os.killpg(proc.pid, signal.SIGHUP)
     with pytest.raises(subprocess.TimeoutExpired):  # still running (the lap takes 48 s)
         proc.wait(timeout=2)
