@@ -18,6 +18,7 @@ import sys
 import sysconfig
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -117,6 +118,19 @@ def listening_addresses(port: int) -> set[str]:
             if state == "0A" and int(hex_port, 16) == port:  # 0A: LISTEN
                 out.add(socket.inet_ntoa(bytes.fromhex(address)[::-1]) if len(address) == 8 else address)
     return out
+
+
+def kill_all(proc: subprocess.Popen[str], children: list[Any]) -> None:
+    """A test's app and the processes it started (``psutil.Process``), whatever state they were left in."""
+    import contextlib
+
+    import psutil
+
+    for child in children:
+        with contextlib.suppress(psutil.NoSuchProcess):
+            child.kill()
+    proc.kill()
+    proc.wait()
 
 
 @pytest.fixture

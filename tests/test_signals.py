@@ -3,7 +3,6 @@ no process the app started outlives it."""
 
 from __future__ import annotations
 
-import contextlib
 import os
 import signal
 import socket
@@ -16,7 +15,7 @@ from pathlib import Path
 
 import psutil
 import pytest
-from conftest import listening_addresses
+from conftest import kill_all, listening_addresses
 
 from r2d2_viz.signals import StopRequested, signals_set, sigterm_raises
 
@@ -154,11 +153,7 @@ def test_serve_leaves_no_server_behind(tmp_path: Path, stop: str) -> None:
         assert _gone(children) == []
         assert not listening_addresses(port) and not listening_addresses(web)
     finally:
-        for child in children:
-            with contextlib.suppress(psutil.NoSuchProcess):
-                child.kill()
-        proc.kill()
-        proc.wait()
+        kill_all(proc, children)
 
 
 def test_a_run_started_under_nohup_outlives_the_hangup(tmp_path: Path) -> None:

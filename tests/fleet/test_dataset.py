@@ -4,7 +4,6 @@ on 127.0.0.1 only; ``--serve`` adds a web viewer; Ctrl-C stops both — and bad 
 
 from __future__ import annotations
 
-import contextlib
 import os
 import signal
 import socket
@@ -15,7 +14,7 @@ import urllib.request
 from pathlib import Path
 
 import pytest
-from conftest import cli, listening_addresses
+from conftest import cli, kill_all, listening_addresses
 from fleetbags import still_bag
 from rerun.chunk import RrdReader
 
@@ -170,11 +169,7 @@ def test_sigterm_leaves_no_web_viewer_behind(fleet: Path) -> None:
         assert [p for p in alive if p.status() != psutil.STATUS_ZOMBIE] == []
         assert not listening_addresses(web) and not listening_addresses(port)
     finally:
-        for child in children:
-            with contextlib.suppress(psutil.NoSuchProcess):
-                child.kill()
-        proc.kill()
-        proc.wait()
+        kill_all(proc, children)
 
 
 def test_a_busy_web_port_is_one_line(fleet: Path) -> None:
