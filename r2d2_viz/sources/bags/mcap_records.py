@@ -5,12 +5,14 @@ chunks that overlap in time merged in time order. What :mod:`.mcap_scan` reads a
 
 from __future__ import annotations
 
+import itertools
 import mmap
 import struct
 import sys
 import zlib
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections import deque
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, replace
 from types import ModuleType
 from typing import NamedTuple
 
@@ -185,7 +187,7 @@ def walk_messages(data: memoryview, order: tuple[str, ...], wanted: dict[int, in
 
 
 def overlapping(chunks: list[ChunkIndex]) -> Iterator[list[ChunkIndex]]:
-    """Chunks (sorted by start) grouped where their time ranges overlap: each group is read and merged at once."""
+    """Chunks (sorted by start) grouped where their time ranges overlap: each group merged (:func:`merged_chunks`)."""
     group: list[ChunkIndex] = []
     end = -1
     for c in chunks:
@@ -196,6 +198,53 @@ def overlapping(chunks: list[ChunkIndex]) -> Iterator[list[ChunkIndex]]:
         end = max(end, c.end_ns)
     if group:
         yield group
+
+
+def merged_chunks(cluster: list[ChunkIndex], read: Callable[[ChunkIndex], Block | None]) -> Iterator[Block]:
+    """The messages of chunks that overlap in time (``read`` gives a chunk's wanted messages, in time order) as
+    time-ordered blocks, holding only the chunks in flight: a chunk is read when the merge reaches its start, and
+    each step gives every message up to the earliest of the open chunks' last times and the next chunk's start.
+    A topic written after the others (its few chunks spanning the whole file) keeps one of its chunks open beside
+    the others', instead of the whole file merged at once. Messages received at one time keep the file's order."""
+    pending = deque(sorted(cluster, key=lambda c: (c.start_ns, c.offset)))
+    live: list[tuple[int, Block, int]] = []  # (file offset, block, its first message not given yet)
+    while pending or live:
+        head = min((int(b.times_ns[at]) for _, b, at in live), default=None)
+        if pending and (head is None or pending[0].start_ns <= head):
+            c = pending.popleft()
+            block = read(c)
+            if block is not None and len(block):
+                live = sorted([*live, (c.offset, block, 0)], key=lambda x: x[0])
+            continue
+        cutoff = min(int(b.times_ns[-1]) for _, b, _ in live)
+        if pending:
+            cutoff = min(cutoff, pending[0].start_ns - 1)
+        parts, kept = [], []
+        for offset, block, at in live:
+            end = at + int(np.searchsorted(block.times_ns[at:], cutoff, side="right"))
+            if end > at:
+                parts.append(block if at == 0 and end == len(block) else _share(block, block.take(np.arange(at, end))))
+            if end < len(block):
+                kept.append((offset, block, end))
+        live = kept
+        yield from _in_order(parts)
+
+
+def _share(block: Block, piece: Block) -> Block:
+    """``piece`` of ``block`` counted as its share (by bytes) of what reading ``block`` took."""
+    if not block.read_nbytes:
+        return piece
+    return replace(piece, read_nbytes=block.read_nbytes * piece.nbytes // max(block.nbytes, 1))
+
+
+def _in_order(parts: list[Block]) -> Iterator[Block]:
+    """Parts (in file order) as time-ordered blocks: as they are where one ends before the next starts (no copy),
+    else merged (:func:`merge_blocks`)."""
+    ordered = sorted(parts, key=lambda p: int(p.times_ns[0]))
+    if all(int(a.times_ns[-1]) < int(b.times_ns[0]) for a, b in itertools.pairwise(ordered)):
+        yield from ordered
+    elif parts:
+        yield merge_blocks(parts)
 
 
 def merge_blocks(parts: list[Block]) -> Block:

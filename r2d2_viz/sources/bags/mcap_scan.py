@@ -49,7 +49,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     chunk_index,
     holds,
     indexed,
-    merge_blocks,
+    merged_chunks,
     message_times,
     overlapping,
     schema_at,
@@ -165,12 +165,11 @@ class McapScan:
             return
         chosen = [c for c in self.chunks if c.end_ns >= lo and c.start_ns < hi and holds(c, wanted)]
         for cluster in overlapping(chosen):
-            in_file_order = sorted(cluster, key=lambda c: c.offset)  # messages at one time: the file's order
-            parts = [b for c in in_file_order if (b := self._chunk_block(c, order, wanted, lo, hi)) is not None]
-            if len(parts) == 1:
-                yield parts[0]
-            elif parts:
-                yield merge_blocks(parts)
+            if len(cluster) == 1:
+                block = self._chunk_block(cluster[0], order, wanted, lo, hi)
+                yield from (block,) if block is not None else ()
+            else:
+                yield from merged_chunks(cluster, lambda c: self._chunk_block(c, order, wanted, lo, hi))
 
     def _chunk_block(
         self, c: ChunkIndex, order: tuple[str, ...], wanted: dict[int, int], lo: int, hi: int

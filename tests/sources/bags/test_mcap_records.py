@@ -16,6 +16,7 @@ from r2d2_viz.sources.bags.mcap_records import (
     chunk_index,
     holds,
     merge_blocks,
+    merged_chunks,
     message_times,
     overlapping,
     string_at,
@@ -89,3 +90,46 @@ def test_chunks_that_overlap_in_time_are_grouped_and_merged_in_time_order() -> N
     merged = merge_blocks([block([0, 6, 9], [b"a0", b"a6", b"a9"]), block([5, 7, 20], [b"b5", b"b7", b"b20"])])
     assert merged.times_ns.tolist() == [0, 5, 6, 7, 9, 20]
     assert [bytes(merged.data(i)) for i in range(len(merged))] == [b"a0", b"b5", b"a6", b"b7", b"a9", b"b20"]
+
+
+def test_overlapping_chunks_are_read_as_the_merge_reaches_them() -> None:
+    """Chunks by hand: ``long`` spans 0..90 (written last: file offset 300), ``a`` 0..20, ``b`` 30..50, ``c`` 60..90.
+    Each is read only once the merge has given everything before its start (``b`` after 20, not at the start);
+    messages received at one time come in the file's order (``a``'s 20 before ``long``'s 20; at 90, ``c`` first);
+    the blocks together are every message in time order."""
+
+    def block(times: list[int], name: str) -> Block:
+        data = [f"{name}{t}".encode() for t in times]
+        starts = np.cumsum([0] + [len(x) for x in data[:-1]]).astype(np.int64)
+        lengths = np.array([len(x) for x in data], dtype=np.int64)
+        index = np.zeros(len(times), dtype=np.int32)
+        return Block(np.array(times, dtype=np.int64), index, ("/t",), memoryview(b"".join(data)), starts, lengths)
+
+    spans = {"a": (0, 20, 0), "b": (30, 50, 100), "c": (60, 90, 200), "long": (0, 90, 300)}
+    contents = {"a": [0, 10, 20], "b": [30, 40, 50], "c": [60, 90], "long": [5, 20, 45, 90]}
+    chunks = {name: ChunkIndex(s, e, off, 1, {}) for name, (s, e, off) in spans.items()}
+    read: list[str] = []
+    given: list[bytes] = []
+
+    def reader(c: ChunkIndex) -> Block:
+        name = next(n for n, x in chunks.items() if x is c)
+        read.append(f"{name} after {len(given)}")
+        return block(contents[name], name)
+
+    for out in merged_chunks(list(chunks.values()), reader):
+        given += [bytes(out.data(i)) for i in range(len(out))]
+    assert given == [
+        b"a0",
+        b"long5",
+        b"a10",
+        b"a20",
+        b"long20",
+        b"b30",
+        b"b40",
+        b"long45",
+        b"b50",
+        b"c60",
+        b"c90",
+        b"long90",
+    ]
+    assert read == ["a after 0", "long after 0", "b after 5", "c after 9"]

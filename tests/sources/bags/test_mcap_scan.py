@@ -436,3 +436,47 @@ def test_a_topic_read_alone_does_not_read_its_chunks_for_their_crc(
     topics = ["/joint_states", "/tf", "/robot_description"]
     assert _read(scan, topics) == _rosbags(file, set(topics)) and scan.problems == {}
     assert sorted(checked) == sorted(c.uncompressed_size for c in chunks) and len(chunks) > 3
+
+
+@pytest.mark.parametrize("compressed", [False, True])
+def test_a_topic_written_after_the_others_is_merged_in_flight(tmp_path: Path, compressed: bool) -> None:
+    """Issue 38 (``--video`` on a camera bag with an H.264 topic: 1 GB): a bag written topic by topic, as converting
+    tools write — 30 strings of 600 kB (two a chunk), then 30 small messages at the same times (one chunk spanning
+    them all): every chunk overlaps the last in time. Reading both topics, each block dropped before the next, holds
+    the chunks in flight (tracemalloc: a few MB), not the whole file merged at once (18 MB); the messages are
+    rosbags' reader's, in time order. Uncompressed chunks (rosbags' default) and zstd ones."""
+    spec = BagSpec(types={"/pad": "std_msgs/msg/String", "/small": "std_msgs/msg/String"})
+    for k in range(30):
+        spec.add("/pad", T0 + k * MS, string(chr(65 + k % 26) * 600_000))
+    for k in range(30):
+        spec.add("/small", T0 + k * MS + 1, string(f"small {k}"))
+    path = tmp_path / "sequential"
+    if compressed:
+        writer = Writer(path, version=9, storage_plugin=StoragePlugin.MCAP)
+        writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+        writer.open()
+        connections = {t: writer.add_connection(t, spec.types[t], typestore=TS) for t in spec.types}
+        for topic, t, data in spec.messages:
+            writer.write(connections[topic], t, data)
+        writer.close()
+        file = storage_file(path)
+    else:
+        file = storage_file(write_bag(path, spec))
+    chunks, channels = _chunks(file)
+    small = [c for c in chunks if set(c.message_index_offsets) == {k for k, t in channels.items() if t == "/small"}]
+    assert len(small) == 1 and (small[0].message_start_time, small[0].message_end_time) == (T0 + 1, T0 + 29 * MS + 1)
+    assert len(chunks) == 16
+
+    scan, got, peaks = McapScan(file), [], []
+    tracemalloc.start()
+    try:
+        for block in scan.blocks(["/pad", "/small"]):  # each block dropped before the next is read
+            peaks.append(tracemalloc.get_traced_memory()[1] - sum(len(d) for _, _, d in got))  # less what is kept
+            got += [(t, topic, bytes(d)) for t, topic, d in block.messages()]
+            del block
+            tracemalloc.reset_peak()
+    finally:
+        tracemalloc.stop()
+    assert got == _rosbags(file, {"/pad", "/small"})
+    assert [t for t, _, _ in got] == sorted(t for _, t, _ in spec.messages)
+    assert max(peaks) < 5_000_000, peaks  # a chunk or two (1.2 MB each) and the step being merged, not 18 MB
