@@ -92,3 +92,42 @@ def write_video_bag(path: Path, samples: list[tuple[str, int, str, bytes]]) -> N
             blob = np.frombuffer(data, np.uint8)
             msg = compressed(Header(stamp(t), "cam"), fmt, blob) if as_image else video(stamp(t), "cam", blob, fmt)
             writer.write(connections[topic], t, bytes(store.serialize_cdr(msg, msgtype)))
+
+
+def write_camera_video_bag(path: Path, n: int, *, rate: float = 15.0, frames: Frames | None = None) -> None:
+    """Issue 38's camera bag: ``n`` rgb8 frames at ``rate`` on /camera/image_raw (CameraInfo each second), and an
+    H.264 topic ``/front/video`` (``foxglove_msgs/msg/CompressedVideo``, 320x240 by PyAV's x264, a keyframe every
+    2 s) of the same scene, written after the camera, topic by topic as a converting tool writes — so its few
+    chunks span the whole bag and overlap every camera chunk in time. Written as it goes (the frames are not held)."""
+    from fractions import Fraction
+
+    import av
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    store.register(get_types_from_msg(FOXGLOVE_VIDEO, "foxglove_msgs/msg/CompressedVideo"))
+    video = store.types["foxglove_msgs/msg/CompressedVideo"]
+    encoder = av.CodecContext.create("libx264", "w")
+    encoder.width, encoder.height, encoder.pix_fmt = 320, 240, "yuv420p"
+    encoder.time_base, encoder.gop_size, encoder.max_b_frames = Fraction(1, round(rate)), round(2 * rate), 0
+    encoder.options = {"tune": "zerolatency", "preset": "ultrafast"}
+    frames = frames or Frames()
+    samples: list[tuple[int, bytes]] = []
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        info = writer.add_connection("/camera/camera_info", "sensor_msgs/msg/CameraInfo", typestore=store)
+        camera = writer.add_connection("/camera/image_raw", "sensor_msgs/msg/Image", typestore=store)
+        passed = writer.add_connection("/front/video", "foxglove_msgs/msg/CompressedVideo", typestore=store)
+        for i in range(n):
+            t = T0 + round(i * 1e9 / rate)
+            pixels = frames(i)
+            if i % round(rate) == 0:
+                writer.write(info, t, camera_info(t, frames.width, frames.height))
+            writer.write(camera, t + 1, image(t, pixels))
+            frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(pixels[::2, ::2]), format="rgb24")
+            frame.pts = i
+            samples += [(t + 2, bytes(p)) for p in encoder.encode(frame)]
+        samples += [(T0 + round(n * 1e9 / rate), bytes(p)) for p in encoder.encode(None)]
+        for t, sample in samples:
+            msg = video(stamp(t), "front", np.frombuffer(sample, np.uint8), "h264")
+            writer.write(passed, t, bytes(store.serialize_cdr(msg, "foxglove_msgs/msg/CompressedVideo")))
