@@ -237,14 +237,29 @@ def _share(block: Block, piece: Block) -> Block:
     return replace(piece, read_nbytes=block.read_nbytes * piece.nbytes // max(block.nbytes, 1))
 
 
+RUN_BYTES = 64 << 10
+"""Interleaved parts whose runs (messages in a row from one part) hold this many bytes on average are given run by
+run, as views of their chunks (a camera's frames between a video topic's samples: not copied); smaller runs are
+merged into one block (copying a few small messages costs less than a block each)."""
+
+
 def _in_order(parts: list[Block]) -> Iterator[Block]:
-    """Parts (in file order) as time-ordered blocks: as they are where one ends before the next starts (no copy),
-    else merged (:func:`merge_blocks`)."""
+    """Parts (in file order) as time-ordered blocks: as they are where one ends before the next starts, run by run
+    where their runs are big (:data:`RUN_BYTES`), else merged (:func:`merge_blocks`)."""
     ordered = sorted(parts, key=lambda p: int(p.times_ns[0]))
     if all(int(a.times_ns[-1]) < int(b.times_ns[0]) for a, b in itertools.pairwise(ordered)):
         yield from ordered
-    elif parts:
+        return
+    order = np.argsort(np.concatenate([p.times_ns for p in parts]), kind="stable")  # ties: the file's order
+    part = np.repeat(np.arange(len(parts)), [len(p) for p in parts])[order]
+    edges = np.flatnonzero(np.diff(part)) + 1
+    if sum(p.nbytes for p in parts) < RUN_BYTES * (len(edges) + 1):
         yield merge_blocks(parts)
+        return
+    firsts = np.cumsum([0] + [len(p) for p in parts[:-1]])
+    for run in np.split(order, edges):
+        k = int(np.searchsorted(firsts, run[0], side="right")) - 1
+        yield _share(parts[k], parts[k].take(run - firsts[k]))
 
 
 def merge_blocks(parts: list[Block]) -> Block:

@@ -133,3 +133,22 @@ def test_overlapping_chunks_are_read_as_the_merge_reaches_them() -> None:
         b"long90",
     ]
     assert read == ["a after 0", "long after 0", "b after 5", "c after 9"]
+
+
+def test_big_interleaved_messages_are_given_run_by_run_without_a_copy() -> None:
+    """Two chunks by hand whose messages interleave: 300 kB frames at 0, 20, 40 and 4-byte samples at 10, 30. Each
+    run (one message here) comes as a view of its own chunk's buffer, in time order; tiny messages that interleave
+    are merged into one block instead (the test above)."""
+    frames = [bytes([k]) * 300_000 for k in range(3)]
+    big = Block(
+        np.array([0, 20, 40], dtype=np.int64), np.zeros(3, dtype=np.int32), ("/t",), memoryview(b"".join(frames)),
+        np.array([0, 300_000, 600_000], dtype=np.int64), np.full(3, 300_000, dtype=np.int64),
+    )  # fmt: skip
+    small = Block(
+        np.array([10, 30], dtype=np.int64), np.zeros(2, dtype=np.int32), ("/t",), memoryview(b"s010s030"),
+        np.array([0, 4], dtype=np.int64), np.full(2, 4, dtype=np.int64),
+    )  # fmt: skip
+    chunks = [ChunkIndex(0, 40, 0, 1, {}), ChunkIndex(10, 30, 100, 1, {})]
+    out = list(merged_chunks(chunks, lambda c: big if c.offset == 0 else small))
+    assert [bytes(b.data(i)) for b in out for i in range(len(b))] == [frames[0], b"s010", frames[1], b"s030", frames[2]]
+    assert [b.buffer.obj for b in out] == [big.buffer.obj, small.buffer.obj] * 2 + [big.buffer.obj]

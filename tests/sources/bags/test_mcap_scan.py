@@ -444,7 +444,8 @@ def test_a_topic_written_after_the_others_is_merged_in_flight(tmp_path: Path, co
     tools write — 30 strings of 600 kB (two a chunk), then 30 small messages at the same times (one chunk spanning
     them all): every chunk overlaps the last in time. Reading both topics, each block dropped before the next, holds
     the chunks in flight (tracemalloc: a few MB), not the whole file merged at once (18 MB); the messages are
-    rosbags' reader's, in time order. Uncompressed chunks (rosbags' default) and zstd ones."""
+    rosbags' reader's, in time order. Uncompressed chunks (rosbags' default) and zstd ones; the uncompressed strings
+    are not even copied (each a run of its own between the small messages)."""
     spec = BagSpec(types={"/pad": "std_msgs/msg/String", "/small": "std_msgs/msg/String"})
     for k in range(30):
         spec.add("/pad", T0 + k * MS, string(chr(65 + k % 26) * 600_000))
@@ -480,3 +481,5 @@ def test_a_topic_written_after_the_others_is_merged_in_flight(tmp_path: Path, co
     assert got == _rosbags(file, {"/pad", "/small"})
     assert [t for t, _, _ in got] == sorted(t for _, t, _ in spec.messages)
     assert max(peaks) < 5_000_000, peaks  # a chunk or two (1.2 MB each) and the step being merged, not 18 MB
+    if not compressed:  # the strings' runs between the small messages: views of the file's pages, never copied
+        assert all(block.buffer.obj is scan._map for block in scan.blocks(["/pad", "/small"]))
