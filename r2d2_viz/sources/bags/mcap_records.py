@@ -11,14 +11,16 @@ import struct
 import sys
 import zlib
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from types import ModuleType
-from typing import NamedTuple
+from typing import NamedTuple, TypeVar
 
 import numpy as np
 
 from r2d2_viz.sources.bags.storage import Block, in_time_order
+
+C = TypeVar("C")
 
 
 def _zstd() -> ModuleType:
@@ -200,25 +202,28 @@ def overlapping(chunks: list[ChunkIndex]) -> Iterator[list[ChunkIndex]]:
         yield group
 
 
-def merged_chunks(cluster: list[ChunkIndex], read: Callable[[ChunkIndex], Block | None]) -> Iterator[Block]:
+def merged_chunks(
+    cluster: Sequence[C], read: Callable[[C], Block | None], place: Callable[[C], tuple[int, int]]
+) -> Iterator[Block]:
     """The messages of chunks that overlap in time (``read`` gives a chunk's wanted messages, in time order) as
     time-ordered blocks, holding only the chunks in flight: a chunk is read when the merge reaches its start, and
     each step gives every message up to the earliest of the open chunks' last times and the next chunk's start.
     A topic written after the others (its few chunks spanning the whole file) keeps one of its chunks open beside
-    the others', instead of the whole file merged at once. Messages received at one time keep the file's order."""
-    pending = deque(sorted(cluster, key=lambda c: (c.start_ns, c.offset)))
+    the others', instead of the whole file merged at once. Messages received at one time keep the file's order.
+    ``place``: a chunk's first receive time and its place in the file (any storage's chunks: MCAP, ROS 1)."""
+    pending = deque(sorted(cluster, key=place))
     live: list[tuple[int, Block, int]] = []  # (file offset, block, its first message not given yet)
     while pending or live:
         head = min((int(b.times_ns[at]) for _, b, at in live), default=None)
-        if pending and (head is None or pending[0].start_ns <= head):
+        if pending and (head is None or place(pending[0])[0] <= head):
             c = pending.popleft()
             block = read(c)
             if block is not None and len(block):
-                live = sorted([*live, (c.offset, block, 0)], key=lambda x: x[0])
+                live = sorted([*live, (place(c)[1], block, 0)], key=lambda x: x[0])
             continue
         cutoff = min(int(b.times_ns[-1]) for _, b, _ in live)
         if pending:
-            cutoff = min(cutoff, pending[0].start_ns - 1)
+            cutoff = min(cutoff, place(pending[0])[0] - 1)
         parts, kept = [], []
         for offset, block, at in live:
             end = at + int(np.searchsorted(block.times_ns[at:], cutoff, side="right"))
@@ -277,6 +282,9 @@ def merge_blocks(parts: list[Block]) -> Block:
         starts,
         lengths,
         sum(p.cost for p in parts),
+        seq=None
+        if all(p.seq is None for p in parts)
+        else np.concatenate([np.full(len(p), -1, np.int64) if p.seq is None else p.seq for p in parts]),
     )
     return in_time_order(block)
 

@@ -169,7 +169,8 @@ class McapScan:
                 block = self._chunk_block(cluster[0], order, wanted, lo, hi)
                 yield from (block,) if block is not None else ()
             else:
-                yield from merged_chunks(cluster, lambda c: self._chunk_block(c, order, wanted, lo, hi))
+                read = lambda c: self._chunk_block(c, order, wanted, lo, hi)  # noqa: E731
+                yield from merged_chunks(cluster, read, lambda c: (c.start_ns, c.offset))
 
     def _chunk_block(
         self, c: ChunkIndex, order: tuple[str, ...], wanted: dict[int, int], lo: int, hi: int

@@ -22,6 +22,7 @@ import numpy as np
 from r2d2_viz.arrays import I64
 from r2d2_viz.msgs.definitions import Convert, from_ros1, own_store
 from r2d2_viz.msgs.typestore import MsgError
+from r2d2_viz.sources.bags.mcap_records import merged_chunks
 from r2d2_viz.sources.bags.rosbag1_cdr import convert_runs
 from r2d2_viz.sources.bags.rosbag1_records import (
     MAGIC,
@@ -201,8 +202,9 @@ class Rosbag1:
     def blocks(
         self, topics: Collection[str], *, start_ns: int | None = None, stop_ns: int | None = None
     ) -> Iterator[Block]:
-        """Messages on ``topics`` in ``[start_ns, stop_ns)``: one block per chunk (per run of chunks whose times
-        overlap), in time order; chunks the index says hold none of them are not read."""
+        """Messages on ``topics`` in ``[start_ns, stop_ns)``: one block per chunk, in time order (chunks whose times
+        overlap merged as the merge reaches them: :func:`~.mcap_records.merged_chunks`); chunks the index says hold
+        none of them are not read."""
         conns = self._wanted(topics)
         start = -(1 << 63) if start_ns is None else start_ns
         stop = 1 << 63 if stop_ns is None else stop_ns
@@ -215,13 +217,16 @@ class Rosbag1:
             key=lambda c: c.start_ns,
         )
         names = topic_tuple(topics)
+
+        def read(chunk: Chunk) -> Block | None:
+            messages, seqs = self._messages(chunk, conns, start, stop)
+            return block_of(messages, names, seqs) if messages else None
+
         group: list[Chunk] = []
         group_end = 0
         for chunk in [*chunks, None]:
             if group and (chunk is None or chunk.start_ns >= group_end):
-                read = [self._messages(g, conns, start, stop) for g in group]
-                if messages := [m for got, _ in read for m in got]:
-                    yield block_of(messages, names, np.concatenate([seqs for _, seqs in read]))
+                yield from merged_chunks(group, read, lambda c: (c.start_ns, c.pos))
                 group = []
             if chunk is not None:
                 group_end = max(group_end, chunk.end_ns + 1) if group else chunk.end_ns + 1

@@ -116,7 +116,7 @@ def test_overlapping_chunks_are_read_as_the_merge_reaches_them() -> None:
         read.append(f"{name} after {len(given)}")
         return block(contents[name], name)
 
-    for out in merged_chunks(list(chunks.values()), reader):
+    for out in merged_chunks(list(chunks.values()), reader, lambda c: (c.start_ns, c.offset)):
         given += [bytes(out.data(i)) for i in range(len(out))]
     assert given == [
         b"a0",
@@ -149,6 +149,6 @@ def test_big_interleaved_messages_are_given_run_by_run_without_a_copy() -> None:
         np.array([0, 4], dtype=np.int64), np.full(2, 4, dtype=np.int64),
     )  # fmt: skip
     chunks = [ChunkIndex(0, 40, 0, 1, {}), ChunkIndex(10, 30, 100, 1, {})]
-    out = list(merged_chunks(chunks, lambda c: big if c.offset == 0 else small))
+    out = list(merged_chunks(chunks, lambda c: big if c.offset == 0 else small, lambda c: (c.start_ns, c.offset)))
     assert [bytes(b.data(i)) for b in out for i in range(len(b))] == [frames[0], b"s010", frames[1], b"s030", frames[2]]
     assert [b.buffer.obj for b in out] == [big.buffer.obj, small.buffer.obj] * 2 + [big.buffer.obj]

@@ -455,3 +455,47 @@ def test_header_seq_of_the_real_turtlesim_bag() -> None:
     path = Path(__file__).parents[2] / "data/bags/ros1/example-lz4.bag"
     got = _seq_by_topic(Rosbag1(path), ["/rosout"])["/rosout"]
     assert got == seqs(path, "/rosout") and len(got) == 10
+
+
+def test_a_topic_written_after_the_others_is_merged_in_flight(tmp_path: Path) -> None:
+    """Issue 38 (``--video``'s 1 GB on a bag written topic by topic): rosbags' ROS 1 writer, 30 joint states padded
+    to 300 kB (a chunk each), then 30 small ones at the times between (one chunk spanning them all): every chunk
+    overlaps the last. Reading both topics, each block dropped before the next, holds the chunks in flight
+    (tracemalloc: a few MB), not the whole file joined at once (18 MB); messages and their ``header.seq`` are what
+    rosbags' reader gives, in time order."""
+    import tracemalloc
+
+    from rosbags.rosbag1 import Reader
+
+    path = tmp_path / "sequential.bag"
+    writer = Writer(path)
+    writer.chunk_threshold = 200_000
+    with writer:
+        big = writer.add_connection("/big", "sensor_msgs/msg/JointState", typestore=NOETIC)
+        small = writer.add_connection("/small", "sensor_msgs/msg/JointState", typestore=NOETIC)
+        for k in range(30):
+            writer.write(big, T0 + k * 10**7, _joint_state(k, [f"j{k}_" + "x" * 300_000]))
+        for k in range(30):
+            writer.write(small, T0 + k * 10**7 + 1, _joint_state(100 + k))
+    with Reader(path) as reader:
+        assert len(list(reader.chunk_infos)) == 31  # each big one in a chunk of its own, the small ones in one
+        expected = sorted(
+            ((t, c.topic, NOETIC.deserialize_ros1(bytes(d), c.msgtype)) for c, t, d in reader.messages()),
+            key=lambda m: m[0],
+        )
+    bag, got, seqs, peaks = Rosbag1(path), [], [], []
+    tracemalloc.start()
+    try:
+        for block in bag.blocks(["/big", "/small"]):
+            peaks.append(tracemalloc.get_traced_memory()[1] - sum(len(d) for _, _, d in got))  # less what is kept
+            got += [(t, topic, bytes(d)) for t, topic, d in block.messages()]
+            seqs += [] if block.seq is None else block.seq.tolist()
+            del block
+            tracemalloc.reset_peak()
+    finally:
+        tracemalloc.stop()
+    assert [(t, topic) for t, topic, _ in got] == [(t, topic) for t, topic, _ in expected]
+    decoded = [typestore().deserialize_cdr(d, "sensor_msgs/msg/JointState") for _, _, d in got]
+    assert [m.name for m in decoded] == [m.name for _, _, m in expected]
+    assert seqs == [m.header.seq for _, _, m in expected] == [7] * 60
+    assert max(peaks) < 3_000_000, peaks  # a big chunk or two and the step being joined, not 18 MB
