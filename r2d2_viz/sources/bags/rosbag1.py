@@ -217,11 +217,7 @@ class Rosbag1:
             key=lambda c: c.start_ns,
         )
         names = topic_tuple(topics)
-
-        def read(chunk: Chunk) -> Block | None:
-            messages, seqs = self._messages(chunk, conns, start, stop)
-            return block_of(messages, names, seqs) if messages else None
-
+        read = lambda chunk: _block_of(self._messages(chunk, conns, start, stop), names)  # noqa: E731
         group: list[Chunk] = []
         group_end = 0
         for chunk in [*chunks, None]:
@@ -284,3 +280,9 @@ def _span(chunks: list[Chunk]) -> tuple[int, int] | None:
     if not with_messages:
         return None
     return min(c.start_ns for c in with_messages), max(c.end_ns for c in with_messages)
+
+
+def _block_of(found: tuple[list[tuple[int, str, bytes | memoryview]], I64], names: tuple[str, ...]) -> Block | None:
+    """A chunk's messages and their ``header.seq`` as a block (None: none)."""
+    messages, seqs = found
+    return block_of(messages, names, seqs) if messages else None
