@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 from conftest import cli
 from fieldbags import BATTERY, STATE, expected_fields, messages, store, write
-from rrd import read_recording
+from rerun.chunk import RrdReader
+from rrd import Rows, read_recording
+
+from r2d2_viz.viewer.fields_feed import CHUNK_ROWS
 
 N = 120
 PLOTS = ("/odom.twist.twist.linear.x", "/arm_controller/state.error.positions[0]")
@@ -26,19 +29,43 @@ def recorded(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFa
     return read_recording(out), result.stderr
 
 
-def _golden(topic: str, msgtype: str) -> list[tuple[int, dict]]:
+def _golden(topic: str, msgtype: str, n: int = N) -> list[tuple[int, dict]]:
     ts = store()
     return [
-        (t, expected_fields(ts, ts.deserialize_cdr(d, msgtype), msgtype)) for top, t, d in messages(N) if top == topic
+        (t, expected_fields(ts, ts.deserialize_cdr(d, msgtype), msgtype)) for top, t, d in messages(n) if top == topic
     ]
 
 
 @pytest.mark.parametrize(("topic", "msgtype"), [("/battery", BATTERY), ("/arm_controller/state", STATE)])
 def test_the_recording_holds_every_field_of_every_message(recorded: tuple[dict, str], topic: str, msgtype: str) -> None:
     recording, _ = recorded
-    rows = recording[f"/topics{topic}"]
-    assert len(rows.times) == N
-    for k, (t, want) in enumerate(_golden(topic, msgtype)):
+    _assert_every_field(recording[f"/topics{topic}"], topic, msgtype, N)
+
+
+def test_a_batch_run_sends_a_topics_fields_in_chunks_of_thousands_of_messages(tmp_path: Path) -> None:
+    """Issue 38: the fields went to Rerun a ``send_columns`` per block and per layout in it (60 chunks for 3,000
+    batteries whose strings and arrays change length, a few hundred rows each), which cost Rerun more to encode and
+    write than the values. A batch run holds a topic's rows until it has ``CHUNK_ROWS`` (or ``CHUNK_BYTES``) of
+    them; the recording holds the same values at the same times (rosbags' deserializer: the golden source)."""
+    n = 3000
+    bag = write(tmp_path / "bag", messages(n))
+    out = tmp_path / "out.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    reader = RrdReader(out)
+    chunks: dict[str, int] = {}
+    for chunk in reader.stream(store=reader.recordings()[0]):
+        chunks[chunk.entity_path] = chunks.get(chunk.entity_path, 0) + 1
+    assert chunks["/topics/battery"] <= -(-n // CHUNK_ROWS), chunks
+    recording = read_recording(out)
+    for topic, msgtype in (("/battery", BATTERY), ("/arm_controller/state", STATE)):
+        _assert_every_field(recording[f"/topics{topic}"], topic, msgtype, n)
+
+
+def _assert_every_field(rows: Rows, topic: str, msgtype: str, n: int) -> None:
+    """Each message's fields in its row, as rosbags deserialises them; what a message lacks is empty or null."""
+    assert len(rows.times) == n
+    for k, (t, want) in enumerate(_golden(topic, msgtype, n)):
         at = rows.times.index(t)
         got = {
             name.split(":", 1)[1]: values[at][0]
