@@ -233,3 +233,46 @@ def test_ros1_header_seq_is_a_field_and_plottable(tmp_path: Path) -> None:
     assert plot.times == [t for t, _ in temp]
     assert [v[0] for v in plot.temporal["Scalars:scalars"]] == pytest.approx([float(s) for _, s in temp])
     assert "/topics/value" not in recording or not any("seq" in k for k in recording["/topics/value"].temporal)
+
+
+@pytest.mark.parametrize("gather", [False, True])
+def test_rows_held_across_blocks_keep_what_was_cleared_and_what_was_not_known_yet(tmp_path: Path, gather: bool) -> None:
+    """Issue 38's chunks hold the rows of several blocks and layouts (times interleaved): each row must still show
+    what its own message had — a field an earlier message had and this one lacks is empty (cleared, issue 37), a
+    field first seen in a later block is nothing (null) before — as a chunk per block showed them. Values by hand."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.generic.fields import Columns
+    from r2d2_viz.viewer.fields_feed import FieldsFeed
+
+    out = tmp_path / "out.rrd"
+    rec = rr.RecordingStream("test_held_rows")
+    rec.save(str(out))
+    feed = FieldsFeed(rec, clock="timestamp", shown={"/x": "my_msgs/msg/X"}, gather=gather)
+    t = 1_700_000_000_000_000_000
+    blocks = [
+        [  # two layouts of one block, their times interleaved
+            Columns(np.array([t + 10, t + 30]), {"a": np.array([1.0, 3.0])}),
+            Columns(np.array([t + 20]), {"a": np.array([2.0]), "b": np.array([5], dtype=np.int32)}),
+        ],
+        [
+            Columns(np.array([t + 40]), {"a": np.array([4.0])}),
+            Columns(np.array([t + 50]), texts={"c": np.array(["hi"], dtype=object)}),
+        ],
+    ]
+    for block in blocks:
+        feed.push([("/x", c) for c in block])
+        feed.until(t + 50)
+    feed.finish(lambda line: None)
+    rec.flush()
+    rec.disconnect()
+    rows = read_recording(out)["/topics/x"]
+    got = [{n.split(":", 1)[1]: v[i] for n, v in sorted(rows.temporal.items())} for i in range(len(rows.times))]
+    assert [x - t for x in rows.times] == [10, 20, 30, 40, 50]
+    assert got == [
+        {"a": [1.0], "b": [], "c": None},
+        {"a": [2.0], "b": [5], "c": None},
+        {"a": [3.0], "b": [], "c": None},
+        {"a": [4.0], "b": [], "c": []},
+        {"a": [], "b": [], "c": ["hi"]},
+    ]
