@@ -41,6 +41,8 @@ CHUNK_ROWS = 4096
 CHUNK_BYTES = 1 << 20
 """…or this many bytes of values and offsets (Rerun writes a chunk of more than about 1.3 MB to a file as it is,
 not compressed: the file grows by a third)."""
+HELD_BYTES = 16 << 20
+"""All entities together hold at most about this much (a bag of hundreds of slow topics): past it, all are sent."""
 
 
 def topic_entity(topic: str) -> str:
@@ -86,6 +88,8 @@ class FieldsFeed:
         """topic → every field its messages have had so far (what a row lacks is logged empty: cleared)."""
         self._held: dict[str, _Held] = {}
         """entity → its rows not sent yet."""
+        self.held_bytes = 0
+        """Their bytes, all entities together."""
 
     def push(self, fields: Sequence[TopicColumns]) -> None:
         for topic, columns in fields:
@@ -163,11 +167,16 @@ class FieldsFeed:
         held.pieces.append(piece)
         held.rows, held.nbytes = held.rows + rows, held.nbytes + nbytes
         held.kinds.update(kinds)
+        self.held_bytes += nbytes
         if not self.gather or held.rows >= CHUNK_ROWS or held.nbytes >= CHUNK_BYTES:
             self._flush(entity)
+        if self.held_bytes > HELD_BYTES:
+            for other in list(self._held):
+                self._flush(other)
 
     def _flush(self, entity: str) -> None:
         held = self._held.pop(entity)
+        self.held_bytes -= held.nbytes
         if held.topic is None:
             self._plot(entity, held.pieces)
         else:

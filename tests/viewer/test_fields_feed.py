@@ -276,3 +276,32 @@ def test_rows_held_across_blocks_keep_what_was_cleared_and_what_was_not_known_ye
         {"a": [4.0], "b": [], "c": []},
         {"a": [], "b": [], "c": ["hi"]},
     ]
+
+
+def test_what_a_batch_run_holds_is_bounded_over_all_topics(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Many slow topics each under a chunk's rows would together hold their whole bag: past ``HELD_BYTES`` all are
+    sent, and every row still reaches the recording once."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.generic.fields import Columns
+    from r2d2_viz.viewer import fields_feed
+
+    monkeypatch.setattr(fields_feed, "HELD_BYTES", 1000)
+    out = tmp_path / "out.rrd"
+    rec = rr.RecordingStream("test_held_bound")
+    rec.save(str(out))
+    topics = {f"/t{k}": "my_msgs/msg/X" for k in range(30)}
+    feed = fields_feed.FieldsFeed(rec, clock="timestamp", shown=topics, gather=True)
+    t = 1_700_000_000_000_000_000
+    most = 0
+    for i in range(20):
+        feed.push([(topic, Columns(np.array([t + i]), {"a": np.array([float(i)])})) for topic in topics])
+        feed.until(t + i)
+        most = max(most, feed.held_bytes)
+    feed.finish(lambda line: None)
+    rec.flush()
+    rec.disconnect()
+    assert most <= 1000 and feed.held_bytes == 0
+    recording = read_recording(out)
+    for topic in topics:
+        assert recording[f"/topics{topic}"].temporal["my_msgs/msg/X:a"] == [[float(i)] for i in range(20)]
