@@ -39,8 +39,9 @@ CHUNK_ROWS = 4096
 """A batch run sends an entity's rows when it holds this many (Rerun's chunk store keeps sorted chunks of up to
 4,096 rows whole)…"""
 CHUNK_BYTES = 1 << 20
-"""…or this many bytes of values and offsets (Rerun writes a chunk of more than about 1.3 MB to a file as it is,
-not compressed: the file grows by a third)."""
+"""…or this many bytes of values and offsets (Rerun writes a chunk of more than about 1.2–1.4 MB to a file as it is,
+not compressed: a script's chunks of zeros, 12,000 rows of 19 fields for 20 entities, made 3.9 MB at 5,000 rows a
+chunk, 21 MB at 6,000)."""
 HELD_BYTES = 16 << 20
 """All entities together hold at most about this much (a bag of hundreds of slow topics): past it, all are sent."""
 
