@@ -205,7 +205,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     samples, interrupted, tree = 0, False, plan.tree
     clock: Clock = plan.source.clock if plan.source is not None else "timestamp"
     view = plan_view(plan, rviz=config.rviz, fixed_frame=config.fixed_frame, show=config.show)
-    fields = fields_run(plan, config.plots, clock, header_time=config.time == "header")
+    fields = fields_run(plan, config.plots, clock, header_time=config.time == "header", gather=not config.live)
     layout = dataclasses.replace(view.layout, field_plots=config.plots, tf_graph=config.tf_tree)
     view = dataclasses.replace(view, layout=layout)
     blueprint = generate_blueprint(view.spec, layout=view.layout)

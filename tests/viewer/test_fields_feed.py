@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 from conftest import cli
 from fieldbags import BATTERY, STATE, expected_fields, messages, store, write
-from rrd import read_recording
+from rerun.chunk import RrdReader
+from rrd import Rows, read_recording
+
+from r2d2_viz.viewer.fields_feed import CHUNK_ROWS
 
 N = 120
 PLOTS = ("/odom.twist.twist.linear.x", "/arm_controller/state.error.positions[0]")
@@ -26,19 +29,43 @@ def recorded(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFa
     return read_recording(out), result.stderr
 
 
-def _golden(topic: str, msgtype: str) -> list[tuple[int, dict]]:
+def _golden(topic: str, msgtype: str, n: int = N) -> list[tuple[int, dict]]:
     ts = store()
     return [
-        (t, expected_fields(ts, ts.deserialize_cdr(d, msgtype), msgtype)) for top, t, d in messages(N) if top == topic
+        (t, expected_fields(ts, ts.deserialize_cdr(d, msgtype), msgtype)) for top, t, d in messages(n) if top == topic
     ]
 
 
 @pytest.mark.parametrize(("topic", "msgtype"), [("/battery", BATTERY), ("/arm_controller/state", STATE)])
 def test_the_recording_holds_every_field_of_every_message(recorded: tuple[dict, str], topic: str, msgtype: str) -> None:
     recording, _ = recorded
-    rows = recording[f"/topics{topic}"]
-    assert len(rows.times) == N
-    for k, (t, want) in enumerate(_golden(topic, msgtype)):
+    _assert_every_field(recording[f"/topics{topic}"], topic, msgtype, N)
+
+
+def test_a_batch_run_sends_a_topics_fields_in_chunks_of_thousands_of_messages(tmp_path: Path) -> None:
+    """Issue 38: the fields went to Rerun a ``send_columns`` per block and per layout in it (60 chunks for 3,000
+    batteries whose strings and arrays change length, a few hundred rows each), which cost Rerun more to encode and
+    write than the values. A batch run holds a topic's rows until it has ``CHUNK_ROWS`` (or ``CHUNK_BYTES``) of
+    them; the recording holds the same values at the same times (rosbags' deserializer: the golden source)."""
+    n = 3000
+    bag = write(tmp_path / "bag", messages(n))
+    out = tmp_path / "out.rrd"
+    result = cli("--bag", str(bag), "--save", str(out), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    reader = RrdReader(out)
+    chunks: dict[str, int] = {}
+    for chunk in reader.stream(store=reader.recordings()[0]):
+        chunks[chunk.entity_path] = chunks.get(chunk.entity_path, 0) + 1
+    assert chunks["/topics/battery"] <= -(-n // CHUNK_ROWS), chunks
+    recording = read_recording(out)
+    for topic, msgtype in (("/battery", BATTERY), ("/arm_controller/state", STATE)):
+        _assert_every_field(recording[f"/topics{topic}"], topic, msgtype, n)
+
+
+def _assert_every_field(rows: Rows, topic: str, msgtype: str, n: int) -> None:
+    """Each message's fields in its row, as rosbags deserialises them; what a message lacks is empty or null."""
+    assert len(rows.times) == n
+    for k, (t, want) in enumerate(_golden(topic, msgtype, n)):
         at = rows.times.index(t)
         got = {
             name.split(":", 1)[1]: values[at][0]
@@ -206,3 +233,75 @@ def test_ros1_header_seq_is_a_field_and_plottable(tmp_path: Path) -> None:
     assert plot.times == [t for t, _ in temp]
     assert [v[0] for v in plot.temporal["Scalars:scalars"]] == pytest.approx([float(s) for _, s in temp])
     assert "/topics/value" not in recording or not any("seq" in k for k in recording["/topics/value"].temporal)
+
+
+@pytest.mark.parametrize("gather", [False, True])
+def test_rows_held_across_blocks_keep_what_was_cleared_and_what_was_not_known_yet(tmp_path: Path, gather: bool) -> None:
+    """Issue 38's chunks hold the rows of several blocks and layouts (times interleaved): each row must still show
+    what its own message had — a field an earlier message had and this one lacks is empty (cleared, issue 37), a
+    field first seen in a later block is nothing (null) before — as a chunk per block showed them. Values by hand."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.generic.fields import Columns
+    from r2d2_viz.viewer.fields_feed import FieldsFeed
+
+    out = tmp_path / "out.rrd"
+    rec = rr.RecordingStream("test_held_rows")
+    rec.save(str(out))
+    feed = FieldsFeed(rec, clock="timestamp", shown={"/x": "my_msgs/msg/X"}, gather=gather)
+    t = 1_700_000_000_000_000_000
+    blocks = [
+        [  # two layouts of one block, their times interleaved
+            Columns(np.array([t + 10, t + 30]), {"a": np.array([1.0, 3.0])}),
+            Columns(np.array([t + 20]), {"a": np.array([2.0]), "b": np.array([5], dtype=np.int32)}),
+        ],
+        [
+            Columns(np.array([t + 40]), {"a": np.array([4.0])}),
+            Columns(np.array([t + 50]), texts={"c": np.array(["hi"], dtype=object)}),
+        ],
+    ]
+    for block in blocks:
+        feed.push([("/x", c) for c in block])
+        feed.until(t + 50)
+    feed.finish(lambda line: None)
+    rec.flush()
+    rec.disconnect()
+    rows = read_recording(out)["/topics/x"]
+    got = [{n.split(":", 1)[1]: v[i] for n, v in sorted(rows.temporal.items())} for i in range(len(rows.times))]
+    assert [x - t for x in rows.times] == [10, 20, 30, 40, 50]
+    assert got == [
+        {"a": [1.0], "b": [], "c": None},
+        {"a": [2.0], "b": [5], "c": None},
+        {"a": [3.0], "b": [], "c": None},
+        {"a": [4.0], "b": [], "c": []},
+        {"a": [], "b": [], "c": ["hi"]},
+    ]
+
+
+def test_what_a_batch_run_holds_is_bounded_over_all_topics(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Many slow topics each under a chunk's rows would together hold their whole bag: past ``HELD_BYTES`` all are
+    sent, and every row still reaches the recording once."""
+    import rerun as rr
+
+    from r2d2_viz.msgs.generic.fields import Columns
+    from r2d2_viz.viewer import fields_feed
+
+    monkeypatch.setattr(fields_feed, "HELD_BYTES", 1000)
+    out = tmp_path / "out.rrd"
+    rec = rr.RecordingStream("test_held_bound")
+    rec.save(str(out))
+    topics = {f"/t{k}": "my_msgs/msg/X" for k in range(30)}
+    feed = fields_feed.FieldsFeed(rec, clock="timestamp", shown=topics, gather=True)
+    t = 1_700_000_000_000_000_000
+    most = 0
+    for i in range(20):
+        feed.push([(topic, Columns(np.array([t + i]), {"a": np.array([float(i)])})) for topic in topics])
+        feed.until(t + i)
+        most = max(most, feed.held_bytes)
+    feed.finish(lambda line: None)
+    rec.flush()
+    rec.disconnect()
+    assert most <= 1000 and feed.held_bytes == 0
+    recording = read_recording(out)
+    for topic in topics:
+        assert recording[f"/topics{topic}"].temporal["my_msgs/msg/X:a"] == [[float(i)] for i in range(20)]
