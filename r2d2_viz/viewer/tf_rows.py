@@ -24,7 +24,7 @@ from r2d2_viz.kinematics.tree import (
     write_transforms,
 )
 from r2d2_viz.sources.base import FrameTrack
-from r2d2_viz.viewer.columns import Encoded, encoded, f32, first_of_every, tiled
+from r2d2_viz.viewer.columns import Encoded, encoded, f32, first_of_every, list_column, tiled
 from r2d2_viz.viewer.scene import ARROW_COLOR
 
 
@@ -79,13 +79,13 @@ class TfRows:
         if self._names is None or len(self._names[0]) != n * self.rows:
             self._names = (tiled(self.parents, n), tiled(self.children, n))
         layout = _transform_layout()
-        offsets = pa.py_buffer(np.arange(n * self.rows + 1, dtype=np.int32))
-        columns = [
-            (layout["translation"][0], _one_per_row(layout["translation"][1], t32.reshape(-1), offsets)),
-            (layout["quaternion"][0], _one_per_row(layout["quaternion"][1], q32.reshape(-1), offsets)),
-            (layout["child_frame"][0], _one_per_row(layout["child_frame"][1], self._names[1], offsets)),
-            (layout["parent_frame"][0], _one_per_row(layout["parent_frame"][1], self._names[0], offsets)),
-        ]
+        arrays = {
+            "translation": _vectors(t32, layout["translation"][1]),
+            "quaternion": _vectors(q32, layout["quaternion"][1]),
+            "parent_frame": self._names[0],
+            "child_frame": self._names[1],
+        }
+        columns = [(d, list_column(list_type, arrays[name])) for name, (d, list_type) in layout.items()]
         return [*columns, *((d, first_of_every(a, self.rows)) for d, a in arrows)]
 
     def _arrow_columns(self, translation: F64, quat: F64, tracks: tuple[FrameTrack, ...]) -> Encoded:
@@ -119,10 +119,6 @@ def _transform_layout() -> dict[str, tuple[rr.ComponentDescriptor, pa.DataType]]
     return {d.component.split(":")[-1]: (d, a.type) for d, a in encoded(columns)}
 
 
-def _one_per_row(list_type: pa.DataType, values: npt.NDArray[np.float32] | pa.Array, offsets: pa.Buffer) -> pa.Array:
-    """A list array of one value per row (``offsets`` 0, 1, 2 …) over ``values``: float32 components of fixed-size
-    lists, or an Arrow array of the values themselves; no copy."""
-    item = list_type.value_type
-    if not isinstance(values, pa.Array):
-        values = pa.FixedSizeListArray.from_arrays(pa.array(values), type=item)
-    return pa.Array.from_buffers(list_type, len(values), [None, offsets], children=[values])
+def _vectors(values: npt.NDArray[np.float32], list_type: pa.DataType) -> pa.Array:
+    """Rows of ``values`` ``(n, k, d)`` as Rerun's fixed-size lists of ``d`` floats (the list type's items)."""
+    return pa.FixedSizeListArray.from_arrays(pa.array(values.reshape(-1)), type=list_type.value_type)
