@@ -84,6 +84,12 @@ class PreparedSamples:
     def __len__(self) -> int:
         return len(self.times_ns)
 
+    @property
+    def nbytes(self) -> int:
+        """The Arrow bytes Rerun is handed for these samples (what a batch run's backpressure counts)."""
+        columns = sum(array.nbytes for entity in self.entities for _, array in entity.columns)
+        return columns + sum(times.nbytes for times in self.times.values())
+
 
 class RobotStream:
     """Logs one robot driven by one source to a recording (see the module docstring for the order of calls).
