@@ -87,8 +87,8 @@ class PreparedSamples:
     @property
     def nbytes(self) -> int:
         """The Arrow bytes Rerun is handed for these samples (what a batch run's backpressure counts)."""
-        columns = sum(array.nbytes for entity in self.entities for _, array in entity.columns)
-        return columns + sum(times.nbytes for times in self.times.values())
+        columns = sum(int(array.nbytes) for entity in self.entities for _, array in entity.columns)
+        return columns + sum(int(times.nbytes) for times in self.times.values())
 
 
 class RobotStream:
