@@ -54,8 +54,7 @@ LIVE_BLOCK_SECONDS = 5.0
 LIVE_BLOCK_SAMPLES = 1000
 """…and a block has at most this many samples, so at high rates computing one makes only a sample or two late."""
 FLUSH_BYTES = 64 << 20
-"""A batch run waits for the sinks after about this much data (bag bytes, and the Arrow bytes of the robot's
-samples: 64 bytes a sample undercounted a robot of many joints, whose /tf has a row per joint)."""
+"""A batch run waits for the sinks after about this much data (bag bytes, and the Arrow bytes of robot samples)."""
 LAP_SAMPLES = 1440
 """One lap of the tutorial's odom circle: 360° / (¼° per sample) — 48 s at the default 30 Hz."""
 
