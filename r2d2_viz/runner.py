@@ -54,7 +54,7 @@ LIVE_BLOCK_SECONDS = 5.0
 LIVE_BLOCK_SAMPLES = 1000
 """…and a block has at most this many samples, so at high rates computing one makes only a sample or two late."""
 FLUSH_BYTES = 64 << 20
-"""A batch run waits for the sinks after about this much data (bag bytes, and 64 bytes a robot sample)."""
+"""A batch run waits for the sinks after about this much data (bag bytes, and the Arrow bytes of robot samples)."""
 LAP_SAMPLES = 1440
 """One lap of the tutorial's odom circle: 360° / (¼° per sample) — 48 s at the default 30 Hz."""
 
@@ -342,7 +342,7 @@ def _batch(
     for window in windows:
         chunk = window.joints if streamer is not None else None
         prepared = streamer.prepare(chunk) if streamer is not None and chunk is not None and len(chunk) else None
-        unflushed += window.nbytes + (len(chunk) if chunk is not None else 0) * 64
+        unflushed += window.nbytes + (prepared.nbytes if prepared is not None else 0)
         if unflushed > FLUSH_BYTES:  # backpressure: the sinks have taken what came before
             flush()
             unflushed = 0

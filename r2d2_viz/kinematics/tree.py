@@ -169,38 +169,91 @@ def joint_transforms(tree: KinematicTree, q: npt.ArrayLike) -> tuple[F64, F64]:
 
 
 def transforms_from_values(tree: KinematicTree, values: F64) -> tuple[F64, F64]:
-    """:func:`joint_transforms` from the values ``(T, M)`` of the moving joints (see :func:`moving_values`).
+    """:func:`joint_transforms` from the values ``(T, M)`` of the moving joints (see :func:`moving_values`), as
+    ``(translation (T, M, 3), quaternion xyzw (T, M, 4))`` (see :func:`write_transforms`)."""
+    n_samples, n_moving = len(values), len(tree.moving)
+    translation, quat = np.empty((n_samples, n_moving, 3)), np.empty((n_samples, n_moving, 4))
+    write_transforms(tree, values, translation, quat)
+    return translation, quat
 
-    Per joint, ``origin ⊗ rot(axis, θ) = sin(θ/2) · (origin ⊗ (axis, 0)) + cos(θ/2) · origin`` and a
-    prismatic shift is ``d · (R_origin · axis)``: the per-joint factors are computed once per call, the
-    per-sample work is one sin, one cos and a few multiply-adds. The arithmetic runs joint by joint over
-    long runs of samples (numpy is slow on many short rows); the results are views ``(T, M, k)`` of arrays
-    laid out ``(M, T, k)``, so ``translation[:, m]`` is contiguous.
+
+def write_transforms(
+    tree: KinematicTree, values: F64, translation: npt.NDArray[np.floating], quat: npt.NDArray[np.floating]
+) -> None:
+    """``T_parent_child`` of the moving joints for their values ``(T, M)``, written into ``translation[:, :M]`` and
+    ``quat[:, :M]`` (arrays ``(T, ≥M, 3)`` and ``(T, ≥M, 4)`` xyzw, of any float type: computed in float64,
+    cast as they are written).
+
+    Per joint, ``origin ⊗ rot(axis, θ) = sin(θ/2) · (origin ⊗ (axis, 0)) + cos(θ/2) · origin`` and a prismatic
+    shift is ``t_origin + d · (R_origin · axis)``; what does not move with the samples (a revolute joint's
+    translation, a prismatic joint's rotation: ``θ = 0``, ``d = 0`` in the same formulas) is computed once per
+    joint. The per-sample arithmetic (one sin, one cos and a few multiply-adds) runs over each kind's joints with
+    the samples contiguous (numpy is slow on many short rows), then lands transposed in the outputs.
     """
-    n_moving = len(tree.moving)
-    revolute = (tree.moving_kind == REVOLUTE)[:, None]
-    pure_axis = np.concatenate([tree.moving_axis, np.zeros((n_moving, 1))], axis=-1)
-    origin_q = tree.moving_origin_q
-    origin_axis_q = quat_multiply(origin_q, pure_axis)  # (M, 4)
-    direction = np.einsum("mij,mj->mi", tree.moving_origin_R, tree.moving_axis)  # (M, 3)
+    f = _factors(tree)
+    by_joint = np.asarray(values, dtype=np.float64).T  # (M, T), a view
+    if f.n_revolute:
+        half = by_joint[f.revolute] * 0.5  # (R, T), contiguous
+        sin, cos = np.sin(half), np.cos(half)
+        part, scratch = np.empty_like(half), np.empty_like(half)
+        for k in range(4):
+            np.multiply(sin, f.axis_q[f.revolute, k, None], out=part)
+            np.multiply(cos, f.origin_q[f.revolute, k, None], out=scratch)
+            part += scratch
+            quat[:, f.revolute, k] = part.T
+        translation[:, f.revolute] = f.still_t[f.revolute]
+    if f.n_prismatic:
+        shift = by_joint[f.prismatic]  # (P, T)
+        part = np.empty_like(shift)
+        for k in range(3):
+            np.multiply(shift, f.direction[f.prismatic, k, None], out=part)
+            part += tree.moving_origin_t[f.prismatic, k, None]
+            translation[:, f.prismatic, k] = part.T
+        quat[:, f.prismatic] = f.still_q[f.prismatic]
 
-    by_joint = np.asarray(values, dtype=np.float64).T  # (M, T)
-    n_samples = by_joint.shape[1]
-    half = np.where(revolute, by_joint, 0.0)
-    half *= 0.5
-    sin, cos = np.sin(half), np.cos(half)
-    quat = np.empty((n_moving, n_samples, 4))
-    scratch = np.empty((n_moving, n_samples))
-    for k in range(4):
-        np.multiply(sin, origin_axis_q[:, k, None], out=quat[..., k])
-        np.multiply(cos, origin_q[:, k, None], out=scratch)
-        quat[..., k] += scratch
-    shift = np.where(revolute, 0.0, by_joint)
-    translation = np.empty((n_moving, n_samples, 3))
-    for k in range(3):  # prismatic: t = t_origin + R_origin · (axis · d) = t_origin + d · (R_origin · axis)
-        np.multiply(shift, direction[:, k, None], out=translation[..., k])
-        translation[..., k] += tree.moving_origin_t[:, k, None]
-    return translation.transpose(1, 0, 2), quat.transpose(1, 0, 2)
+
+@dataclass(frozen=True)
+class _Factors:
+    """Per-joint factors of :func:`write_transforms`, computed once per tree."""
+
+    revolute: slice | I64
+    prismatic: slice | I64
+    n_revolute: int
+    n_prismatic: int
+    origin_q: F64  # (M, 4)
+    axis_q: F64  # (M, 4) origin ⊗ (axis, 0)
+    direction: F64  # (M, 3) R_origin · axis
+    still_t: F64  # (M, 3) 0 · direction + t_origin: a revolute joint's translation
+    still_q: F64  # (M, 4) sin(0) · axis_q + cos(0) · origin_q: a prismatic joint's rotation
+
+
+@lru_cache(maxsize=8)
+def _factors(tree: KinematicTree) -> _Factors:
+    n_moving = len(tree.moving)
+    origin_q = tree.moving_origin_q
+    axis_q = quat_multiply(origin_q, np.concatenate([tree.moving_axis, np.zeros((n_moving, 1))], axis=-1))
+    direction = np.einsum("mij,mj->mi", tree.moving_origin_R, tree.moving_axis)
+    zero = np.zeros((n_moving, 1))
+    revolute = np.flatnonzero(tree.moving_kind == REVOLUTE)
+    prismatic = np.flatnonzero(tree.moving_kind != REVOLUTE)
+    return _Factors(
+        revolute=_as_slice(revolute),
+        prismatic=_as_slice(prismatic),
+        n_revolute=len(revolute),
+        n_prismatic=len(prismatic),
+        origin_q=origin_q,
+        axis_q=axis_q,
+        direction=direction,
+        still_t=zero * direction + tree.moving_origin_t,
+        still_q=np.sin(zero) * axis_q + np.cos(zero) * origin_q,
+    )
+
+
+def _as_slice(index: I64) -> slice | I64:
+    """A run of consecutive indices as a slice (numpy then writes through a view, not a gather)."""
+    if len(index) and index[-1] - index[0] == len(index) - 1:
+        return slice(int(index[0]), int(index[-1]) + 1)
+    return index
 
 
 def link_positions(

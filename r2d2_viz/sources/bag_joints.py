@@ -128,7 +128,8 @@ class JointStateDecoder:
                     left = left[1:]
                     continue
                 key_end = 12 + len(layout.key)
-                same = np.all(raw[left, 12:key_end] == raw[first, 12:key_end], axis=1)
+                keys = raw[:, 12:key_end] if len(left) == len(raw) else raw[left, 12:key_end]  # first pass: no gather
+                same = np.all(keys == raw[first, 12:key_end], axis=1)
                 if not layout.names:  # ROS 1 publishers that send positions only: nothing says which joint
                     bad[rows[left[same]]] = True
                     self.nameless += int(np.count_nonzero(same))
@@ -136,7 +137,8 @@ class JointStateDecoder:
                     bad[rows[left[same]]] = True
                     self.skipped += int(np.count_nonzero(same))
                 else:
-                    groups.append((layout, rows[left[same]], raw[left[same]]))
+                    whole = len(left) == len(raw) and bool(same.all())  # one layout for all: no gather
+                    groups.append((layout, rows[left[same]], raw if whole else raw[left[same]]))
                 left = left[~same]
         used = ~bad
         if not used.any():
@@ -150,12 +152,18 @@ class JointStateDecoder:
             header[rows] = stamps_ns(raw[:, STAMP].tobytes())
             keep = [i for i, name in enumerate(layout.names) if name in column]
             if keep:
-                values = raw[:, layout.positions : layout.end].copy().view("<f8")[:, keep]
+                values = raw[:, layout.positions : layout.end].copy().view("<f8")
+                if keep != list(range(values.shape[1])):
+                    values = values[:, keep]
                 nonfinite = ~np.isfinite(values)
                 if nonfinite.any():
                     self.nonfinite += int(np.count_nonzero(nonfinite.any(axis=1)))
                     values[nonfinite] = np.nan
-                positions[rows[:, None], [column[layout.names[i]] for i in keep]] = values
+                columns = [column[layout.names[i]] for i in keep]
+                if len(rows) == n and columns == list(range(len(joints))):  # every message, every joint, in order
+                    positions[...] = values
+                else:
+                    positions[rows[:, None], columns] = values
         for row, names, values, stamp_ns in singles:
             header[row] = stamp_ns
             self.nonfinite += int(not np.isfinite(values).all())

@@ -10,16 +10,18 @@ Values outside the URDF limits are shown, not clamped (like robot_state_publishe
 from __future__ import annotations
 
 import math
+from functools import cache
 
 import numpy as np
 import numpy.typing as npt
+import pyarrow as pa
 import rerun as rr
 
 from r2d2_viz.arrays import F64
 from r2d2_viz.kinematics.tree import KinematicTree
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.viewer import entities
-from r2d2_viz.viewer.columns import Encoded, encoded, send, time_array
+from r2d2_viz.viewer.columns import Encoded, encoded, list_column, send, time_array
 
 
 class JointPlots:
@@ -71,12 +73,17 @@ class JointPlots:
             )
 
     def encode(self, values: F64) -> list[tuple[str, Encoded]]:
-        """One row per sample on each plot entity."""
-        n = len(values)
-        return [
-            (entity, encoded(rr.Scalars.columns(scalars=values[:, ms].reshape(-1)).partition(np.full(n, len(ms)))))
-            for entity, ms in self.series
-        ]
+        """One row per sample on each plot entity: the row of its joints' values, as ``rr.Scalars.columns``
+        partitioned by sample builds it, from buffers (issue 38)."""
+        descriptor, list_type = _scalars_layout()
+        out: list[tuple[str, Encoded]] = []
+        for entity, ms in self.series:
+            if len(ms) == values.shape[1] and (ms == np.arange(len(ms))).all():  # every joint, in order: no gather
+                block = np.ascontiguousarray(values, dtype=np.float64)
+            else:
+                block = np.ascontiguousarray(values[:, ms], dtype=np.float64)
+            out.append((entity, [(descriptor, list_column(list_type, pa.array(block.reshape(-1)), len(ms)))]))
+        return out
 
     def log_limits(self, rec: rr.RecordingStream, time_ns: int) -> None:
         """One row on every limit line at ``time_ns``: one chunk, encoded once (a robot with a thousand limited
@@ -113,3 +120,10 @@ def _palette(n: int) -> list[tuple[int, int, int, int]]:
         r, g, b = (0.5 + 0.5 * math.cos(2 * math.pi * (h + k / 3)) for k in (0, 1, 2))
         colors.append((int(60 + 195 * r), int(60 + 195 * g), int(60 + 195 * b), 255))
     return colors
+
+
+@cache
+def _scalars_layout() -> tuple[rr.ComponentDescriptor, pa.DataType]:
+    """Rerun's descriptor and Arrow list type of a ``Scalars`` column, from its own builder."""
+    ((descriptor, array),) = encoded(rr.Scalars.columns(scalars=[0.0]))
+    return descriptor, array.type

@@ -84,6 +84,11 @@ class PreparedSamples:
     def __len__(self) -> int:
         return len(self.times_ns)
 
+    @property
+    def nbytes(self) -> int:
+        """The Arrow bytes of the columns Rerun is handed (what a batch run's backpressure counts)."""
+        return int(sum(array.nbytes for entity in self.entities for _, array in entity.columns))
+
 
 class RobotStream:
     """Logs one robot driven by one source to a recording (see the module docstring for the order of calls).
@@ -301,13 +306,8 @@ class LiveRobots:
     """The namespaced robots of a live run (see the module docstring). ``batches``: what the settle received (which
     robots there are, which frames the graph has); ``sent``: the lateness hook, told of each chunk sent."""
 
-    def __init__(
-        self,
-        scene: LiveScene,
-        batches: Sequence[LiveBatch],
-        packages: PackageIndex,
-        sent: Callable[[str, Iterable[int]], None],
-    ) -> None:
+    def __init__(self, scene: LiveScene, batches: Sequence[LiveBatch], packages: PackageIndex,
+                 sent: Callable[[str, Iterable[int]], None]) -> None:  # fmt: skip
         self.scene, self.packages, self.sent = scene, packages, sent
         self.several = bool(robot_namespaces(batches))
         self.main: set[str] = set()

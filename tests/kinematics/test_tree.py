@@ -272,3 +272,23 @@ def test_link_positions_of_every_link_match_the_full_poses(tmp_path: Path, chain
     every = list(range(len(tree.links)))
     got = link_positions(tree, translation, quat, every)
     assert np.allclose(np.stack([got[i] for i in every], axis=1), full[..., :3, 3], atol=1e-9, equal_nan=True)
+
+
+def test_written_transforms_are_the_float64_ones_cast_and_leave_the_other_rows(tmp_path: Path) -> None:
+    """``write_transforms`` into float32 rows of a wider array (the /tf columns, issue 38): the float64
+    transforms (checked against yourdfpy above) cast to float32, the rows beyond the moving joints untouched."""
+    from r2d2_viz.kinematics.tree import transforms_from_values, write_transforms
+
+    path = tmp_path / "r.urdf"
+    path.write_text(random_urdf(30, seed=4, joint_types=("fixed", "revolute", "prismatic", "continuous")))
+    tree = compile_tree(load_urdf(path))
+    q = np.random.default_rng(4).uniform(-3, 3, (40, len(tree.actuated)))
+    values = moving_values(tree, q)
+    m = len(tree.moving)
+    translation = np.full((40, m + 2, 3), 7.0, dtype=np.float32)
+    quat = np.full((40, m + 2, 4), 7.0, dtype=np.float32)
+    write_transforms(tree, values, translation, quat)
+    t64, q64 = transforms_from_values(tree, values)
+    assert np.array_equal(translation[:, :m], t64.astype(np.float32))
+    assert np.array_equal(quat[:, :m], q64.astype(np.float32))
+    assert (translation[:, m:] == 7).all() and (quat[:, m:] == 7).all()

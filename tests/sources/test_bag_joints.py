@@ -158,3 +158,24 @@ def test_robot_description_is_the_latest(tmp_path: Path) -> None:
     with open_bag(REPO / "tests/data/bags/talker_db3/talker.db3") as bag:  # a String recorded by ROS 2
         assert read_robot_description(bag) is None
         assert read_robot_description(bag, "/topic") == "Hello, world! 9"
+
+
+@pytest.mark.parametrize("publishers", ["one, every joint in order", "two of one length, names swapped"])
+def test_one_layout_for_all_and_layouts_of_one_length_read_as_rosbags_reads(tmp_path: Path, publishers: str) -> None:
+    """Issue 38: a block whose messages all share one layout with every joint in the robot's order (the 1 h
+    JointState bag's) is read without gathers; layouts of one byte length (names swapped) still apart. Values bit
+    for bit as rosbags deserialises them."""
+    rng = np.random.default_rng(3)
+    spec = BagSpec()
+    for k in range(200):
+        t = T0 + k * 10**7
+        names = ARM if publishers.startswith("one") or k % 2 else ["elbow", "shoulder", "gripper", "wrist"]
+        spec.add("/joint_states", t, joint_state(t - 10**6, names, rng.normal(size=4)))
+    path = write_bag(tmp_path / "b", spec)
+    receive, header, values = _rosbags_reference(storage_file(path))
+    with open_bag(path) as bag:
+        for max_samples in (64, 1000):
+            times, rows = _all(_pass(bag, ARM), max_samples)
+            assert times.tolist() == receive
+            assert rows == values
+            assert _all(_pass(bag, ARM, time="header"), max_samples)[0].tolist() == header

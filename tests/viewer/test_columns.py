@@ -9,7 +9,7 @@ import pyarrow as pa
 import rerun as rr
 from rrd import read_recording
 
-from r2d2_viz.viewer.columns import encoded, f32, first_of_every, send, tiled, time_array
+from r2d2_viz.viewer.columns import encoded, f32, first_of_every, list_column, send, tiled, time_array
 
 
 def test_tiled_is_texts_times_n() -> None:
@@ -53,3 +53,14 @@ def test_f32_turns_doubles_beyond_float32_into_inf_silently() -> None:
         out = f32(np.array([1e300, -1e300, 0.5, np.nan]))
     assert out.dtype == np.float32
     assert out[0] == np.inf and out[1] == -np.inf and out[2] == 0.5 and np.isnan(out[3])
+
+
+def test_list_column_is_rows_of_step_values_over_the_same_buffer() -> None:
+    """Issue 38: ``list_column`` is what ``partition`` into rows of equal length makes, without a copy."""
+    values = pa.array(np.arange(12, dtype=np.float64))
+    (expected,) = [c.as_arrow_array() for c in rr.Scalars.columns(scalars=np.arange(12.0)).partition([3, 3, 3, 3])]
+    got = list_column(expected.type, values, 3)
+    assert got.equals(expected)
+    assert got.to_pylist() == [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0], [6.0, 7.0, 8.0], [9.0, 10.0, 11.0]]
+    assert got.values.buffers()[1].address == values.buffers()[1].address  # no copy
+    assert list_column(expected.type, values).to_pylist() == [[float(k)] for k in range(12)]

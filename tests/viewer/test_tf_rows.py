@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pyarrow as pa
+import pytest
+import rerun as rr
 from fk import link_poses
 
-from r2d2_viz.kinematics.tree import compile_tree, moving_values
+from r2d2_viz.kinematics.tree import compile_tree, moving_values, transforms_from_values
 from r2d2_viz.robot.model import load_urdf
 from r2d2_viz.robot.synth import random_urdf
 from r2d2_viz.sources.base import FrameTrack
@@ -46,3 +48,42 @@ def test_rows_names_and_moving_arrows(tmp_path) -> None:
     for k in range(n):
         expected = [poses[k, index[j.child], :3, 3] for j in ends] + [t_root[k]]
         assert np.allclose(np.array(first[k]), expected, atol=1e-5)
+
+
+@pytest.mark.parametrize("root_track", [True, False])
+def test_columns_are_what_rerun_builds_from_the_float64_transforms(tmp_path, root_track: bool) -> None:
+    """The columns are built from buffers (issue 38): they must equal, descriptor and Arrow array alike, what
+    ``rr.Transform3D.columns`` builds from the float64 transforms (Rerun casts them to float32) — a revolute-only
+    tree without a root track takes the float32 path, the others the float64 one (their arrows need it)."""
+    path = tmp_path / "r.urdf"
+    types = ("fixed", "revolute", "prismatic", "continuous") if root_track else ("fixed", "revolute", "continuous")
+    path.write_text(random_urdf(20, seed=5, joint_types=types))
+    tree = compile_tree(load_urdf(path))
+    robot = tree.robot
+    edges = (("odom", robot.root), ("map", "odom")) if root_track else (("map", "odom"),)
+    rows = TfRows(tree, tracks=edges, fixed_frame="odom")
+    n = 50
+    rng = np.random.default_rng(3)
+    values = moving_values(tree, rng.uniform(-4, 4, (n, len(tree.actuated))))
+    t_track = rng.uniform(-1, 1, (n, 3))
+    t_track[7] = 1e300  # beyond float32: +inf
+    quat = rng.normal(size=(n, 4))
+    tracks = tuple(FrameTrack(p, c, t_track * (k + 1), quat) for k, (p, c) in enumerate(edges))
+    for _ in range(2):  # the frame names are reused for a second chunk of the same length
+        got = rows.encode(values, tracks)
+        translation, q = transforms_from_values(tree, values)
+        translation = np.concatenate([translation, *(t.translation[:, None] for t in tracks)], axis=1)
+        q = np.concatenate([q, *(t.quat_xyzw[:, None] for t in tracks)], axis=1)
+        with np.errstate(over="ignore"):
+            expected = rr.Transform3D.columns(
+                translation=translation.reshape(-1, 3).astype(np.float32),
+                quaternion=q.reshape(-1, 4),
+                parent_frame=rows.parents * n,
+                child_frame=rows.children * n,
+            )
+        by_descriptor = {str(d): (d, a) for d, a in got}
+        for column in expected:
+            d, a = by_descriptor[str(column.component_descriptor())]
+            assert d == column.component_descriptor()
+            assert a.equals(column.as_arrow_array()), d
+        assert np.isinf(by_descriptor["Transform3D:translation"][1].flatten().flatten().to_numpy()).any()
