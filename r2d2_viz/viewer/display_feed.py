@@ -1,9 +1,9 @@
 """Display topics into the recording, in time order, as far as a replay has got (like :class:`TfFeed` for
 recorded transforms): each message decoded (:mod:`r2d2_viz.msgs`) and logged in its TF frame at its time.
 
-An empty frame id is drawn in the fixed frame (said once per topic); a message that cannot be decoded is said once
-per topic and counted (the count is said at the end). Odometry keeps RViz's history (Keep, default 100): its poses
-go round ``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
+An empty frame id is drawn in the fixed frame (said once per topic); a message that cannot be decoded is said once per
+topic and counted (the count is said at the end). Odometry keeps RViz's history (Keep, default 100): its poses go round
+``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
 
 Cameras become Rerun ``VideoStream`` s (:class:`VideoFeed`): each raw 8-bit camera topic encoded as it is read
 (``--video``; a bag's reader thread or a live receiver: the encoders release the GIL), samples compressed already
@@ -220,8 +220,8 @@ class DisplayFeed:
         while self._pending and (time_ns is None or self._pending[0].time_ns <= time_ns):
             message = self.decode(self._pending.popleft())
             if _simple(self, message, message.decoded):
-                _count(self, message)
-                self.columns.add(message, self.cameras.get(message.topic, ()), header_time=self.header_time)
+                entity = _count(self, message)[1]
+                self.columns.add(message, entity, self.cameras.get(message.topic, ()), header_time=self.header_time)
             else:  # on its own: after what its entities' runs hold, at the time the runs left
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
                 self.log(message)
@@ -241,7 +241,7 @@ class DisplayFeed:
             return
         if message.msgtype == GRID:
             self.maps[message.topic] = bytes(message.data)
-        state = _count(self, message)
+        state, slot = _count(self, message)
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
             decoded = self.decode(message).decoded
@@ -273,10 +273,7 @@ class DisplayFeed:
         if self.header_time:
             stamp = decoded.stamp_ns if isinstance(decoded, Decoded) else _first_stamp(decoded)
             time_ns = stamp if stamp else time_ns
-        entity = message.topic
-        keep = _keep(self.styles, message.topic, message.msgtype)
-        if keep > 1 and isinstance(decoded, Decoded):
-            entity = f"{message.topic}/{(state.messages - 1) % keep}"
+        entity = slot if isinstance(decoded, Decoded) else message.topic
         images = self.cameras.get(message.topic, ())
         times = [time_ns]
         if images and state.messages == 1 and self._anchored is not None and self._anchored[0] < time_ns:
@@ -345,7 +342,7 @@ class DisplayFeed:
                 )
 
 
-def _count(feed: DisplayFeed, message: TopicMessage) -> _TopicState:
+def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[_TopicState, str]:
     state = feed.topics.setdefault(message.topic, _TopicState())
     state.markers.anchor = feed._anchored
     state.messages += 1
@@ -353,7 +350,8 @@ def _count(feed: DisplayFeed, message: TopicMessage) -> _TopicState:
     if feed._unflushed > FLUSH_BYTES:  # backpressure: big messages must not pile up ahead of the sinks
         feed.rec.flush()
         feed._unflushed = 0
-    return state
+    keep = _keep(feed.styles, message.topic, message.msgtype)  # a history: <topic>/<k>, k = the message's slot
+    return state, f"{message.topic}/{(state.messages - 1) % keep}" if keep > 1 else message.topic
 
 
 def _keep(styles: Mapping[str, DisplayStyle], topic: str, msgtype: str) -> int:
@@ -362,10 +360,9 @@ def _keep(styles: Mapping[str, DisplayStyle], topic: str, msgtype: str) -> int:
 
 
 def _simple(feed: DisplayFeed, message: TopicMessage, decoded: Decoded | list[MarkerOp] | MsgError | None) -> bool:
-    """Whether the decoded message joins its topic's run: one image or points, its topic drawn on one entity."""
-    style = feed.styles.get(message.topic) or DisplayStyle()
-    one = _keep(feed.styles, message.topic, message.msgtype) <= 1 and not style.decay and feed.video.encoder is None
-    return one and columnable(decoded, first=message.topic not in feed.topics)
+    """Whether the decoded message joins a run (:func:`columnable`): not decayed, no ``--video``."""
+    decay = (feed.styles.get(message.topic) or DisplayStyle()).decay
+    return not decay and feed.video.encoder is None and columnable(decoded, first=message.topic not in feed.topics)
 
 
 def _update_map(feed: DisplayFeed, message: TopicMessage) -> None:

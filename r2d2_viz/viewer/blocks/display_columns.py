@@ -29,7 +29,7 @@ from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.viewer.columns import Encoded, encoded, send, time_array
 from r2d2_viz.viewer.displays import Clock, image_plane, packed, set_time
 
-KINDS = (shapes.Image, shapes.CompressedImage, shapes.Points, shapes.Pinhole)
+KINDS = (shapes.Image, shapes.CompressedImage, shapes.Points, shapes.Arrows, shapes.Pinhole)
 _ONE = np.ones(1, dtype=np.int64)
 _BLOB = pa.list_(pa.field("item", pa.uint8(), nullable=False))
 
@@ -58,25 +58,29 @@ class ColumnRuns:
         self.runs: dict[str, _Run] = {}
         self.last_ns: int | None = None
 
-    def add(self, message: TopicMessage, images: tuple[str, ...] = (), *, header_time: bool = False) -> None:
-        """Add a message that can join (:func:`columnable`) to its topic's run, at its receive time or (``header_time``)
-        its header's stamp when it has one; a camera's pinhole to its ``images`` ' runs too."""
+    def add(
+        self, message: TopicMessage, entity: str, images: tuple[str, ...] = (), *, header_time: bool = False
+    ) -> None:
+        """Add a message that can join (:func:`columnable`) to the run of ``entity`` (its topic's, or a slot of its
+        history), at its receive time or (``header_time``) its header's stamp when it has one; a camera's pinhole to
+        its ``images`` ' runs too."""
         decoded = message.decoded
         assert isinstance(decoded, Decoded)
         time_ns = (decoded.stamp_ns if header_time else 0) or message.time_ns
-        for entity in (message.topic, *images):
-            run = self.runs.setdefault(entity, _Run())
+        for name in (entity, *images):
+            run = self.runs.setdefault(name, _Run())
             run.times_ns.append(time_ns)
             run.frames.append(decoded.frame_id)
             run.items.append(decoded.items[0])
         self.last_ns = time_ns
 
     def send(self, *entities: str) -> None:
-        """Send the runs of ``entities`` (every run when none is named)."""
-        for name in [e for e in entities if e in self.runs] if entities else list(self.runs):
+        """Send the runs of ``entities`` and of the entities below them (every run when none is named)."""
+        below = tuple(e + "/" for e in entities)
+        for name in [e for e in self.runs if e in entities or e.startswith(below)] if entities else list(self.runs):
             run = self.runs.pop(name)
             times_ns = np.array(run.times_ns, dtype=np.int64)
-            for kind, build in ((shapes.Points, _points), (shapes.Pinhole, _pinholes)):
+            for kind, build in ((shapes.Points, _points), (shapes.Arrows, _arrows), (shapes.Pinhole, _pinholes)):
                 rows = [i for i, item in enumerate(run.items) if isinstance(item, kind)]
                 if rows:
                     columns = build(name, [run.items[i] for i in rows], [run.frames[i] for i in rows])
@@ -163,13 +167,9 @@ def _points(entity: str, items: list[Shape], frames: list[str]) -> Encoded:
     message; a radius each) and ``InstancePoses3D`` (one pose each), a row per message. Built as Arrow arrays of
     Rerun's types from numpy (Rerun's ``columns()`` converters cost more than the arrays)."""
     points = [i for i in items if isinstance(i, shapes.Points)]
-    n = len(points)
+    ones = np.ones(len(points), dtype=np.int64)
     colors = [packed(p.colors) for p in points]
     positions = np.concatenate([p.positions for p in points]) if points else np.zeros((0, 3), np.float32)
-    poses = [p.T_frame_item for p in points]
-    translations = np.array([p.translation for p in poses], dtype=np.float32).reshape(-1, 3)
-    quaternions = np.array([p.xyzw for p in poses], dtype=np.float32).reshape(-1, 4)
-    ones = np.ones(n, dtype=np.int64)
     return [
         (rr.CoordinateFrame.descriptor_frame(), _lists(pa.array(frames, type=pa.utf8()), ones)),
         (rr.Points3D.descriptor_positions(), _lists(_vectors(positions, 3), [len(p.positions) for p in points])),
@@ -178,6 +178,40 @@ def _points(entity: str, items: list[Shape], frames: list[str]) -> Encoded:
             _lists(pa.array(np.concatenate(colors), pa.uint32()), [len(c) for c in colors]),
         ),
         (rr.Points3D.descriptor_radii(), _lists(pa.array(np.array([p.radius for p in points], np.float32)), ones)),
+        *_poses([p.T_frame_item for p in points]),
+    ]
+
+
+def _arrows(entity: str, items: list[Shape], frames: list[str]) -> Encoded:
+    """A run of ``Arrows`` as columns: ``CoordinateFrame``, ``Arrows3D`` (origins, vectors and colours partitioned per
+    message; a radius each) and ``InstancePoses3D`` (one pose each), a row per message."""
+    arrows = [i for i in items if isinstance(i, shapes.Arrows)]
+    ones = np.ones(len(arrows), dtype=np.int64)
+    lengths = [len(a.origins) for a in arrows]
+    colors = [packed(a.colors) for a in arrows]
+    return [
+        (rr.CoordinateFrame.descriptor_frame(), _lists(pa.array(frames, type=pa.utf8()), ones)),
+        (rr.Arrows3D.descriptor_vectors(), _lists(_vectors(_stacked([a.vectors for a in arrows]), 3), lengths)),
+        (rr.Arrows3D.descriptor_origins(), _lists(_vectors(_stacked([a.origins for a in arrows]), 3), lengths)),
+        (rr.Arrows3D.descriptor_radii(), _lists(pa.array(np.array([a.radius for a in arrows], np.float32)), ones)),
+        (
+            rr.Arrows3D.descriptor_colors(),
+            _lists(pa.array(np.concatenate(colors), pa.uint32()), [len(c) for c in colors]),
+        ),
+        *_poses([a.T_frame_item for a in arrows]),
+    ]
+
+
+def _stacked(parts: list[np.ndarray]) -> np.ndarray:
+    return np.concatenate([np.asarray(p, dtype=np.float32).reshape(-1, 3) for p in parts])
+
+
+def _poses(poses: list[shapes.Pose]) -> Encoded:
+    """``InstancePoses3D``: one pose (translation, ``xyzw``) a row."""
+    ones = np.ones(len(poses), dtype=np.int64)
+    translations = np.array([p.translation for p in poses], dtype=np.float32).reshape(-1, 3)
+    quaternions = np.array([p.xyzw for p in poses], dtype=np.float32).reshape(-1, 4)
+    return [
         (rr.InstancePoses3D.descriptor_translations(), _lists(_vectors(translations, 3), ones)),
         (rr.InstancePoses3D.descriptor_quaternions(), _lists(_vectors(quaternions, 4), ones)),
     ]

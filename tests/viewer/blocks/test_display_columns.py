@@ -34,7 +34,13 @@ def _messages() -> list[tuple[str, Decoded]]:
         ("/cam/image", Decoded("cam2", 0, (shapes.Image(RGB[::-1], "BGR", "bgr8"),))),  # a strided view
         ("/cam/info", Decoded("cam", 0, (shapes.Pinhole(K, 640, 480),))),
         ("/cloud", Decoded("lidar", 0, (shapes.Points(np.full((2, 3), 7, np.float32), _rgba(2), 0.02),))),
+        ("/odom/7", Decoded("odom", 0, (shapes.Arrows(_xyz(1, 0), _xyz(1, 1), _rgba(1), 0.01, turned),))),  # a slot
+        ("/odom/8", Decoded("odom", 0, (shapes.Arrows(_xyz(2, 5), _xyz(2, 6), _rgba(2), 0.02),))),
     ]
+
+
+def _xyz(n: int, at: float) -> np.ndarray:
+    return np.arange(n * 3, dtype=np.float32).reshape(n, 3) + at
 
 
 def _rgba(n: int) -> np.ndarray:
@@ -52,7 +58,7 @@ def _record(path: Path, columns: bool) -> None:
         time_ns = (i + 1) * S
         assert columnable(decoded)
         if columns:
-            runs.add(TopicMessage(time_ns, topic, "", b"", decoded=decoded), CAMERA.get(topic, ()))
+            runs.add(TopicMessage(time_ns, topic, "", b"", decoded=decoded), topic, CAMERA.get(topic, ()))
             continue
         for entity in (topic, *CAMERA.get(topic, ())):
             log_decoded(rec, entity, decoded, timeline="time", time_ns=time_ns, clock="timestamp")
@@ -78,6 +84,7 @@ def test_a_run_sent_as_columns_is_what_logging_each_message_gives(tmp_path: Path
     cloud = runs["/cloud"]
     assert [len(p) for p in cloud.temporal["Points3D:positions"]] == [3, 0, 2]
     assert cloud.temporal["InstancePoses3D:quaternions"][1] == [[0.0, 0.0, 0.6000000238418579, 0.800000011920929]]
+    assert runs["/odom/8"].temporal["Arrows3D:origins"] == [[[5, 6, 7], [8, 9, 10]]]
     # the pinhole on the camera's image entities too, each naming its own image plane
     assert runs["/cam/image"].temporal["Pinhole:child_frame"][2] == ["/cam/image#image"]
 
