@@ -26,19 +26,57 @@ _CONSTANT = [np.array([row[c][0] for row in _SEXTANTS]) for c in range(3)]
 _SLOPE = [np.array([row[c][1] for row in _SEXTANTS]) for c in range(3)]
 
 
-def rainbow(value: F32) -> U8:
-    """RViz's ``getRainbowColor`` (HSV hue 0..5/6) of ``value`` clipped to [0, 1] (NaN reads as 0): RGBA8."""
-    v = np.clip(np.nan_to_num(np.asarray(value, dtype=np.float64), nan=0.0), 0.0, 1.0)
+def _rainbow_float(v: np.ndarray) -> np.ndarray:
+    """``getRainbowColor`` computed in doubles for values in [0, 1]: RGB levels ``(n, 3)`` (what the table holds)."""
     h = v * 5.0 + 1.0
     i = np.floor(h).astype(np.int64)
     f = h - i
     n = np.where(i % 2 == 0, f, 1.0 - f)  # 1 - f on even sextants, as getRainbowColor flips f there
     # each channel is one of n, 0 or 1 per sextant i (1..6): constant + slope * n, looked up (no np.select)
-    r, g, b = (_CONSTANT[c][i] + _SLOPE[c][i] * n for c in range(3))
-    out = np.empty((v.shape[0], 4), dtype=np.uint8)
-    out[:, 0], out[:, 1], out[:, 2] = (np.round(c * 255) for c in (r, g, b))
-    out[:, 3] = 255
-    return out
+    return np.stack([np.round((_CONSTANT[c][i] + _SLOPE[c][i] * n) * 255) for c in range(3)], axis=1)
+
+
+def _rainbow_table() -> tuple[F32, np.ndarray]:
+    """The rainbow as a step function of a float32 value: the sorted float32 values where the colour changes, and
+    the colour (RGBA8 packed in a native ``uint32``, bytes in R, G, B, A order) below the first and from each.
+
+    Each channel's level changes where ``255 n`` crosses ``k + 1/2`` (and at the sextants' edges): the exact float32
+    value of each change is found among the 33 floats around where it falls in exact arithmetic (doubles err by
+    far less). The colour is monotone in the value between changes, so the table is exact for every float32."""
+    k = np.arange(255) + 0.5
+    near = [((s + k / 255) / 5) for s in range(5)] + [np.arange(1, 5) / 5]
+    centres = np.concatenate(near).astype(np.float32).view(np.int32)
+    floats = (centres[:, None] + np.arange(-16, 17, dtype=np.int32)).view(np.float32)
+    floats = np.unique(np.clip(floats, 0.0, 1.0))
+    levels = _rainbow_float(floats.astype(np.float64))
+    changes = np.flatnonzero((levels[1:] != levels[:-1]).any(axis=1)) + 1
+    bounds = floats[changes]
+    rgb = np.concatenate([levels[:1], levels[changes]]).astype(np.uint8)
+    rgba = np.concatenate([rgb, np.full((len(rgb), 1), 255, np.uint8)], axis=1)
+    return bounds.astype(np.float32), np.ascontiguousarray(rgba).view(np.uint32).ravel()
+
+
+_BOUNDS, _COLORS = _rainbow_table()
+_CELLS = 8192
+"""[0, 1] cut in this many cells (a power of two: ``v * _CELLS`` is exact), each holding one change at most."""
+_FIRST = np.searchsorted(_BOUNDS, np.arange(_CELLS + 1, dtype=np.float32) / _CELLS, side="right")
+"""Per cell, the colour at its start (an index into ``_COLORS``); the last cell is 1.0 itself."""
+_NEXT = np.append(_BOUNDS, np.float32(np.inf))[_FIRST]
+"""Per cell, the change that may fall in it (inf when none: the last)."""
+assert (np.diff(_FIRST) <= 1).all(), "a cell holds two changes"
+
+
+def rainbow(value: F32) -> U8:
+    """RViz's ``getRainbowColor`` (HSV hue 0..5/6) of ``value`` clipped to [0, 1] (NaN reads as 0): RGBA8.
+
+    Looked up (:func:`_rainbow_table`): the colour of the value's cell, or of the change in that cell when the
+    value is past it — what doubles give for the float32 value, to the level."""
+    v = np.asarray(value, dtype=np.float32)
+    v = np.fmin(np.fmax(v, np.float32(0.0)), np.float32(1.0))  # fmax: NaN → 0
+    cell = (v * np.float32(_CELLS)).astype(np.intp)
+    index = _FIRST[cell] + (v >= _NEXT[cell])
+    colors: U8 = _COLORS[index].view(np.uint8).reshape(-1, 4)
+    return colors
 
 
 def intensity_colors(values: F32) -> U8:

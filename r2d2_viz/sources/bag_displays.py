@@ -5,7 +5,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 from r2d2_viz.msgs.registry import DECODERS, decode, in_3d
@@ -47,6 +47,23 @@ def display_topics(bag: Bag) -> tuple[dict[str, str], dict[str, str]]:
             continue  # a robot's description (any namespace's) is its model, not a String to show
         (shown if info.msgtype in DECODERS or info.msgtype == GRID_UPDATE else other)[topic] = info.msgtype
     return shown, other
+
+
+IMAGES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
+
+
+def camera_images(topics: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
+    """Each CameraInfo topic's image topics: those under its namespace (``/cam/camera_info`` →
+    ``/cam/image_raw``, ``/cam/image_raw/compressed``), as RViz's Camera display pairs them."""
+    out = {}
+    for info, msgtype in topics.items():
+        if msgtype != "sensor_msgs/msg/CameraInfo":
+            continue
+        namespace = info.rsplit("/", 1)[0] + "/"
+        images = tuple(t for t, m in sorted(topics.items()) if m in IMAGES and t.startswith(namespace))
+        if images:
+            out[info] = images
+    return out
 
 
 def frames_of(messages: Iterable[TopicMessage]) -> set[str]:

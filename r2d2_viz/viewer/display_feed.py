@@ -1,9 +1,9 @@
 """Display topics into the recording, in time order, as far as a replay has got (like :class:`TfFeed` for
 recorded transforms): each message decoded (:mod:`r2d2_viz.msgs`) and logged in its TF frame at its time.
 
-An empty frame id is drawn in the fixed frame (said once per topic); a message that cannot be decoded is said once
-per topic and counted (the count is said at the end). Odometry keeps RViz's history (Keep, default 100): its poses
-go round ``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
+An empty frame id is drawn in the fixed frame (said once per topic); a message that cannot be decoded is said once per
+topic and counted (the count is said at the end). Odometry keeps RViz's history (Keep, default 100): its poses go round
+``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
 
 Cameras become Rerun ``VideoStream`` s (:class:`VideoFeed`): each raw 8-bit camera topic encoded as it is read
 (``--video``; a bag's reader thread or a live receiver: the encoders release the GIL), samples compressed already
@@ -37,8 +37,9 @@ from r2d2_viz.msgs.shapes import (
     is_plain,
 )
 from r2d2_viz.msgs.typestore import MsgError
-from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage
+from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_images
 from r2d2_viz.sources.base import Clock, TfRecords
+from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
 from r2d2_viz.viewer.decay import FixedFramePlacer
 from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, PlainBook, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
@@ -182,6 +183,7 @@ class DisplayFeed:
         self._placer = FixedFramePlacer(tf, fixed_frame) if decayed else None
         self.on_map: Callable[[str, GridMap], object] | None = None
         """Called with each map drawn and its frame (the tools' ground grows to cover it)."""
+        self.columns = ColumnRuns(self.rec, timeline, clock)  # images, points: sent as columns by until()
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -190,8 +192,7 @@ class DisplayFeed:
         set_time(self.rec, self.timeline, time_ns, self.clock)
         self._anchored = (time_ns, self.fixed_frame)  # markers' entities too, from their first message
         for topic, msgtype in topics.items():
-            style = self.styles.get(topic) or DisplayStyle()
-            keep = style.keep if style.keep is not None else KEEP.get(msgtype, 1)
+            keep = _keep(self.styles, topic, msgtype)
             for entity in [f"{topic}/{k}" for k in range(keep)] if keep > 1 else [topic]:
                 self.rec.log(entity, rr.CoordinateFrame(self.fixed_frame))
 
@@ -217,8 +218,15 @@ class DisplayFeed:
         """Log the pending messages received up to ``time_ns`` (inclusive; all when None); how many."""
         logged = 0
         while self._pending and (time_ns is None or self._pending[0].time_ns <= time_ns):
-            self.log(self._pending.popleft())
+            message = self.decode(self._pending.popleft())
+            if _simple(self, message, message.decoded):
+                entity = _count(self, message)[1]
+                self.columns.add(message, entity, self.cameras.get(message.topic, ()), header_time=self.header_time)
+            else:  # on its own: after what its entities' runs hold, at the time the runs left
+                self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
+                self.log(message)
             logged += 1
+        self.columns.interrupt()
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
             if state.markers.live:
                 expire_markers(
@@ -233,13 +241,7 @@ class DisplayFeed:
             return
         if message.msgtype == GRID:
             self.maps[message.topic] = bytes(message.data)
-        state = self.topics.setdefault(message.topic, _TopicState())
-        state.markers.anchor = self._anchored
-        state.messages += 1
-        self._unflushed += len(message.data)
-        if self._unflushed > FLUSH_BYTES:  # backpressure: big messages must not pile up ahead of the sinks
-            self.rec.flush()
-            self._unflushed = 0
+        state, slot = _count(self, message)
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
             decoded = self.decode(message).decoded
@@ -271,10 +273,7 @@ class DisplayFeed:
         if self.header_time:
             stamp = decoded.stamp_ns if isinstance(decoded, Decoded) else _first_stamp(decoded)
             time_ns = stamp if stamp else time_ns
-        entity = message.topic
-        keep = style.keep if style.keep is not None else KEEP.get(message.msgtype, 1)
-        if keep > 1 and isinstance(decoded, Decoded):
-            entity = f"{message.topic}/{(state.messages - 1) % keep}"
+        entity = slot if isinstance(decoded, Decoded) else message.topic
         images = self.cameras.get(message.topic, ())
         times = [time_ns]
         if images and state.messages == 1 and self._anchored is not None and self._anchored[0] < time_ns:
@@ -307,7 +306,7 @@ class DisplayFeed:
         except MsgError as exc:
             decoded = exc
         prepared = None
-        if isinstance(decoded, Decoded) and decoded.frame_id and not _meshes(decoded):
+        if isinstance(decoded, Decoded) and _ahead(self, message, decoded):
             prepared = prepare(decoded)  # the archetypes too, off the logging thread
         return dataclasses.replace(message, decoded=decoded, prepared=prepared)
 
@@ -343,6 +342,29 @@ class DisplayFeed:
                 )
 
 
+def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[_TopicState, str]:
+    state = feed.topics.setdefault(message.topic, _TopicState())
+    state.markers.anchor = feed._anchored
+    state.messages += 1
+    feed._unflushed += len(message.data)
+    if feed._unflushed > FLUSH_BYTES:  # backpressure: big messages must not pile up ahead of the sinks
+        feed.rec.flush()
+        feed._unflushed = 0
+    keep = _keep(feed.styles, message.topic, message.msgtype)  # a history: <topic>/<k>, k = the message's slot
+    return state, f"{message.topic}/{(state.messages - 1) % keep}" if keep > 1 else message.topic
+
+
+def _keep(styles: Mapping[str, DisplayStyle], topic: str, msgtype: str) -> int:
+    style = styles.get(topic) or DisplayStyle()
+    return style.keep if style.keep is not None else KEEP.get(msgtype, 1)
+
+
+def _simple(feed: DisplayFeed, message: TopicMessage, decoded: Decoded | list[MarkerOp] | MsgError | None) -> bool:
+    """Whether the decoded message joins a run (:func:`columnable`): not decayed, no ``--video``."""
+    decay = (feed.styles.get(message.topic) or DisplayStyle()).decay
+    return not decay and feed.video.encoder is None and columnable(decoded, first=message.topic not in feed.topics)
+
+
 def _update_map(feed: DisplayFeed, message: TopicMessage) -> None:
     """An OccupancyGridUpdate applied to the latest map of the topic it updates, as RViz's Map display does
     (``/costmap_updates`` updates ``/costmap``); the map is drawn again."""
@@ -365,26 +387,10 @@ def _update_map(feed: DisplayFeed, message: TopicMessage) -> None:
     feed.log(TopicMessage(message.time_ns, topic, GRID, updated))
 
 
-IMAGES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
-
-
-def camera_images(topics: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
-    """Each CameraInfo topic's image topics: those under its namespace (``/cam/camera_info`` →
-    ``/cam/image_raw``, ``/cam/image_raw/compressed``), as RViz's Camera display pairs them."""
-    out = {}
-    for info, msgtype in topics.items():
-        if msgtype != "sensor_msgs/msg/CameraInfo":
-            continue
-        namespace = info.rsplit("/", 1)[0] + "/"
-        images = tuple(t for t, m in sorted(topics.items()) if m in IMAGES and t.startswith(namespace))
-        if images:
-            out[info] = images
-    return out
-
-
-def _meshes(decoded: Decoded) -> bool:
-    """Whether it draws mesh files (loaded through the package resolver when logged, not ahead)."""
-    return any(isinstance(item, MeshResource) for item in decoded.items)
+def _ahead(feed: DisplayFeed, message: TopicMessage, decoded: Decoded) -> bool:
+    """Whether its archetypes are built ahead: in a frame, no mesh files (loaded when logged), not columns."""
+    meshes = any(isinstance(item, MeshResource) for item in decoded.items)
+    return bool(decoded.frame_id) and not meshes and not _simple(feed, message, decoded)
 
 
 def _first_stamp(ops: list[MarkerOp]) -> int:

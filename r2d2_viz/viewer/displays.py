@@ -99,7 +99,7 @@ def _mesh(item: shapes.MeshResource, load: MeshLoader | None) -> list[rr.AsCompo
     ]
 
 
-def _packed(colors: np.ndarray) -> np.ndarray:
+def packed(colors: np.ndarray) -> np.ndarray:
     """RGBA8 rows ``(n, 4)`` as ``0xRRGGBBAA`` uint32, what Rerun stores (it would convert them itself, slower)."""
     if colors.dtype != np.uint8 or colors.ndim != 2 or colors.shape[1] != 4:
         return colors
@@ -110,7 +110,7 @@ def _packed(colors: np.ndarray) -> np.ndarray:
 def archetypes(item: shapes.Shape, load: MeshLoader | None = None) -> list[rr.AsComponents]:
     """The Rerun archetypes drawing one shape (without its ``CoordinateFrame``)."""
     if isinstance(item, shapes.Points):
-        points = rr.Points3D(item.positions, colors=_packed(item.colors), radii=item.radius)
+        points = rr.Points3D(item.positions, colors=packed(item.colors), radii=item.radius)
         return [points, instance_pose(item.T_frame_item)]
     if isinstance(item, shapes.LineStrips):
         radii = item.radius if item.radius > 0 else None

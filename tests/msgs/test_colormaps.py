@@ -17,6 +17,19 @@ def test_rainbow_matches_the_transcribed_cpp() -> None:
     assert rainbow(np.array([0.0, 0.5, 1.0], np.float32))[:, :3].tolist() == [[255, 0, 255], [0, 255, 128], [255, 0, 0]]
 
 
+def test_rainbow_table_matches_the_transcribed_cpp_at_every_step() -> None:
+    # the rainbow is a table lookup (issue 38: it was computed in doubles per point): every level step of every
+    # channel, where 255 n crosses k + 1/2 in each sextant, and each sextant's edge, with the float32 values just
+    # around it (a wrong step shows as a colour one level off on one side of it)
+    k = np.arange(255) + 0.5
+    centres = np.concatenate([(s + k / 255) / 5 for s in range(5)] + [np.arange(6) / 5]).astype(np.float32)
+    values = (centres.view(np.int32)[:, None] + np.arange(-3, 4, dtype=np.int32)).view(np.float32).ravel()
+    values = np.concatenate([values, np.array([np.nan, -np.inf, np.inf, -0.0, 7.0], np.float32)])
+    got = [tuple(c[:3]) for c in rainbow(values).tolist()]
+    want = [rviz_rainbow(0.0 if np.isnan(v) else float(v)) for v in values]  # NaN reads as 0
+    assert got == want
+
+
 def test_intensity_equal_bounds_and_nan() -> None:
     # equal bounds: RViz divides by 1e20, value 1 for everyone → red
     assert intensity_colors(np.array([5.0, 5.0], np.float32))[:, :3].tolist() == [[255, 0, 0]] * 2

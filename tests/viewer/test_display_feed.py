@@ -116,6 +116,15 @@ def test_the_feed_pulls_messages_up_to_a_time_and_odometry_goes_round_its_keep()
         messages = [TopicMessage(t, "/odom", "nav_msgs/msg/Odometry", odometry(1, float(t))) for t in (1, 2, 3, 4)]
         feed = DisplayFeed(_Notices(), clock="timestamp", fixed_frame="odom")  # type: ignore[arg-type]
         feed.styles["/odom"] = feed_module.DisplayStyle(keep=2)
+
+        class _Runs:  # a pose is one arrow: it goes out as columns (viewer/blocks), on its slot's entity
+            def add(self, message: TopicMessage, entity: str, *args: object, **kwargs: object) -> None:
+                sent.append((entity, message.time_ns))
+
+            def interrupt(self, *entities: str) -> None:
+                pass
+
+        feed.columns = _Runs()  # type: ignore[assignment]
         assert feed.next_time_ns is None and feed.until(None) == 0  # nothing read yet
         feed.push(messages[:3])  # one stretch of the replay
         assert feed.next_time_ns == 1

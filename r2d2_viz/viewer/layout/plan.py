@@ -20,12 +20,12 @@ from r2d2_viz.msgs.shapes import Decoded, DecodeOptions
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, TopicDisplay, ViewSpec, missing_fixed_frame, orbit_eye
-from r2d2_viz.sources.bag_displays import frames_of
+from r2d2_viz.sources.bag_displays import IMAGES, camera_images, frames_of
 from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords, reachable
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
-from r2d2_viz.viewer.display_feed import IMAGES, DisplayStyle, camera_images
+from r2d2_viz.viewer.display_feed import DisplayStyle
 from r2d2_viz.viewer.layout.blueprint import Layout, robot_display
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
 

@@ -1,0 +1,2 @@
+"""Display messages logged per block as columns: a run of one topic's images or points goes to Rerun in one
+``send_columns`` per entity, with the components :mod:`r2d2_viz.viewer.displays` logs per message."""

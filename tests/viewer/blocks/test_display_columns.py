@@ -1,0 +1,98 @@
+"""Runs of images, points and pinholes sent as columns (issue 38: logged one ``rec.log`` per message, their
+archetypes built per message, they cost more than reading the bag): read back with Rerun's reader, every row is
+what the per-message path (:func:`r2d2_viz.viewer.displays.log_decoded`) logs, and the pixels are the message's
+own bytes (written by hand below)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+from rrd import read_recording
+
+from r2d2_viz.msgs import shapes
+from r2d2_viz.msgs.shapes import Decoded, Pose
+from r2d2_viz.sources.bag_displays import TopicMessage
+from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
+from r2d2_viz.viewer.displays import log_decoded
+
+S = 1_000_000_000
+RGB = np.arange(2 * 3 * 3, dtype=np.uint8).reshape(2, 3, 3)  # 2 rows of 3 pixels, bytes 0..17
+MONO16 = np.array([[1, 2], [0x0102, 0xFFFF]], dtype=np.uint16)
+K = np.array([[500.0, 0, 320], [0, 505, 240], [0, 0, 1]])
+
+
+def _messages() -> list[tuple[str, Decoded]]:
+    turned = Pose((1.0, 2.0, 3.0), (0.0, 0.0, 0.6, 0.8))
+    return [
+        ("/cam/image", Decoded("cam", 0, (shapes.Image(RGB, "RGB", "rgb8"),))),
+        ("/depth", Decoded("cam", 0, (shapes.Image(MONO16, "L", "16UC1"),))),
+        ("/cam/image/compressed", Decoded("cam", 0, (shapes.CompressedImage(b"\xff\xd8jpeg", "image/jpeg"),))),
+        ("/cloud", Decoded("lidar", 0, (shapes.Points(np.ones((3, 3), np.float32), _rgba(3), 0.02),))),
+        ("/cloud", Decoded("lidar", 0, (shapes.Points(np.zeros((0, 3), np.float32), _rgba(1), 0.05, turned),))),
+        ("/cam/image", Decoded("cam2", 0, (shapes.Image(RGB[::-1], "BGR", "bgr8"),))),  # a strided view
+        ("/cam/info", Decoded("cam", 0, (shapes.Pinhole(K, 640, 480),))),
+        ("/cloud", Decoded("lidar", 0, (shapes.Points(np.full((2, 3), 7, np.float32), _rgba(2), 0.02),))),
+        ("/odom/7", Decoded("odom", 0, (shapes.Arrows(_xyz(1, 0), _xyz(1, 1), _rgba(1), 0.01, turned),))),  # a slot
+        ("/odom/8", Decoded("odom", 0, (shapes.Arrows(_xyz(2, 5), _xyz(2, 6), _rgba(2), 0.02),))),
+    ]
+
+
+def _xyz(n: int, at: float) -> np.ndarray:
+    return np.arange(n * 3, dtype=np.float32).reshape(n, 3) + at
+
+
+def _rgba(n: int) -> np.ndarray:
+    return (np.arange(n * 4, dtype=np.uint8).reshape(n, 4) * 13).astype(np.uint8)
+
+
+CAMERA = {"/cam/info": ("/cam/image", "/cam/image/compressed")}
+
+
+def _record(path: Path, columns: bool) -> None:
+    rec = rr.RecordingStream("test_display_columns")
+    rec.save(path)
+    runs = ColumnRuns(rec, "time", "timestamp")
+    for i, (topic, decoded) in enumerate(_messages()):
+        time_ns = (i + 1) * S
+        assert columnable(decoded)
+        if columns:
+            runs.add(TopicMessage(time_ns, topic, "", b"", decoded=decoded), topic, CAMERA.get(topic, ()))
+            continue
+        for entity in (topic, *CAMERA.get(topic, ())):
+            log_decoded(rec, entity, decoded, timeline="time", time_ns=time_ns, clock="timestamp")
+    runs.send()
+    rec.flush()
+    rec.disconnect()
+
+
+def test_a_run_sent_as_columns_is_what_logging_each_message_gives(tmp_path: Path) -> None:
+    _record(tmp_path / "each.rrd", columns=False)
+    _record(tmp_path / "runs.rrd", columns=True)
+    each, runs = read_recording(tmp_path / "each.rrd"), read_recording(tmp_path / "runs.rrd")
+    assert set(runs) - {"/__properties"} == set(each) - {"/__properties"}
+    for entity in set(each) - {"/__properties"}:
+        assert runs[entity].times == each[entity].times, entity
+        assert dict(runs[entity].temporal) == dict(each[entity].temporal), entity
+    image = runs["/cam/image"]
+    # the pixels as the message held them, row by row (by hand: bytes 0..17; the second one's rows swapped)
+    buffers = [b for b in image.temporal["Image:buffer"] if b is not None]
+    assert buffers == [[list(range(18))], [[*range(9, 18), *range(9)]]]
+    depth = runs["/depth"].temporal["Image:buffer"][0][0]
+    assert depth == list(MONO16.astype("<u2").tobytes())  # little-endian words: 01 00 02 00 02 01 ff ff
+    cloud = runs["/cloud"]
+    assert [len(p) for p in cloud.temporal["Points3D:positions"]] == [3, 0, 2]
+    assert cloud.temporal["InstancePoses3D:quaternions"][1] == [[0.0, 0.0, 0.6000000238418579, 0.800000011920929]]
+    assert runs["/odom/8"].temporal["Arrows3D:origins"] == [[[5, 6, 7], [8, 9, 10]]]
+    # the pinhole on the camera's image entities too, each naming its own image plane
+    assert runs["/cam/image"].temporal["Pinhole:child_frame"][2] == ["/cam/image#image"]
+
+
+def test_what_cannot_join_a_run() -> None:
+    pinhole = Decoded("cam", 0, (shapes.Pinhole(K, 640, 480),))
+    assert columnable(pinhole) and not columnable(pinhole, first=True)  # a camera's first: from the run's start
+    assert not columnable(Decoded("", 0, (shapes.Image(RGB, "RGB", "rgb8"),)))  # no frame: said, then the fixed one
+    two = (shapes.Image(RGB, "RGB", "rgb8"), shapes.Image(RGB, "RGB", "rgb8"))
+    assert not columnable(Decoded("cam", 0, two))
+    assert not columnable(Decoded("map", 0, (shapes.Text("hi", (0.0, 0.0, 0.0), 0.1, (1, 1, 1, 1)),)))
