@@ -8,13 +8,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 import rerun as rr
 from rrd import read_recording
 
 from r2d2_viz.msgs import shapes
 from r2d2_viz.msgs.shapes import Decoded, Pose
 from r2d2_viz.sources.bag_displays import TopicMessage
-from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
+from r2d2_viz.viewer.blocks.display_columns import RUN_BYTES, ColumnRuns, columnable
 from r2d2_viz.viewer.displays import log_decoded
 
 S = 1_000_000_000
@@ -50,7 +51,9 @@ def _rgba(n: int) -> np.ndarray:
 CAMERA = {"/cam/info": ("/cam/image", "/cam/image/compressed")}
 
 
-def _record(path: Path, columns: bool) -> None:
+def _record(path: Path, columns: bool, data: bytes = b"", sent: list[int] | None = None) -> None:
+    """Every message logged one by one, or (``columns``) added to runs, each with ``data`` as its bytes; ``sent``:
+    after each message, how many runs are held (sent ones are gone)."""
     rec = rr.RecordingStream("test_display_columns")
     rec.save(path)
     runs = ColumnRuns(rec, "time", "timestamp")
@@ -58,7 +61,9 @@ def _record(path: Path, columns: bool) -> None:
         time_ns = (i + 1) * S
         assert columnable(decoded)
         if columns:
-            runs.add(TopicMessage(time_ns, topic, "", b"", decoded=decoded), topic, CAMERA.get(topic, ()))
+            runs.add(TopicMessage(time_ns, topic, "", data, decoded=decoded), topic, CAMERA.get(topic, ()))
+            if sent is not None:
+                sent.append(len(runs.runs))
             continue
         for entity in (topic, *CAMERA.get(topic, ())):
             log_decoded(rec, entity, decoded, timeline="time", time_ns=time_ns, clock="timestamp")
@@ -67,9 +72,15 @@ def _record(path: Path, columns: bool) -> None:
     rec.disconnect()
 
 
-def test_a_run_sent_as_columns_is_what_logging_each_message_gives(tmp_path: Path) -> None:
+@pytest.mark.parametrize("held", ["whole", "bounded"])
+def test_a_run_sent_as_columns_is_what_logging_each_message_gives(tmp_path: Path, held: str) -> None:
     _record(tmp_path / "each.rrd", columns=False)
-    _record(tmp_path / "runs.rrd", columns=True)
+    held_runs: list[int] = []
+    # bounded: each message's bytes are a run's limit (RUN_BYTES), so every run goes out as soon as a message joins
+    # it (a window's scans in one run raised a --topics run's peak by ~60 MB); the recording must not change
+    data = b"\0" * (RUN_BYTES if held == "bounded" else 1)
+    _record(tmp_path / "runs.rrd", columns=True, data=data, sent=held_runs)
+    assert held_runs == ([0] * 10 if held == "bounded" else [1, 2, 3, 4, 4, 4, 5, 5, 6, 7])
     each, runs = read_recording(tmp_path / "each.rrd"), read_recording(tmp_path / "runs.rrd")
     assert set(runs) - {"/__properties"} == set(each) - {"/__properties"}
     for entity in set(each) - {"/__properties"}:
