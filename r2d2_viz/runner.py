@@ -1,7 +1,6 @@
 """One run of the app: model → source → kinematics → stream, batch or paced to the wall clock.
 
-No rerun import here: :mod:`r2d2_viz.viewer.sinks` opens and closes the recording, :mod:`r2d2_viz.viewer` writes it.
-"""
+No rerun import here: :mod:`r2d2_viz.viewer.sinks` opens and closes the recording, :mod:`r2d2_viz.viewer` writes it."""
 
 from __future__ import annotations
 
@@ -240,6 +239,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                     else None,
                     tf=[r for r in (plan.static_tf, plan.moving_tf) if r is not None],
                     video=VideoFeed(config.video, live=config.live),
+                    hold=not config.live,  # runs of display columns kept across windows (fewer, bigger chunks)
                     load_mesh=uri_loader(_packages(config), config.bag.parent if config.bag else Path(".")),
                 )
                 displays.on_map = tools.drawing.cover if tools and tools.drawing else None  # the ground: over maps

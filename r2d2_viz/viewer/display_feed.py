@@ -162,6 +162,7 @@ class DisplayFeed:
         start_ns: int | None = None,
         tf: Sequence[TfRecords] = (),
         video: VideoFeed | None = None,
+        hold: bool = False,
     ) -> None:
         self.notices, self.rec = notices, notices.rec
         self.video = video or VideoFeed(None)
@@ -183,7 +184,7 @@ class DisplayFeed:
         self._placer = FixedFramePlacer(tf, fixed_frame) if decayed else None
         self.on_map: Callable[[str, GridMap], object] | None = None
         """Called with each map drawn and its frame (the tools' ground grows to cover it)."""
-        self.columns = ColumnRuns(self.rec, timeline, clock)  # images, points: sent as columns by until()
+        self.columns = ColumnRuns(self.rec, timeline, clock, hold=hold)  # images, points: columns (until())
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -226,7 +227,7 @@ class DisplayFeed:
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
                 self.log(message)
             logged += 1
-        self.columns.interrupt()
+        self.columns.interrupt(everything=time_ns is None)  # everything taken: held runs too
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
             if state.markers.live:
                 expire_markers(
@@ -332,7 +333,8 @@ class DisplayFeed:
         return [dataclasses.replace(op, decoded=fix(op.decoded)) if op.decoded else op for op in decoded]
 
     def finish(self) -> None:
-        """Say, per topic, how many messages could not be shown (when more than the one already said)."""
+        """Send the runs still held; say, per topic, how many messages could not be shown (beyond the first)."""
+        self.columns.send()
         for topic, note in self.video.finish():
             self.notices.report(f"{self._where(topic)}: {note}")
         for topic, state in self.topics.items():

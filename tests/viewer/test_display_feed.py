@@ -121,7 +121,7 @@ def test_the_feed_pulls_messages_up_to_a_time_and_odometry_goes_round_its_keep()
             def add(self, message: TopicMessage, entity: str, *args: object, **kwargs: object) -> None:
                 sent.append((entity, message.time_ns))
 
-            def interrupt(self, *entities: str) -> None:
+            def interrupt(self, *entities: str, everything: bool = False) -> None:
                 pass
 
         feed.columns = _Runs()  # type: ignore[assignment]

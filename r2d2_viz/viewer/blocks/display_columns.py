@@ -35,7 +35,13 @@ _BLOB = pa.list_(pa.field("item", pa.uint8(), nullable=False))
 RUN_BYTES = 2 << 20
 """A run is sent once its messages hold this many bytes (their points are joined into one column when it goes, and
 Rerun keeps a chunk whole until it is written: a window's scans in one run raised ``--topics /scan …``'s peak by
-~60 MB)."""
+~60 MB)..."""
+RUN_ROWS = 4096
+"""... or this many messages."""
+HELD_BYTES = 16 << 20
+"""A batch run (``hold``) keeps its runs across windows, every run sent once they hold this many bytes in all: a
+run per window made a chunk of one row per window for each slot of a history (7,600 of the sensor bag's 16,815
+chunks were odometry's), and Rerun keeps ~3 kB of every chunk in memory until the file's footer is written."""
 
 
 def columnable(decoded: Decoded | list[MarkerOp] | MsgError | None, *, first: bool = False) -> bool:
@@ -58,10 +64,13 @@ class ColumnRuns:
     """The runs not sent yet, per entity; ``last_ns``: the time of the latest message taken since :meth:`interrupt`
     (a per-message log then sets the recording's time to it first, as logging that message would have)."""
 
-    def __init__(self, rec: rr.RecordingStream, timeline: str, clock: Clock) -> None:
+    def __init__(self, rec: rr.RecordingStream, timeline: str, clock: Clock, *, hold: bool = False) -> None:
         self.rec, self.timeline, self.clock = rec, timeline, clock
         self.runs: dict[str, _Run] = {}
         self.last_ns: int | None = None
+        self.hold, self.held = hold, 0
+        """``hold``: runs are kept across :meth:`interrupt` s that name no entity (a batch run; a live one sends
+        what it has taken at the end of each window); ``held``: the bytes of the messages in the runs."""
 
     def add(
         self, message: TopicMessage, entity: str, images: tuple[str, ...] = (), *, header_time: bool = False
@@ -78,9 +87,13 @@ class ColumnRuns:
             run.frames.append(decoded.frame_id)
             run.items.append(decoded.items[0])
             run.nbytes += len(message.data)
+            self.held += len(message.data)
         self.last_ns = time_ns
-        full = [name for name in (entity, *images) if name in self.runs and self.runs[name].nbytes >= RUN_BYTES]
-        if full:
+        runs = [(name, self.runs[name]) for name in (entity, *images) if name in self.runs]
+        full = [name for name, run in runs if run.nbytes >= RUN_BYTES or len(run.times_ns) >= RUN_ROWS]
+        if self.held >= HELD_BYTES:
+            self.send()
+        elif full:
             self.send(*full)
 
     def send(self, *entities: str) -> None:
@@ -88,6 +101,7 @@ class ColumnRuns:
         below = tuple(e + "/" for e in entities)
         for name in [e for e in self.runs if e in entities or e.startswith(below)] if entities else list(self.runs):
             run = self.runs.pop(name)
+            self.held -= run.nbytes
             times_ns = np.array(run.times_ns, dtype=np.int64)
             for kind, build in ((shapes.Points, _points), (shapes.Arrows, _arrows), (shapes.Pinhole, _pinholes)):
                 rows = [i for i, item in enumerate(run.items) if isinstance(item, kind)]
@@ -98,10 +112,12 @@ class ColumnRuns:
                 if isinstance(item, shapes.Image | shapes.CompressedImage):
                     send(self.rec, name, self.timeline, time_array(times_ns[i : i + 1], self.clock), _image(item))
 
-    def interrupt(self, *entities: str) -> None:
-        """Before a message logged on its own (on ``entities``; or at the end of a block: all of them): their runs
-        sent, and the recording's time where the last message taken left it (logging it would have set it)."""
-        self.send(*entities)
+    def interrupt(self, *entities: str, everything: bool = False) -> None:
+        """Before a message logged on its own (on ``entities``; or at the end of a block: all of them, unless the
+        runs are held and not ``everything`` was taken): their runs sent, and the recording's time where the last
+        message taken left it (logging it would have set it)."""
+        if entities or everything or not self.hold:
+            self.send(*entities)
         if self.last_ns is not None:
             set_time(self.rec, self.timeline, self.last_ns, self.clock)
             self.last_ns = None

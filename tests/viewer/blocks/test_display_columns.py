@@ -51,35 +51,38 @@ def _rgba(n: int) -> np.ndarray:
 CAMERA = {"/cam/info": ("/cam/image", "/cam/image/compressed")}
 
 
-def _record(path: Path, columns: bool, data: bytes = b"", sent: list[int] | None = None) -> None:
-    """Every message logged one by one, or (``columns``) added to runs, each with ``data`` as its bytes; ``sent``:
-    after each message, how many runs are held (sent ones are gone)."""
+def _record(path: Path, columns: bool, data: bytes = b"", sent: list[int] | None = None, *, hold: bool = False) -> None:
+    """Every message logged one by one, or (``columns``) added to runs, each with ``data`` as its bytes and a window
+    ending after it (``hold``: a batch run's runs, kept across windows); ``sent``: after each message, how many runs
+    are held (sent ones are gone)."""
     rec = rr.RecordingStream("test_display_columns")
     rec.save(path)
-    runs = ColumnRuns(rec, "time", "timestamp")
+    runs = ColumnRuns(rec, "time", "timestamp", hold=hold)
     for i, (topic, decoded) in enumerate(_messages()):
         time_ns = (i + 1) * S
         assert columnable(decoded)
         if columns:
             runs.add(TopicMessage(time_ns, topic, "", data, decoded=decoded), topic, CAMERA.get(topic, ()))
+            if hold:
+                runs.interrupt()  # the end of a window: a live run sends its runs here, a batch run keeps them
             if sent is not None:
                 sent.append(len(runs.runs))
             continue
         for entity in (topic, *CAMERA.get(topic, ())):
             log_decoded(rec, entity, decoded, timeline="time", time_ns=time_ns, clock="timestamp")
-    runs.send()
+    runs.interrupt(everything=True)
     rec.flush()
     rec.disconnect()
 
 
-@pytest.mark.parametrize("held", ["whole", "bounded"])
+@pytest.mark.parametrize("held", ["whole", "bounded", "across windows"])
 def test_a_run_sent_as_columns_is_what_logging_each_message_gives(tmp_path: Path, held: str) -> None:
     _record(tmp_path / "each.rrd", columns=False)
     held_runs: list[int] = []
     # bounded: each message's bytes are a run's limit (RUN_BYTES), so every run goes out as soon as a message joins
     # it (a window's scans in one run raised a --topics run's peak by ~60 MB); the recording must not change
     data = b"\0" * (RUN_BYTES if held == "bounded" else 1)
-    _record(tmp_path / "runs.rrd", columns=True, data=data, sent=held_runs)
+    _record(tmp_path / "runs.rrd", columns=True, data=data, sent=held_runs, hold=held == "across windows")
     assert held_runs == ([0] * 10 if held == "bounded" else [1, 2, 3, 4, 4, 4, 5, 5, 6, 7])
     each, runs = read_recording(tmp_path / "each.rrd"), read_recording(tmp_path / "runs.rrd")
     assert set(runs) - {"/__properties"} == set(each) - {"/__properties"}
