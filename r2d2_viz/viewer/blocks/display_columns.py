@@ -15,7 +15,7 @@ program logged them), as the robot's and the transforms' columns already lack th
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cache
 
 import numpy as np
@@ -58,6 +58,9 @@ class _Run:
     frames: list[str] = field(default_factory=list)
     items: list[Shape] = field(default_factory=list)
     nbytes: int = 0
+    pins: bool = False
+    """Whether an item is a view of its message's bytes (an image; a cloud of x, y, z alone): holding it across
+    windows would keep the whole block it was read in (a .db3's are anonymous memory: 3 GB held)."""
 
 
 class ColumnRuns:
@@ -87,6 +90,7 @@ class ColumnRuns:
             run.frames.append(decoded.frame_id)
             run.items.append(decoded.items[0])
             run.nbytes += len(message.data)
+            run.pins = run.pins or not _owned(decoded.items[0])
             self.held += len(message.data)
         self.last_ns = time_ns
         runs = [(name, self.runs[name]) for name in (entity, *images) if name in self.runs]
@@ -118,9 +122,24 @@ class ColumnRuns:
         message taken left it (logging it would have set it)."""
         if entities or everything or not self.hold:
             self.send(*entities)
+        elif pinning := [name for name, run in self.runs.items() if run.pins]:  # (none named would send them all)
+            self.send(*pinning)
         if self.last_ns is not None:
             set_time(self.rec, self.timeline, self.last_ns, self.clock)
             self.last_ns = None
+
+
+def _owned(item: Shape) -> bool:
+    """Whether every array of ``item`` owns its memory (no view of the bytes its message was read in)."""
+    if isinstance(item, shapes.Image | shapes.CompressedImage):
+        return False
+    for f in fields(item):
+        array = getattr(item, f.name)
+        while isinstance(array, np.ndarray) and isinstance(array.base, np.ndarray):
+            array = array.base
+        if isinstance(array, np.ndarray) and array.base is not None:
+            return False
+    return True
 
 
 def _lists(values: pa.Array, lengths: Sequence[int] | np.ndarray, of: pa.DataType | None = None) -> pa.Array:
