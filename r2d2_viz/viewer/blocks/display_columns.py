@@ -35,9 +35,9 @@ _BLOB = pa.list_(pa.field("item", pa.uint8(), nullable=False))
 RUN_BYTES = 2 << 20
 """A run is sent once its messages hold this many bytes (their points are joined into one column when it goes, and
 Rerun keeps a chunk whole until it is written: a window's scans in one run raised ``--topics /scan …``'s peak by
-~60 MB)..."""
+~60 MB), or :data:`RUN_ROWS` messages."""
 RUN_ROWS = 4096
-"""... or this many messages."""
+"""The most messages a run holds before it is sent."""
 HELD_BYTES = 16 << 20
 """A batch run (``hold``) keeps its runs across windows, every run sent once they hold this many bytes in all: a
 run per window made a chunk of one row per window for each slot of a history (7,600 of the sensor bag's 16,815
