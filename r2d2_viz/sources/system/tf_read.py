@@ -134,7 +134,7 @@ def read_bag(
     )
     if robot is not None:
         recorded = static_edges | set(zip(rows.parents, rows.children, strict=True))
-        rows = _with_robot(rows, robot_parts, recorded)
+        rows = _with_robot(rows, robot_parts, recorded & robot.moving_edges())
         static_edges |= set(robot.static_edges()) - recorded
     if not cols:
         return rows, sorted(static_edges), NO_HEADERS
@@ -149,14 +149,14 @@ def read_bag(
 
 
 def _with_robot(rows: TfRows, robot: list[Rows], recorded: set[tuple[str, str]]) -> TfRows:
-    """``rows`` and the robot's rows of the edges no TF topic recorded (stamped when published)."""
+    """``rows`` and the robot's rows but those of the ``recorded`` edges (stamped when published)."""
     if not robot:
         return rows
     parents = np.concatenate([r[0] for r in robot])
     children = np.concatenate([r[1] for r in robot])
     times = np.concatenate([r[2] for r in robot])
     keep = np.ones(len(times), bool)
-    for p, c in set(zip(parents, children, strict=True)) & recorded:
+    for p, c in recorded:
         keep &= ~((parents == p) & (children == c))
     return TfRows(
         np.r_[rows.parents, parents[keep]].astype(object),

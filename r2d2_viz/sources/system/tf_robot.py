@@ -40,6 +40,11 @@ class RobotFrames:
                     out.append((joint.parent, joint.child))
         return sorted(set(out))
 
+    def moving_edges(self) -> set[tuple[str, str]]:
+        """The edges :meth:`rows` may give: every moving joint's and every track's (but those skipped)."""
+        joints = {edge for tree in self.trees for _, edge in self._moving(tree)}
+        return joints | (set(self.tracks) - self.skip)
+
     def static_records(self, time_ns: int) -> TfRecords:
         """:meth:`static_edges` as static rows at ``time_ns`` (identity transforms: for the TF tree, not drawn)."""
         edges = self.static_edges()
