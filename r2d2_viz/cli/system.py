@@ -99,7 +99,7 @@ def _motion_tree(args: argparse.Namespace) -> tuple[TfTree, str]:
     robot_state_publisher and state_publisher.py publish it: over ``--duration`` (one lap: 48 s) at ``--rate``."""
     from r2d2_viz.kinematics.tree import compile_tree
     from r2d2_viz.runner import LAP_SAMPLES
-    from r2d2_viz.sources.motion import make_motion
+    from r2d2_viz.sources.motion import default_motion, make_motion
     from r2d2_viz.sources.system.tf_robot import motion_tree
 
     if not (math.isfinite(args.rate) and args.rate > 0):
@@ -111,7 +111,7 @@ def _motion_tree(args: argparse.Namespace) -> tuple[TfTree, str]:
     source = make_motion(robot, args.motion, rate=args.rate, n_samples=n)
     tree = motion_tree(compile_tree(robot), source)
     name = args.urdf.name if args.urdf is not None else "the tutorial's R2D2"
-    return tree, f"TF tree of {name} ({args.motion or 'default'} motion, {n} samples at {args.rate:g} Hz)"
+    return tree, f"TF tree of {name} ({args.motion or default_motion(robot)} motion, {n} samples at {args.rate:g} Hz)"
 
 
 def tf_tree_sink(args: argparse.Namespace) -> None:
