@@ -74,7 +74,7 @@ class Feeds:
 
     def push(self, window: Window) -> None:
         """A stretch's transforms and display messages, logged by :meth:`until` when due."""
-        self.tf.push(window.tf)
+        self.tf.push(window.tf, (window.joints, *window.more_joints))
         if self.displays is not None:
             self.displays.add_tf(window.tf)
             if window.displays:

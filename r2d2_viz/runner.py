@@ -245,7 +245,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                 displays.on_map = tools.drawing.cover if tools and tools.drawing else None  # the ground: over maps
                 displays.push(plan.seek_messages)
             feeds = Feeds(
-                TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None
+                TfFeed(recorded, plan), displays, [*map(RobotFeed, streamers[1:])], fields.feed(rec) if fields else None
             )
             watching = config.watch and watch_robot(recording, plan.source, streamer, config, _packages(config))
             for robot in streamers:

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from bagmaker import T0, TS, BagSpec, Header, stamp, tf_message, write_bag
+from bagmaker import T0, TS, TYPES, BagSpec, Header, joint_state, stamp, string, tf_message, write_bag
 from rosbags.highlevel import AnyReader
 
 POINT = "geometry_msgs/msg/PointStamped"
@@ -72,6 +72,33 @@ def rate_and_gap(times: list[int]) -> tuple[float, float]:
     """messages − 1 over the span (Hz), and the largest gap (s)."""
     t = np.sort(np.asarray(times, dtype=np.int64))
     return (len(t) - 1) / ((t[-1] - t[0]) / S), float(np.diff(t).max()) / S
+
+
+ROVER = """<robot name="rover"><link name="base_link"/><link name="laser"/><link name="wheel"/><link name="wheel2"/>
+<link name="caster"/>
+<joint name="laser_mount" type="fixed"><parent link="base_link"/><child link="laser"/><origin xyz="0.1 0 0.2"/></joint>
+<joint name="wheel_joint" type="continuous"><parent link="base_link"/><child link="wheel"/><axis xyz="0 1 0"/></joint>
+<joint name="wheel2_joint" type="continuous"><parent link="base_link"/><child link="wheel2"/><axis xyz="0 1 0"/>
+<mimic joint="wheel_joint"/></joint>
+<joint name="caster_joint" type="continuous"><parent link="base_link"/><child link="caster"/></joint></robot>"""
+"""A robot as robot_state_publisher sees it: ``laser`` on a fixed joint (``/tf_static``), ``wheel`` moved by the
+joint states, ``wheel2`` mimicking it (published with it), ``caster`` never named by a joint state (never published)."""
+
+
+def rover(s: BagSpec, times_ns: Sequence[int], namespace: str = "") -> BagSpec:
+    """``<namespace>/robot_description`` (:data:`ROVER`) and its joint states naming ``wheel_joint`` at ``times_ns``."""
+    s.types[f"{namespace}/robot_description"] = TYPES["/robot_description"]
+    s.types[f"{namespace}/joint_states"] = TYPES["/joint_states"]
+    s.add(f"{namespace}/robot_description", T0, string(ROVER))
+    for k, t in enumerate(times_ns):
+        s.add(f"{namespace}/joint_states", int(t), joint_state(int(t), ["wheel_joint"], [0.1 * k]))
+    return s
+
+
+def receive_times(path: Path, topic: str) -> list[int]:
+    """The receive times of ``topic``'s messages, read with rosbags."""
+    with AnyReader([path], default_typestore=TS) as reader:
+        return [t for _, t, _ in reader.messages(connections=[c for c in reader.connections if c.topic == topic])]
 
 
 def real_bag(name: str) -> Path:

@@ -5,11 +5,21 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from r2d2_viz.cli.parser import EXIT_OK
-from r2d2_viz.errors import UsageError
+from r2d2_viz.errors import BagError, UrdfError, UsageError, stderr_line
+
+if TYPE_CHECKING:
+    from r2d2_viz.robot.model import Robot
+    from r2d2_viz.robot.packages import PackageIndex
+    from r2d2_viz.sources.bags.bag import Bag
+    from r2d2_viz.sources.system.tf_read import TfSources
+    from r2d2_viz.sources.system.tf_tree import TfTree
 
 LISTEN_SECONDS = 5.0
 """How long ``--ros --tf-tree`` listens without ``--duration``."""
@@ -36,10 +46,10 @@ def tf_tree_main(args: argparse.Namespace) -> int:
         from r2d2_viz.sources.system.tf_read import bag_tree
 
         with open_bag(args.bag) as bag:
-            tree = bag_tree(bag)
+            tree = bag_tree(bag, _replayed(args, bag))
         title = f"TF tree of {args.bag}"
     else:
-        raise UsageError("--tf-tree prints the TF tree of a bag or a live graph: use it with --bag PATH or --ros")
+        tree, title = _motion_tree(args)
     if out is not None:
         write_graph(tree, out, title)
     for line in tree_lines(tree, title):
@@ -49,6 +59,61 @@ def tf_tree_main(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _loader(args: argparse.Namespace) -> tuple[Callable[[], Robot], PackageIndex]:
+    """``--urdf`` (or the R2D2) with its xacro arguments and packages, as a run loads it."""
+    from r2d2_viz.robot.model import default_urdf_path
+    from r2d2_viz.robot.packages import PackageIndex
+    from r2d2_viz.robot.xacro_load import load_robot
+
+    mappings: dict[str, str] = {}
+    for item in args.xacro_args:
+        name, sep, value = item.partition(":=")
+        if not sep or not name.isidentifier():
+            raise UsageError(f"{item!r}: expected a xacro argument NAME:=VALUE")
+        mappings[name] = value
+    path = args.urdf or (None if args.bag is not None else default_urdf_path())
+    packages = PackageIndex.from_args(tuple(args.package_path), description=path, environ=os.environ)
+    return lambda: load_robot(args.urdf or default_urdf_path(), mappings=mappings, packages=packages), packages
+
+
+def _replayed(args: argparse.Namespace, bag: Bag) -> TfSources | None:
+    """What the replay of ``bag`` reads of TF and draws from robot descriptions (``--urdf``, or the bag's
+    ``/robot_description``s): its plan. A description the replay could not use either is said in one line, and
+    the tree is then the recorded TF's alone."""
+    from r2d2_viz.sources.plan import plan_bag
+    from r2d2_viz.sources.system.tf_read import tf_sources
+
+    load, packages = _loader(args)
+    try:
+        plan = plan_bag(bag, load_robot=load if args.urdf is not None else None, packages=packages)
+    except (BagError, UrdfError) as exc:
+        if args.urdf is not None and isinstance(exc, UrdfError):
+            raise
+        print(stderr_line(f"warning: {exc}: the tree is the recorded TF's alone"), file=sys.stderr)
+        return None
+    return tf_sources(plan)
+
+
+def _motion_tree(args: argparse.Namespace) -> tuple[TfTree, str]:
+    """The tree of the robot (``--urdf``, or the tutorial's R2D2) under its generated motion (``--motion``), as
+    robot_state_publisher and state_publisher.py publish it: over ``--duration`` (one lap: 48 s) at ``--rate``."""
+    from r2d2_viz.kinematics.tree import compile_tree
+    from r2d2_viz.runner import LAP_SAMPLES
+    from r2d2_viz.sources.motion import default_motion, make_motion
+    from r2d2_viz.sources.system.tf_robot import motion_tree
+
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise UsageError(f"--rate must be a positive number of Hz, got {args.rate:g}")
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise UsageError(f"--duration must be a positive number of seconds, got {args.duration:g}")
+    n = LAP_SAMPLES if args.duration is None else max(1, round(args.duration * args.rate))
+    robot = _loader(args)[0]()
+    source = make_motion(robot, args.motion, rate=args.rate, n_samples=n)
+    tree = motion_tree(compile_tree(robot), source)
+    name = args.urdf.name if args.urdf is not None else "the tutorial's R2D2"
+    return tree, f"TF tree of {name} ({args.motion or default_motion(robot)} motion, {n} samples at {args.rate:g} Hz)"
+
+
 def tf_tree_sink(args: argparse.Namespace) -> None:
     """``--tf-tree`` with a sink: the recording gets the TF graph view; a FILE belongs to the printed tree."""
     if args.tf_tree != "-":
@@ -56,7 +121,5 @@ def tf_tree_sink(args: argparse.Namespace) -> None:
             f"--tf-tree {args.tf_tree}: the graph file goes with the printed tree; with a viewer or --save the "
             "recording holds the TF graph (give --tf-tree alone)"
         )
-    if args.bag is None and not args.ros:
-        raise UsageError("--tf-tree shows the TF tree of a bag or a live graph: use it with --bag PATH or --ros")
     if args.save is not None and args.save.suffix == ".mcap":
         raise UsageError(f"--save {args.save}: a bag has no graph view; --tf-tree goes with a recording (.rrd)")

@@ -10,16 +10,23 @@ Edges that the robot's URDF also defines are left out (the kinematics of the joi
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import rerun as rr
 
-from r2d2_viz.sources.base import Clock, TfRecords
+from r2d2_viz.sources.bag_tf import concatenate
+from r2d2_viz.sources.base import Clock, SampleChunk, TfRecords
+from r2d2_viz.sources.system.tf_robot import RobotFrames
 from r2d2_viz.viewer import entities
 from r2d2_viz.viewer.columns import encoded, f32, send, tiled, time_array
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH
 from r2d2_viz.viewer.scene import ARROW_COLOR
 from r2d2_viz.viewer.system.tf_graph import TfGraph
+
+if TYPE_CHECKING:
+    from r2d2_viz.sources.plan import RunPlan
 
 
 class RecordedTf:
@@ -43,8 +50,9 @@ class RecordedTf:
         self.graph: TfGraph | None = None
         """``--tf-tree``: the TF graph view, fed every row (the URDF's edges too)."""
 
-    def log(self, records: TfRecords) -> None:
-        if self.graph is not None:
+    def log(self, records: TfRecords, *, graph: bool = True) -> None:
+        """``records`` as transforms; fed to the graph too unless ``graph`` is False (they were, merged)."""
+        if self.graph is not None and graph:
             self.graph.add(records)
         keep = np.array([(p, c) not in self.skip for p, c in zip(records.parents, records.children, strict=True)])
         if not keep.any():
@@ -125,15 +133,27 @@ class RecordedTf:
 
 class TfFeed:
     """Recorded moving transforms handed to a :class:`RecordedTf` in time order, as far as a replay has got: a
-    replay :meth:`push` es each stretch it reads, and :meth:`until` logs what is due."""
+    replay :meth:`push` es each stretch it reads, and :meth:`until` logs what is due.
 
-    def __init__(self, recorded: RecordedTf) -> None:
+    With the TF graph (``--tf-tree``) and a ``plan`` whose robots come from descriptions, the graph also gets the
+    frames the kinematics draws (:class:`~r2d2_viz.sources.system.tf_robot.RobotFrames`: fixed joints once, moving
+    joints at each joint-states sample), merged in time order with the recorded rows (not logged as transforms)."""
+
+    def __init__(self, recorded: RecordedTf, plan: RunPlan | None = None) -> None:
         self.recorded = recorded
         self._pending: deque[TfRecords] = deque()
+        self._robot: deque[TfRecords] = deque()
         self.logged = 0
+        self.robot = robot_frames(plan) if plan is not None and recorded.graph is not None else None
+        if self.robot is not None and recorded.graph is not None and plan is not None:
+            start = plan.replay.span[0] if plan.replay is not None else 0
+            recorded.graph.add(self.robot.static_records(start))
 
-    def push(self, records: TfRecords | None) -> None:
-        """Transforms just read (sorted by time here: header stamps need not be in order)."""
+    def push(self, records: TfRecords | None, joints: Sequence[SampleChunk | None] = ()) -> None:
+        """Transforms just read (sorted by time here: header stamps need not be in order), and the joint states of
+        the same stretch (each robot's: the graph's robot frames)."""
+        if self.robot is not None and joints and len(robot := self.robot.records(joints)):
+            self._robot.append(robot)
         if records is None or len(records) == 0:
             return
         times = records.times_ns
@@ -148,15 +168,37 @@ class TfFeed:
 
     def until(self, time_ns: int | None = None) -> None:
         """Log the pending records up to ``time_ns`` (inclusive; all of them when None)."""
-        while self._pending:
-            r = self._pending[0]
-            stop = len(r) if time_ns is None else int(np.searchsorted(r.times_ns, time_ns, side="right"))
-            if stop == 0:
-                return
-            part = r if stop == len(r) else r.rows(np.arange(stop))
-            self.recorded.log(TfRecords(part.times_ns, part.parents, part.children, part.translation, part.quat_xyzw))
-            self.logged += stop
-            if stop < len(r):
-                self._pending[0] = r.rows(np.arange(stop, len(r)))
-                return
-            self._pending.popleft()
+        parts = _due(self._pending, time_ns)
+        graph = self.recorded.graph
+        merged = graph is not None and self.robot is not None  # the graph gets recorded and robot rows as one
+        if merged and graph is not None and (both := concatenate([*parts, *_due(self._robot, time_ns)])):
+            graph.add(both.rows(np.argsort(both.times_ns, kind="stable")))
+        for part in parts:
+            self.recorded.log(part, graph=not merged)
+            self.logged += len(part)
+
+
+def _due(pending: deque[TfRecords], time_ns: int | None) -> list[TfRecords]:
+    """The records of ``pending`` up to ``time_ns`` (inclusive; all when None), taken off it."""
+    out = []
+    while pending:
+        r = pending[0]
+        stop = len(r) if time_ns is None else int(np.searchsorted(r.times_ns, time_ns, side="right"))
+        if stop == 0:
+            break
+        part = r if stop == len(r) else r.rows(np.arange(stop))
+        out.append(TfRecords(part.times_ns, part.parents, part.children, part.translation, part.quat_xyzw))
+        if stop < len(r):
+            pending[0] = r.rows(np.arange(stop, len(r)))
+            break
+        pending.popleft()
+    return out
+
+
+def robot_frames(plan: RunPlan) -> RobotFrames | None:
+    """The frames the run's kinematics draws (its robots', and a generated motion's tracks), for the TF graph."""
+    trees = tuple(r.tree for r in plan.robots) or ((plan.tree,) if plan.tree is not None else ())
+    if not trees:
+        return None
+    tracks = tuple(plan.source.frames) if plan.source is not None else ()
+    return RobotFrames(trees, tracks, plan.skip_edges)

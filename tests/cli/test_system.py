@@ -82,7 +82,7 @@ def test_the_graph_as_dot_and_svg(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "words"),
     [
-        (["--tf-tree"], "use it with --bag PATH or --ros"),
+        (["--tf-tree", "--rate", "0"], "--rate must be a positive number of Hz"),  # the robot's tree: a motion
         (["--bag", "B", "--tf-tree", "t.png"], "unknown extension '.png'"),
         (["--bag", "missing", "--tf-tree"], "no such file"),
     ],

@@ -2,7 +2,8 @@
 node per frame, named by it, laid out as rqt_tf_tree draws: depth across, siblings down) and ``GraphEdges``
 (parent → child), one snapshot every :data:`PERIOD_NS` of record time, so the node labels — each frame's rate over
 the last :data:`WINDOW_NS` and its age (time since its transform last came) — change under the time cursor. Stale
-frames are red (:data:`~r2d2_viz.sources.system.tf_tree.STALE_PERIODS`), static ones grey, the roots blue.
+frames are red (:data:`~r2d2_viz.sources.system.tf_tree.STALE_PERIODS`), static ones grey, the roots blue; an edge on
+both ``/tf_static`` and ``/tf`` is dynamic from its first ``/tf`` message on, as the printed tree counts it.
 
 Fed by :class:`~r2d2_viz.viewer.tf_recorded.RecordedTf` with every transform row as it is logged (batch or live);
 per feed, numpy over the rows (one ``bincount`` and one ``maximum.at`` per snapshot)."""
@@ -118,7 +119,7 @@ class TfGraph:
             color = [ROOT_COLOR if f in roots else STATIC_COLOR for f in frames]
             for e, (_, c) in enumerate(self.edges):
                 i = int(child[e])
-                if e in self.static:
+                if e in self.static and np.isnan(age[e]):  # on /tf too: dynamic from its first message there
                     text[i], color[i] = f"{c}\nstatic", STATIC_COLOR
                 elif not np.isnan(age[e]):
                     stale = counts[e] == 0 or age[e] > max(STALE_PERIODS / rate[e], STALE_MIN_S)

@@ -11,7 +11,7 @@ import pytest
 import rerun as rr
 from conftest import cli
 from rrd import blueprint_components, read_recording
-from tfbags import MS, T0, S, bag, edge_every, reference_edges, reference_static, spec, static
+from tfbags import MS, T0, S, bag, edge_every, receive_times, reference_edges, reference_static, rover, spec, static
 
 from r2d2_viz.sources.base import TfRecords
 from r2d2_viz.viewer.system.tf_graph import FRESH_COLOR, STALE_COLOR, STATIC_COLOR, TfGraph, _layout
@@ -112,3 +112,56 @@ def test_without_the_flag_no_graph(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     assert "/tf_tree" not in read_recording(out)
     assert not [v for v in blueprint_components(out).values() if v.get("ViewBlueprint:class_identifier") == ["Graph"]]
+
+
+def test_an_edge_on_tf_and_tf_static_is_dynamic_from_its_first_tf_message(tmp_path: Path) -> None:
+    out = tmp_path / "g.rrd"
+    rec = rr.RecordingStream("test")
+    rec.save(out)
+    graph = TfGraph(rec, clock="timestamp")
+    graph.add(records([T0], ["odom"], ["base_link"], static=True))
+    graph.add(records(T0 + np.arange(30) * 100 * MS, ["odom"] * 30, ["base_link"] * 30))  # then on /tf at 10 Hz
+    rec.flush()
+    rec.disconnect()
+    rows = read_recording(out)["/tf_tree"]
+    # as the printed tree and docs/system.md count it: dynamic (by hand: 20 messages in the 2 s before 2 s, the last
+    # at 2 s); the graph said "static" for the whole run
+    assert snapshot(rows, rows.times.index(T0 + 2 * S, 1))["base_link"] == ("base_link\n10 Hz · 0 s", FRESH_COLOR)
+    assert snapshot(rows, 0)["base_link"] == ("base_link\nstatic", STATIC_COLOR)  # before it came on /tf
+
+
+def test_the_robot_frames_are_in_the_graph(tmp_path: Path) -> None:
+    s = spec()
+    rover(s, T0 + np.arange(31) * 100 * MS)  # joint states at 10 Hz for 3 s
+    edge_every(s, "odom", "base_link", T0 + np.arange(61) * 50 * MS)
+    path = bag(tmp_path / "b", s)
+    out = tmp_path / "b.rrd"
+    done = cli("--bag", str(path), "--tf-tree", "--save", str(out))
+    assert done.returncode == 0, done.stderr
+    rows = read_recording(out)["/tf_tree"]
+    edges = {(e["first"], e["second"]) for e in rows.temporal["GraphEdges:edges"][-1]}
+    # by hand from ROVER: laser fixed, wheel and its mimic wheel2 moved by the joint states (caster never named)
+    assert edges == {("odom", "base_link"), ("base_link", "laser"), ("base_link", "wheel"), ("base_link", "wheel2")}
+    at_2s = snapshot(rows, rows.times.index(T0 + 2 * S))
+    times = np.array(receive_times(path, "/joint_states"))  # rosbags: joint states in the 2 s window, over 2 s
+    expected = np.count_nonzero((times > T0) & (times <= T0 + 2 * S)) / 2.0
+    assert at_2s["wheel"] == (f"wheel\n{expected:.3g} Hz · 0 s", FRESH_COLOR) and at_2s["wheel2"][0].endswith(" · 0 s")
+    assert at_2s["laser"] == ("laser\nstatic", STATIC_COLOR)
+
+
+def test_the_tutorial_robot_has_its_graph(tmp_path: Path) -> None:
+    out = tmp_path / "r2d2.rrd"
+    done = cli("--tf-tree", "--save", str(out), "--duration", "2")
+    assert done.returncode == 0, done.stderr
+    rows = read_recording(out)["/tf_tree"]
+    edges = {(e["first"], e["second"]) for e in rows.temporal["GraphEdges:edges"][-1]}
+    # by hand: r2d2.urdf's six joints and state_publisher.py's odom → axis
+    assert edges == {
+        ("odom", "axis"),
+        ("axis", "leg1"),
+        ("axis", "leg2"),
+        ("axis", "body"),
+        ("body", "head"),
+        ("head", "rod"),
+        ("rod", "box"),
+    }
