@@ -6,7 +6,8 @@ them from the start (:mod:`r2d2_viz.viewer.notices`).
 * a bag: the first receive time of the replayed stretch (the bag's first message; a seek's pre-roll included) — with
   ``--time header``, the earliest stamp of the joint states and transforms the plan read ahead, when there are any;
 * a live graph: the earliest time of what the settle received (joint states, transforms, display and other topics'
-  messages), else the wall clock as the run starts (what a source timestamp of the next message will be near).
+  messages; else the source timestamps of what came: joint states are held until there is a robot), else the wall
+  clock as the run starts (what the source timestamp of the next message will be near).
 """
 
 from __future__ import annotations
@@ -27,8 +28,8 @@ def plan_start_ns(plan: RunPlan) -> int:
     replay = plan.replay
     if replay is None:
         return 0
-    first = replay.segments[0].start_ns if replay.segments else None
-    received = replay.span[0] if first is None else max(replay.span[0], first)
+    first = replay.segments[0].start_ns if replay.segments else None  # a seek's pre-roll comes first
+    received = replay.span[0] if first is None else first
     if replay.time != "header":
         return received
     stamps = _earliest([plan.preview_joints], [plan.moving_tf])
@@ -42,8 +43,11 @@ def live_start_ns(batches: Iterable[LiveBatch], now_ns: int | None = None) -> in
     chunks = [c for b in batches for c in (b.joints, *b.robot_joints.values())]
     messages = [m.time_ns for b in batches for m in (*b.displays, *b.fields)]
     earliest = _earliest(chunks, [r for b in batches for r in b.tf], messages)
+    received = [s.source_timestamp_ns for b in batches for s in b.samples]  # joint states held until a robot comes
     if earliest is not None:
         return earliest
+    if received:
+        return min(received)
     return time.time_ns() if now_ns is None else now_ns
 
 
