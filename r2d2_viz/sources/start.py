@@ -43,9 +43,9 @@ def live_start_ns(batches: Iterable[LiveBatch], now_ns: int | None = None) -> in
     chunks = [c for b in batches for c in (b.joints, *b.robot_joints.values())]
     messages = [m.time_ns for b in batches for m in (*b.displays, *b.fields)]
     earliest = _earliest(chunks, [r for b in batches for r in b.tf], messages)
-    received = [s.source_timestamp_ns for b in batches for s in b.samples]  # joint states held until a robot comes
     if earliest is not None:
         return earliest
+    received = [s.source_timestamp_ns for b in batches for s in b.samples]  # joint states held until a robot comes
     if received:
         return min(received)
     return time.time_ns() if now_ns is None else now_ns
