@@ -23,6 +23,7 @@ from sources.live.test_source import JS, FakeGraph, _js
 from test_live_run_stand_in import Config
 
 import r2d2_viz.live_run as live_run
+from r2d2_viz.msgs.typestore import typestore
 from r2d2_viz.robot.model import default_urdf_path
 from r2d2_viz.sources.live.dds import Publication, Sample
 from r2d2_viz.viewer.sinks import SinkConfig
@@ -34,6 +35,7 @@ INERTIA = "link 'leg1': <inertial>: "
 RVIZ_NOTE = "urdf_tutorial_ros1_urdf.rviz: Grid / Plane Cell Count 10"
 NO_ROBOT = "no --urdf and no /robot_description"
 LOADED = (MISSING_MESH, INERTIA, RVIZ_NOTE)
+STRING = "std_msgs/msg/String"
 
 
 def _urdf(tmp_path: Path) -> Path:
@@ -129,3 +131,34 @@ def test_a_live_graphs_load_time_warnings_at_its_first_message(tmp_path: Path, m
 def test_a_live_graph_without_a_robot_says_so_at_its_first_message(tmp_path: Path, monkeypatch) -> None:
     out, sent_ns = _live(tmp_path, monkeypatch, None)
     _assert_at_first_time(read_recording(out), out, sent_ns, (NO_ROBOT, RVIZ_NOTE))
+
+
+def test_a_live_graphs_later_note_at_the_time_it_came(tmp_path: Path, monkeypatch) -> None:
+    """A /robot_description that does not parse, sent a minute after the run started (a node started later): its
+    line is a row at the source timestamp of the message that brought it, not at the run's start."""
+    monkeypatch.setattr(live_run, "SETTLE_SECONDS", 0.1)
+
+    class LateGraph(FakeGraph):
+        waited = False
+
+        def poll(self) -> list[Sample]:
+            return super().poll() if self.waited else []  # nothing during the settle (it never waits)
+
+        def wait(self, timeout: float) -> bool:
+            self.waited = True
+            return super().wait(timeout)
+
+    graph = LateGraph()
+    store = typestore("jazzy")
+    text = bytes(store.serialize_cdr(store.types[STRING](data="<robot name='r'><link/></robot>"), STRING))
+    graph.pubs = [Publication("/robot_description", STRING, True, True)]
+    sent_ns = time.time_ns() + 60 * S
+    graph.queue = [Sample("/robot_description", STRING, sent_ns, text)]
+    out = tmp_path / "live.rrd"
+    config: Any = Config(None, SinkConfig(save=out), duration=0.5)
+    live_run.run_on(config, graph, threading.Event())
+    rows = read_recording(out)["/warnings"]
+    texts = [text[0] for text in rows.temporal["TextLog:text"]]
+    [late] = [t for t, text in zip(rows.times, texts, strict=True) if "(showing transforms only)" in text]
+    [start] = [t for t, text in zip(rows.times, texts, strict=True) if NO_ROBOT in text]
+    assert late == sent_ns and start < sent_ns and not rows.static
