@@ -41,6 +41,7 @@ from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, EMPTY_RUN_NEXT, RosDis
 from r2d2_viz.sources.live.source import LiveBatch, LiveSource
 from r2d2_viz.sources.motion import ODOM
 from r2d2_viz.sources.plan import RunPlan
+from r2d2_viz.sources.start import live_start_ns
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import LiveFields
@@ -288,7 +289,7 @@ class _Scene:
         self.children: set[str] = set()
         self.streamer: RobotStream | None = None
         self.samples = 0
-        self.notices = Notices(rec)
+        self.notices = Notices(rec, at_ns=live_start_ns(batches), clock="timestamp")  # load-time warnings: first
         for note in view.notes:
             self.notices.report(note)
         self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
@@ -353,6 +354,7 @@ class _Scene:
     def handle(self, batch: LiveBatch, bag: LiveBagRecorder | None) -> None:
         if bag is not None:
             bag.write(batch.samples)
+        self.notices.at_ns = max(self.notices.at_ns, live_start_ns([batch], self.notices.at_ns))  # said: from now
         for key, line in batch.notes:
             self.notices.report(line, key=key)
         if batch.descriptions and not self.model.fixed_by_urdf:

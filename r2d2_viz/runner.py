@@ -37,7 +37,7 @@ from r2d2_viz.viewer.fields_feed import FieldsRun, fields_run, undecoded_line
 from r2d2_viz.viewer.files.whole import flush_file, saved_rrd
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
-from r2d2_viz.viewer.notices import Notices
+from r2d2_viz.viewer.notices import run_notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.system.health import system_views
@@ -217,7 +217,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             gather = config.realtime and not config.sink.live  # saved only: no viewer waits for each sample
             streamers = _robot_streams(recording, plan, view, clock, gather) if tree is not None else []
             streamer = streamers[0] if streamers else None
-            notices = streamer.notices if streamer is not None else Notices(rec)
+            notices = run_notices(rec, plan, clock, streamers)  # untimed warnings at the run's first time
             for note in (*plan.notes, *view.notes):
                 notices.report(note)
             recorded = RecordedTf(rec, clock=clock, skip=set(plan.skip_edges), axis_length=view.axis_length)

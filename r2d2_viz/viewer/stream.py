@@ -121,7 +121,7 @@ class RobotStream:
         ``PLOT_PERIOD_NS``, not every sample — Rerun keeps ~3 kB per chunk in memory for the file's footer until
         the file closes, so a chunk per sample at 1 kHz grew a run by ~75 MB a minute."""
         self.fixed_frame = fixed_frame
-        self.notices = Notices(rec, warn=warn, timeline=timeline)
+        self.notices = Notices(rec, warn=warn, timeline=timeline, clock=clock)
         self.state = JointState(tree.actuated)
         self.tf = TfRows(tree, tracks=tuple(frames), fixed_frame=fixed_frame)
         self.plots = JointPlots(tree, timeline=timeline, clock=clock, robot=robot_name)

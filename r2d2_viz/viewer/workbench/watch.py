@@ -99,11 +99,11 @@ class Watching:
     def _log_scene(self, at_ns: int) -> set[str]:
         self.timed.at_ns, self.timed.logged = at_ns, set()
         real, timed = self.stream.rec, cast(rr.RecordingStream, self.timed)
-        self.stream.rec = self.stream.notices.rec = timed  # the model's warnings too: at the reload's time
+        self.stream.rec, self.stream.notices.at_ns = timed, at_ns  # the model's warnings too: at the reload's time
         try:
             self.stream.log_static(self.display)
         finally:
-            self.stream.rec = self.stream.notices.rec = real
+            self.stream.rec = real
             real.reset_time()
         return self.timed.logged
 
