@@ -111,3 +111,15 @@ def test_live_health_fed_in_pieces_by_hand() -> None:
     assert ("/fast", 0) not in got  # nothing to divide by at the first message
     assert got[("/one", 3 * s // 2)] == pytest.approx((0.0, 0.0))  # its first message starts the span: none after
     assert sorted(t for topic, t in got if topic == "/fast") == [k * s // 2 for k in range(1, 9)]
+
+
+def test_ros1_bandwidth_counts_the_bags_own_bytes(tmp_path: Path) -> None:
+    """A ROS 1 ``/clock`` of 8-byte messages every 100 ms (rosbags' writer; its CDR would be 12 bytes): by hand the
+    window (3 s, 5 s] holds 20 messages, 160 bytes over 2 s → 80 B/s."""
+    from seqbags import T0 as ST0
+    from seqbags import write_clock
+
+    with open_bag(write_clock(tmp_path / "clock.bag")) as b:
+        (h,) = bag_health(b)
+    k = int(np.flatnonzero(h.times_ns == ST0 + 5 * S)[0])
+    assert (h.rate_hz[k], h.bandwidth[k]) == (pytest.approx(10.0), pytest.approx(80.0))
