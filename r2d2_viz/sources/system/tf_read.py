@@ -10,10 +10,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from r2d2_viz.arrays import I64
-from r2d2_viz.msgs.typestore import typestore
+from r2d2_viz.msgs.definitions import own_store
+from r2d2_viz.msgs.typestore import MsgError, typestore
 from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder
 from r2d2_viz.sources.bags.bag import Bag
-from r2d2_viz.sources.bags.storage import Block
+from r2d2_viz.sources.bags.storage import Block, TopicInfo
 from r2d2_viz.sources.system.tf_tree import NO_HEADERS, HeaderRows, TfRows, TfTree, analyse, tf_rows
 
 TF_TOPICS = ("/tf", "/tf_static")
@@ -22,28 +23,44 @@ MAX_FRAME_ID = 256
 HEADER_TYPE = "std_msgs/msg/Header"
 
 
-def has_header(msgtype: str) -> bool:
-    """Whether messages of ``msgtype`` start with a ``std_msgs/Header`` (known to the Humble typestore)."""
-    defs = typestore().fielddefs.get(msgtype)
+def has_header(msgtype: str, definition: str = "", encoding: str = "") -> bool:
+    """Whether messages of ``msgtype`` start with a ``std_msgs/Header``: by the message ``definition`` their bag
+    carries (in ``encoding``: a vendor's type that only the bag defines), else by Humble's."""
+    store = typestore()
+    if definition:
+        try:
+            store = own_store(msgtype, definition, encoding)
+        except MsgError:
+            pass  # a definition that cannot be read: as Humble has the type, if it does
+    defs = store.fielddefs.get(msgtype)
     if not defs or not defs[1]:
         return False
     name, (_, kind) = defs[1][0]
     return bool(name == "header" and kind == HEADER_TYPE)
 
 
+def header_first(topic: TopicInfo) -> bool:
+    """:func:`has_header` of a bag's topic, by the definition the bag carries for it."""
+    return has_header(topic.msgtype, topic.definition, topic.encoding)
+
+
 def header_columns(block: Block, rows: np.ndarray) -> tuple[np.ndarray, I64, np.ndarray]:
-    """The frame ids (str array), stamps (ns) and which of ``rows`` had a readable little-endian header (bool):
-    bytes 4..12 the stamp, 12..16 the frame id's length with its NUL, then its characters."""
+    """The frame ids (str array), stamps (ns) and which of ``rows`` had a readable header (bool), in the endianness
+    its CDR encapsulation says (byte 1: 1 little, 0 big): bytes 4..12 the stamp, 12..16 the frame id's length with
+    its NUL, then its characters."""
     buf = np.frombuffer(block.buffer, dtype=np.uint8)
     starts, lengths = block.starts[rows], block.lengths[rows]
     ok = lengths >= 17
     s = np.where(ok, starts, 0)
     head = buf[s[:, None] + np.arange(16)] if len(s) else np.zeros((0, 16), np.uint8)
-    ok &= head[:, 1] == 1  # CDR_LE
+    ok &= (head[:, 0] == 0) & (head[:, 1] <= 1)  # CDR_BE (0, 0) or CDR_LE (0, 1)
+    big = head[:, 1] == 0
     head = np.ascontiguousarray(head)
-    sec = head[:, 4:8].copy().view("<i4")[:, 0].astype(np.int64)
-    nsec = head[:, 8:12].copy().view("<u4")[:, 0].astype(np.int64)
-    size = head[:, 12:16].copy().view("<u4")[:, 0].astype(np.int64)
+    sec, nsec, size = (
+        np.where(big, head[:, a:b].copy().view(">" + kind)[:, 0], head[:, a:b].copy().view("<" + kind)[:, 0])
+        .astype(np.int64)
+        for a, b, kind in ((4, 8, "i4"), (8, 12, "u4"), (12, 16, "u4"))
+    )
     ok &= (size >= 1) & (size <= MAX_FRAME_ID) & (16 + size <= lengths)
     chars = np.where(ok, size - 1, 0)
     width = int(chars.max()) if len(chars) else 0
@@ -61,7 +78,7 @@ def header_columns(block: Block, rows: np.ndarray) -> tuple[np.ndarray, I64, np.
 def read_bag(bag: Bag, *, headers: bool = True) -> tuple[TfRows, list[tuple[str, str]], HeaderRows]:
     """``/tf``'s rows, ``/tf_static``'s edges and (``headers``) the header frames of every other topic."""
     tf_topics = [t for t in TF_TOPICS if bag.require_type(t, TF_MESSAGE)]
-    named = sorted(t for t, info in bag.topics.items() if headers and t not in TF_TOPICS and has_header(info.msgtype))
+    named = sorted(t for t, info in bag.topics.items() if headers and t not in TF_TOPICS and header_first(info))
     receive = TfDecoder(bag.deserialize, static=False, time="receive")
     stamped = TfDecoder(bag.deserialize, static=False, time="header")
     static = TfDecoder(bag.deserialize, static=True, time="receive")

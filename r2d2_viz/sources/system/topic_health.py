@@ -14,7 +14,7 @@ import numpy as np
 
 from r2d2_viz.arrays import F64, I64
 from r2d2_viz.sources.bags.bag import Bag
-from r2d2_viz.sources.system.tf_read import has_header, header_columns
+from r2d2_viz.sources.system.tf_read import header_columns, header_first
 
 PERIOD_NS = 500_000_000
 WINDOW_NS = 2_000_000_000
@@ -42,7 +42,7 @@ def read_messages(
 ) -> dict[str, tuple[I64, I64, I64, I64]]:
     """topic → (receive times, sizes, header stamps or -1, ROS 1 ``header.seq`` or -1) of every message, in time
     order."""
-    headed = {t for t, info in bag.topics.items() if has_header(info.msgtype)}
+    headed = {t for t, info in bag.topics.items() if header_first(info)}
     parts: dict[str, list[tuple[I64, I64, I64, I64]]] = {}
     for block in bag.blocks(sorted(bag.topics), start_ns=start_ns, stop_ns=stop_ns):
         for k, topic in enumerate(block.topics):
@@ -54,7 +54,7 @@ def read_messages(
                 _, got, ok = header_columns(block, rows)
                 stamps[ok] = got[ok]
             seq = np.full(len(rows), -1, np.int64) if block.seq is None else block.seq[rows]
-            parts.setdefault(topic, []).append((block.times_ns[rows], block.lengths[rows], stamps, seq))
+            parts.setdefault(topic, []).append((block.times_ns[rows], block.stored_lengths[rows], stamps, seq))
     return {t: tuple(np.concatenate(c) for c in zip(*p, strict=True)) for t, p in parts.items()}  # type: ignore[misc]
 
 

@@ -123,3 +123,15 @@ def test_ros1_bandwidth_counts_the_bags_own_bytes(tmp_path: Path) -> None:
         (h,) = bag_health(b)
     k = int(np.flatnonzero(h.times_ns == ST0 + 5 * S)[0])
     assert (h.rate_hz[k], h.bandwidth[k]) == (pytest.approx(10.0), pytest.approx(80.0))
+
+
+def test_latency_of_a_vendors_header_type_and_big_endian_headers(tmp_path: Path) -> None:
+    """The bag of ``tests/headerbags.py``: ``/reading`` (a type only the bag defines) received 5 ms after its slot
+    and stamped 30 ms before it, ``/points_be`` (big-endian CDR) 6 ms after and 40 ms before: by hand, latencies of
+    35 and 46 ms in every window."""
+    from headerbags import write
+
+    with open_bag(write(tmp_path / "b")) as b:
+        got = {h.topic: h for h in bag_health(b)}
+    assert np.allclose(got["/reading"].latency_s, 0.035) and np.allclose(got["/points_be"].latency_s, 0.046)
+    assert np.isnan(got["/tf"].latency_s).all()
