@@ -56,11 +56,13 @@ def header_columns(block: Block, rows: np.ndarray) -> tuple[np.ndarray, I64, np.
     ok &= (head[:, 0] == 0) & (head[:, 1] <= 1)  # CDR_BE (0, 0) or CDR_LE (0, 1)
     big = head[:, 1] == 0
     head = np.ascontiguousarray(head)
-    sec, nsec, size = (
-        np.where(big, head[:, a:b].copy().view(">" + kind)[:, 0], head[:, a:b].copy().view("<" + kind)[:, 0])
-        .astype(np.int64)
-        for a, b, kind in ((4, 8, "i4"), (8, 12, "u4"), (12, 16, "u4"))
-    )
+
+    def number(at: int, kind: str) -> I64:
+        cells = head[:, at : at + 4].copy()
+        out: I64 = np.where(big, cells.view(">" + kind)[:, 0], cells.view("<" + kind)[:, 0]).astype(np.int64)
+        return out
+
+    sec, nsec, size = number(4, "i4"), number(8, "u4"), number(12, "u4")
     ok &= (size >= 1) & (size <= MAX_FRAME_ID) & (16 + size <= lengths)
     chars = np.where(ok, size - 1, 0)
     width = int(chars.max()) if len(chars) else 0

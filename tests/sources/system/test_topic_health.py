@@ -135,3 +135,14 @@ def test_latency_of_a_vendors_header_type_and_big_endian_headers(tmp_path: Path)
         got = {h.topic: h for h in bag_health(b)}
     assert np.allclose(got["/reading"].latency_s, 0.035) and np.allclose(got["/points_be"].latency_s, 0.046)
     assert np.isnan(got["/tf"].latency_s).all()
+
+
+def test_the_last_message_is_counted() -> None:
+    """Messages every 3 s from 0 to 51 s, then a topic of two messages 0.3 s apart. By hand: the first's series
+    ends at 51 s with its last message (1 in (49 s, 51 s] → 0.5 Hz); the second's at 0.3 s (1 after the first over
+    the 0.3 s since it → 3.33 Hz), off the half-second grid."""
+    t = np.arange(18, dtype=np.int64) * 3 * S
+    h = health("/slow", t, np.full(len(t), 10, np.int64), np.full(len(t), -1, np.int64))
+    assert h.times_ns[-1] == 51 * S and h.rate_hz[-1] == pytest.approx(0.5) and h.bandwidth[-1] == pytest.approx(5)
+    two = health("/two", np.array([0, 300 * MS]), np.array([10, 10]), np.array([-1, -1]))
+    assert list(two.times_ns) == [0, 300 * MS] and two.rate_hz[-1] == pytest.approx(1 / 0.3)
