@@ -134,28 +134,25 @@ class Rosbag1:
         self, chunk: Chunk, conns: dict[int, str], start: int, stop: int
     ) -> tuple[list[tuple[int, str, bytes | memoryview]], I64, I64]:
         """``(time, topic, CDR bytes)`` of the messages in ``chunk`` on ``conns`` received in ``[start, stop)``, their
-        ``header.seq`` (-1: none) and their sizes in the bag (ROS 1 bytes); one that does not fit its definition is
-        left out, counted in :attr:`bad_messages`."""
+        ``header.seq`` (-1: none) and ROS 1 sizes; one not fitting its definition is counted in :attr:`bad_messages`."""
         buf = self._records.chunk_data(chunk.pos, partial=True)
         index = self._records.chunk_index(chunk)
         if index is not None:
             return self._indexed_messages(buf, index, conns, start, stop)
         view = memoryview(buf)
         out: list[tuple[int, str, bytes | memoryview]] = []
-        seqs: list[int] = []
-        sizes: list[int] = []
+        kept: list[tuple[int, int]] = []  # header.seq, ROS 1 size
         for header, s, e in chunk_records(buf):
             if header.get(b"op") != b"\x02":
                 continue
-            conn = header.get(b"conn", b"")
-            c = _U32.unpack(conn)[0] if len(conn) == 4 else -1
+            c = _U32.unpack(conn)[0] if len(conn := header.get(b"conn", b"")) == 4 else -1
             if c not in conns:
                 continue
             t = time_ns(header.get(b"time", b""))
             if start <= t < stop and self._convert(out, t, c, conns[c], view[s:e]):
-                seqs.append(_U32.unpack_from(buf, s)[0] if c in self._headed and e - s >= 4 else -1)
-                sizes.append(e - s)
-        return out, np.array(seqs, dtype=np.int64), np.array(sizes, dtype=np.int64)
+                kept.append((_U32.unpack_from(buf, s)[0] if c in self._headed and e - s >= 4 else -1, e - s))
+        seqs, sizes = np.array(kept, dtype=np.int64).reshape(-1, 2).T
+        return out, seqs, sizes
 
     def _indexed_messages(
         self, buf: bytes, index: dict[int, IndexRows], conns: dict[int, str], start: int, stop: int

@@ -138,6 +138,15 @@ def test_ros1_bytes_are_the_bags_own(tmp_path: Path) -> None:
     with open_bag(tmp_path / "clock.bag") as b:
         clock = topic_rates(b)["/clock"]
     assert (clock.count, clock.nbytes, clock.bandwidth) == (101, 808, pytest.approx(80.8))
+    # the same bag cut after its one chunk, before the chunk's index records (a killed recorder): read by a scan
+    data = (tmp_path / "clock.bag").read_bytes()
+    records, at = [], 13  # after '#ROSBAG V2.0\n': header length, header, data length, data
+    while at < len(data):
+        header = int.from_bytes(data[at : at + 4], "little")
+        at += 8 + header + int.from_bytes(data[at + 4 + header : at + 8 + header], "little")
+        records.append(at)
+    (tmp_path / "cut.bag").write_bytes(data[: records[1]])  # the bag header, the chunk
+    assert ours(tmp_path / "cut.bag") == ros1_reference(tmp_path / "clock.bag")
     done = cli("--bag", str(tmp_path / "clock.bag"), "--list")
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines() == ["/clock [rosgraph_msgs/msg/Clock] 101 messages, 10 Hz, 80.8 B/s"]
