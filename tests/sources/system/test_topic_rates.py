@@ -150,3 +150,27 @@ def test_ros1_bytes_are_the_bags_own(tmp_path: Path) -> None:
     done = cli("--bag", str(tmp_path / "clock.bag"), "--list")
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines() == ["/clock [rosgraph_msgs/msg/Clock] 101 messages, 10 Hz, 80.8 B/s"]
+
+
+def test_a_layout_converted_to_humbles_counts_the_bags_own_bytes(tmp_path: Path) -> None:
+    """``/temp`` whose bag defines ``sensor_msgs/msg/Temperature`` with a field Humble's lacks (a 40-character
+    ``note``): its messages are converted to Humble's layout to be read, but its bytes are the bag's own, as
+    rosbags' reader hands them out (979 over 1 s; converted, 484)."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.EMPTY)
+    store.register({k: TS.fielddefs[k] for k in ("std_msgs/msg/Header", "builtin_interfaces/msg/Time")})
+    text = "std_msgs/Header header\nfloat64 temperature\nfloat64 variance\nstring note\n"
+    store.register(get_types_from_msg(text, "sensor_msgs/msg/Temperature"))
+    temp = store.types["sensor_msgs/msg/Temperature"]
+    header, time = store.types["std_msgs/msg/Header"], store.types["builtin_interfaces/msg/Time"]
+    path = tmp_path / "b"
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        conn = writer.add_connection("/temp", "sensor_msgs/msg/Temperature", typestore=store)
+        for k in range(11):
+            msg = temp(header(time(T0 // 1_000_000_000, k * 100 * MS), "probe"), 20.0, 0.5, "x" * 40)
+            writer.write(conn, T0 + k * 100 * MS, bytes(store.serialize_cdr(msg, "sensor_msgs/msg/Temperature")))
+    with open_bag(path) as b:
+        assert b.humble_topics == {"/temp"}  # converted to be read
+    assert ours(path) == reference(path) and reference(path)["/temp"][1] == 979
