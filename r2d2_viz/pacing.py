@@ -71,6 +71,8 @@ class Feeds:
     """Several robots: the second, third… (the first is the run's streamer)."""
     fields: FieldsFeed | None = None
     """Other topics' fields and ``--plot`` series."""
+    reached_ns: int | None = None
+    """The end of the last window whose items were handed on (the TF graph's snapshots go on to it)."""
 
     def push(self, window: Window) -> None:
         """A stretch's transforms and display messages, logged by :meth:`until` when due."""
@@ -83,6 +85,8 @@ class Feeds:
             robot.push(chunk)
         if self.fields is not None:
             self.fields.push(window.fields)
+        self._reached(self.reached_ns)  # the window before: its items were handed on
+        self.reached_ns = window.end_ns
 
     @property
     def next_time_ns(self) -> int | None:
@@ -96,6 +100,7 @@ class Feeds:
         return first
 
     def until(self, time_ns: int | None = None) -> None:
+        """Hand on what is due by ``time_ns`` (all of it when None: the run has got to its last window's end)."""
         self.tf.until(time_ns)
         if self.displays is not None:
             self.displays.until(time_ns)
@@ -103,6 +108,13 @@ class Feeds:
             robot.until(time_ns)
         if self.fields is not None:
             self.fields.until(time_ns)
+        if time_ns is None:
+            self._reached(self.reached_ns)
+
+    def _reached(self, time_ns: int | None) -> None:
+        """The run has got to ``time_ns``: the TF graph (``--tf-tree``) snapshots up to it, transforms or none."""
+        if time_ns is not None and (graph := self.tf.recorded.graph) is not None:
+            graph.advance(time_ns)
 
     @property
     def sent(self) -> int:
@@ -199,6 +211,7 @@ def paced(
                 streamer.rec.flush()
         if not stop.is_set() and clock is not None:
             _feed_until(clock, feeds, math.inf, stop, log)
+            feeds.until(None)  # nothing left but the run's end
     return (sent if streamer is not None and sent else feeds.sent), stop.is_set()
 
 

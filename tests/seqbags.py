@@ -63,3 +63,19 @@ def seqs(path: Path, topic: str) -> list[tuple[int, int]]:
     with Reader(path) as reader:
         conns = [c for c in reader.connections if c.topic == topic]
         return [(t, NOETIC.deserialize_ros1(d, c.msgtype).header.seq) for c, t, d in reader.messages(connections=conns)]
+
+
+CLOCK = "rosgraph_msgs/msg/Clock"
+CLOCK_MESSAGES = 101
+"""``/clock`` every 100 ms for 10 s: a ROS 1 ``time`` of 8 bytes each (its CDR, 4 bytes of encapsulation more, 12)."""
+
+
+def write_clock(path: Path) -> Path:
+    """A ROS 1 bag of :data:`CLOCK_MESSAGES` ``rosgraph_msgs/Clock`` on ``/clock``, 100 ms apart (rosbags' writer)."""
+    T = NOETIC.types
+    with Writer(path) as writer:
+        clock = writer.add_connection("/clock", CLOCK, typestore=NOETIC)
+        for k in range(CLOCK_MESSAGES):
+            now = T["builtin_interfaces/msg/Time"](sec=k // 10, nanosec=k % 10 * 100 * MS)
+            writer.write(clock, T0 + k * 100 * MS, bytes(NOETIC.serialize_ros1(T[CLOCK](clock=now), CLOCK)))
+    return path

@@ -182,7 +182,7 @@ class Bag:
             except MsgError:
                 self._bad[topic] = self._bad.get(topic, 0) + 1
         seq = None if block.seq is None else block.seq[kept]
-        return dataclasses.replace(block_of(out, block.topics, seq), read_nbytes=block.cost)
+        return dataclasses.replace(block_of(out, block.topics, seq, block.stored_lengths[kept]), read_nbytes=block.cost)
 
     def _problems(self, f: Storage) -> list[str]:
         """The damaged chunks (each counted once, on the pass that met it) and messages that do not fit their

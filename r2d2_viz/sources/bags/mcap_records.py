@@ -285,6 +285,7 @@ def merge_blocks(parts: list[Block]) -> Block:
         seq=None
         if all(p.seq is None for p in parts)
         else np.concatenate([np.full(len(p), -1, np.int64) if p.seq is None else p.seq for p in parts]),
+        sizes=None if all(p.sizes is None for p in parts) else np.concatenate([p.stored_lengths for p in parts]),
     )
     return in_time_order(block)
 

@@ -132,35 +132,35 @@ class Rosbag1:
 
     def _messages(
         self, chunk: Chunk, conns: dict[int, str], start: int, stop: int
-    ) -> tuple[list[tuple[int, str, bytes | memoryview]], I64]:
+    ) -> tuple[list[tuple[int, str, bytes | memoryview]], I64, I64]:
         """``(time, topic, CDR bytes)`` of the messages in ``chunk`` on ``conns`` received in ``[start, stop)``, their
-        ``header.seq`` (-1: none); one that does not fit its definition is left out, counted in :attr:`bad_messages`."""
+        ``header.seq`` (-1: none) and ROS 1 sizes; one not fitting its definition is counted in :attr:`bad_messages`."""
         buf = self._records.chunk_data(chunk.pos, partial=True)
         index = self._records.chunk_index(chunk)
         if index is not None:
             return self._indexed_messages(buf, index, conns, start, stop)
         view = memoryview(buf)
         out: list[tuple[int, str, bytes | memoryview]] = []
-        seqs: list[int] = []
+        kept: list[tuple[int, int]] = []  # header.seq, ROS 1 size
         for header, s, e in chunk_records(buf):
             if header.get(b"op") != b"\x02":
                 continue
-            conn = header.get(b"conn", b"")
-            c = _U32.unpack(conn)[0] if len(conn) == 4 else -1
+            c = _U32.unpack(conn)[0] if len(conn := header.get(b"conn", b"")) == 4 else -1
             if c not in conns:
                 continue
             t = time_ns(header.get(b"time", b""))
             if start <= t < stop and self._convert(out, t, c, conns[c], view[s:e]):
-                seqs.append(_U32.unpack_from(buf, s)[0] if c in self._headed and e - s >= 4 else -1)
-        return out, np.array(seqs, dtype=np.int64)
+                kept.append((_U32.unpack_from(buf, s)[0] if c in self._headed and e - s >= 4 else -1, e - s))
+        seqs, sizes = np.array(kept, dtype=np.int64).reshape(-1, 2).T
+        return out, seqs, sizes
 
     def _indexed_messages(
         self, buf: bytes, index: dict[int, IndexRows], conns: dict[int, str], start: int, stop: int
-    ) -> tuple[list[tuple[int, str, bytes | memoryview]], I64]:
+    ) -> tuple[list[tuple[int, str, bytes | memoryview]], I64, I64]:
         """As :meth:`_messages`, the records found through the chunk's index records (no header parsed)."""
         wanted = [c for c in index if c in conns]
         if not wanted:
-            return [], np.zeros(0, np.int64)
+            return [], np.zeros(0, np.int64), np.zeros(0, np.int64)
         rows = np.concatenate([index[c] for c in wanted])
         conn_ids = np.repeat(np.array(wanted, dtype=np.int64), [len(index[c]) for c in wanted])
         keep = (rows[:, 0] >= start) & (rows[:, 0] < stop)
@@ -178,7 +178,7 @@ class Rosbag1:
             if not self._convert(out, t, c, conns[c], view[s:e], done.get(i)):
                 left_out.append(i)
         seq = _header_seq(np.frombuffer(buf, dtype=np.uint8), np.isin(conn_ids, list(self._headed)), starts, ends)
-        return out, np.delete(seq, left_out) if left_out else seq
+        return out, np.delete(seq, left_out), np.delete(ends - starts, left_out)
 
     def _convert(self, out: list[Any], t: int, conn: int, topic: str, raw: memoryview, cdr: Any = None) -> bool:
         """Appends ``(t, topic, CDR bytes)`` (``cdr`` when converted already); a message that does not fit its
@@ -282,7 +282,9 @@ def _span(chunks: list[Chunk]) -> tuple[int, int] | None:
     return min(c.start_ns for c in with_messages), max(c.end_ns for c in with_messages)
 
 
-def _block_of(found: tuple[list[tuple[int, str, bytes | memoryview]], I64], names: tuple[str, ...]) -> Block | None:
-    """A chunk's messages and their ``header.seq`` as a block (None: none)."""
-    messages, seqs = found
-    return block_of(messages, names, seqs) if messages else None
+def _block_of(
+    found: tuple[list[tuple[int, str, bytes | memoryview]], I64, I64], names: tuple[str, ...]
+) -> Block | None:
+    """A chunk's messages, their ``header.seq`` and their ROS 1 sizes as a block (None: none)."""
+    messages, seqs, sizes = found
+    return block_of(messages, names, seqs, sizes) if messages else None

@@ -52,9 +52,17 @@ class Block:
     seq: I64 | None = None
     """Each message's ROS 1 ``header.seq`` (-1: none), which the conversion to CDR drops; None: not read (a ROS 2
     storage)."""
+    sizes: I64 | None = None
+    """Each message's size as the bag stores it, where ``lengths`` are of a conversion (a ROS 1 message as CDR, a
+    layout converted to Humble's); None: ``lengths`` are the bag's own."""
 
     def __len__(self) -> int:
         return len(self.times_ns)
+
+    @property
+    def stored_lengths(self) -> I64:
+        """Each message's size as the bag stores it (what ``ros2 topic bw`` / ``rostopic bw`` would count)."""
+        return self.lengths if self.sizes is None else self.sizes
 
     @property
     def nbytes(self) -> int:
@@ -87,6 +95,7 @@ class Block:
             self.read_nbytes,
             self.file,
             None if self.seq is None else self.seq[rows],
+            None if self.sizes is None else self.sizes[rows],
         )
 
     def compacted(self) -> Block:
@@ -106,6 +115,7 @@ class Block:
             self.cost,
             self.file,
             self.seq,
+            self.sizes,
         )
 
     def messages(self) -> Iterator[tuple[int, str, memoryview]]:
@@ -119,10 +129,13 @@ class Block:
 
 
 def block_of(
-    messages: list[tuple[int, str, bytes | memoryview]], topics: tuple[str, ...], seq: I64 | None = None
+    messages: list[tuple[int, str, bytes | memoryview]],
+    topics: tuple[str, ...],
+    seq: I64 | None = None,
+    sizes: I64 | None = None,
 ) -> Block:
     """A block from separate messages (storages without one buffer per stretch): their bytes joined once; ``seq``:
-    their ROS 1 ``header.seq`` (:attr:`Block.seq`)."""
+    their ROS 1 ``header.seq`` (:attr:`Block.seq`); ``sizes``: as the bag stores them (:attr:`Block.sizes`)."""
     index = {t: k for k, t in enumerate(topics)}
     lengths = np.fromiter((len(m[2]) for m in messages), dtype=np.int64, count=len(messages))
     starts = np.zeros(len(messages), dtype=np.int64)
@@ -131,7 +144,7 @@ def block_of(
     times = np.fromiter((m[0] for m in messages), dtype=np.int64, count=len(messages))
     topic_index = np.fromiter((index[m[1]] for m in messages), dtype=np.int32, count=len(messages))
     data = memoryview(b"".join(m[2] for m in messages))
-    return in_time_order(Block(times, topic_index, topics, data, starts, lengths, seq=seq))
+    return in_time_order(Block(times, topic_index, topics, data, starts, lengths, seq=seq, sizes=sizes))
 
 
 def in_time_order(block: Block) -> Block:
@@ -198,6 +211,7 @@ def renamed(block: Block, order: tuple[str, ...]) -> Block:
         block.lengths,
         file=block.file,
         seq=block.seq,
+        sizes=block.sizes,
     )
 
 

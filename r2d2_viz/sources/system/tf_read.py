@@ -11,11 +11,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from r2d2_viz.arrays import I64
-from r2d2_viz.msgs.typestore import typestore
+from r2d2_viz.msgs.definitions import own_store
+from r2d2_viz.msgs.typestore import MsgError, typestore
 from r2d2_viz.sources.bag_joints import JOINT_STATE, JointStateDecoder
 from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder
 from r2d2_viz.sources.bags.bag import Bag
-from r2d2_viz.sources.bags.storage import Block
+from r2d2_viz.sources.bags.storage import Block, TopicInfo
 from r2d2_viz.sources.base import SampleChunk
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.playback import JOINTS
@@ -29,28 +30,46 @@ MAX_FRAME_ID = 256
 HEADER_TYPE = "std_msgs/msg/Header"
 
 
-def has_header(msgtype: str) -> bool:
-    """Whether messages of ``msgtype`` start with a ``std_msgs/Header`` (known to the Humble typestore)."""
-    defs = typestore().fielddefs.get(msgtype)
+def has_header(msgtype: str, definition: str = "", encoding: str = "") -> bool:
+    """Whether messages of ``msgtype`` start with a ``std_msgs/Header``: by the message ``definition`` their bag
+    carries (in ``encoding``: a vendor's type that only the bag defines), else by Humble's."""
+    store = typestore()
+    if definition:
+        try:
+            store = own_store(msgtype, definition, encoding)
+        except MsgError:
+            pass  # a definition that cannot be read: as Humble has the type, if it does
+    defs = store.fielddefs.get(msgtype)
     if not defs or not defs[1]:
         return False
     name, (_, kind) = defs[1][0]
     return bool(name == "header" and kind == HEADER_TYPE)
 
 
+def header_first(topic: TopicInfo) -> bool:
+    """:func:`has_header` of a bag's topic, by the definition the bag carries for it."""
+    return has_header(topic.msgtype, topic.definition, topic.encoding)
+
+
 def header_columns(block: Block, rows: np.ndarray) -> tuple[np.ndarray, I64, np.ndarray]:
-    """The frame ids (str array), stamps (ns) and which of ``rows`` had a readable little-endian header (bool):
-    bytes 4..12 the stamp, 12..16 the frame id's length with its NUL, then its characters."""
+    """The frame ids (str array), stamps (ns) and which of ``rows`` had a readable header (bool), in the endianness
+    its CDR encapsulation says (byte 1: 1 little, 0 big): bytes 4..12 the stamp, 12..16 the frame id's length with
+    its NUL, then its characters."""
     buf = np.frombuffer(block.buffer, dtype=np.uint8)
     starts, lengths = block.starts[rows], block.lengths[rows]
     ok = lengths >= 17
     s = np.where(ok, starts, 0)
     head = buf[s[:, None] + np.arange(16)] if len(s) else np.zeros((0, 16), np.uint8)
-    ok &= head[:, 1] == 1  # CDR_LE
+    ok &= (head[:, 0] == 0) & (head[:, 1] <= 1)  # CDR_BE (0, 0) or CDR_LE (0, 1)
+    big = head[:, 1] == 0
     head = np.ascontiguousarray(head)
-    sec = head[:, 4:8].copy().view("<i4")[:, 0].astype(np.int64)
-    nsec = head[:, 8:12].copy().view("<u4")[:, 0].astype(np.int64)
-    size = head[:, 12:16].copy().view("<u4")[:, 0].astype(np.int64)
+
+    def number(at: int, kind: str) -> I64:
+        cells = head[:, at : at + 4].copy()
+        out: I64 = np.where(big, cells.view(">" + kind)[:, 0], cells.view("<" + kind)[:, 0]).astype(np.int64)
+        return out
+
+    sec, nsec, size = number(4, "i4"), number(8, "u4"), number(12, "u4")
     ok &= (size >= 1) & (size <= MAX_FRAME_ID) & (16 + size <= lengths)
     chars = np.where(ok, size - 1, 0)
     width = int(chars.max()) if len(chars) else 0
@@ -89,7 +108,7 @@ def read_bag(
     robot = src.robot
     joint_topics = [t if robot is not None and bag.require_type(t, JOINT_STATE) else "" for t in src.joints]
     tf_read = {*moving, *statics, *TF_TOPICS}
-    named = sorted(t for t, info in bag.topics.items() if headers and t not in tf_read and has_header(info.msgtype))
+    named = sorted(t for t, info in bag.topics.items() if headers and t not in tf_read and header_first(info))
     receive = TfDecoder(bag.deserialize, static=False, time="receive")
     stamped = TfDecoder(bag.deserialize, static=False, time="header")
     static = TfDecoder(bag.deserialize, static=True, time="receive")

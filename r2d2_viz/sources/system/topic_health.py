@@ -1,12 +1,13 @@
 """Each topic's health over time, from a bag: its rate (Hz) and bandwidth (B/s) over a sliding window, for
 messages that start with a ``std_msgs/Header`` their mean latency (receive time − header stamp) over the same
 window, and, for a ROS 1 topic of one publisher, its drops (``header.seq`` numbers missing, counted at the message
-after them) in the window; sampled every :data:`PERIOD_NS` from the topic's first message to its last. One pass over
-the storage blocks (headers read from the bytes, :func:`~.tf_read.header_columns`), then cumulative sums and
+after them) in the window; sampled every :data:`PERIOD_NS` from the topic's first message, and at its last. One pass
+over the storage blocks (headers read from the bytes, :func:`~.tf_read.header_columns`), then cumulative sums and
 ``searchsorted`` per topic. Pure; no rerun import."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -14,7 +15,8 @@ import numpy as np
 
 from r2d2_viz.arrays import F64, I64
 from r2d2_viz.sources.bags.bag import Bag
-from r2d2_viz.sources.system.tf_read import has_header, header_columns
+from r2d2_viz.sources.system.tf_read import header_columns, header_first
+from r2d2_viz.sources.system.time_base import TimeBase, header_base
 
 PERIOD_NS = 500_000_000
 WINDOW_NS = 2_000_000_000
@@ -36,13 +38,17 @@ class TopicHealth:
     """Sequence numbers missing in the window (:func:`seq_gaps`); None: not known (no ROS 1 ``seq``, several
     publishers, each counting its own, or numbers that do not grow)."""
 
+    def retimed(self, base: TimeBase) -> TopicHealth:
+        """The same samples at ``base``'s times (the run's timeline: :mod:`~.time_base`)."""
+        return dataclasses.replace(self, times_ns=base(self.times_ns))
+
 
 def read_messages(
     bag: Bag, start_ns: int | None = None, stop_ns: int | None = None
 ) -> dict[str, tuple[I64, I64, I64, I64]]:
     """topic → (receive times, sizes, header stamps or -1, ROS 1 ``header.seq`` or -1) of every message, in time
     order."""
-    headed = {t for t, info in bag.topics.items() if has_header(info.msgtype)}
+    headed = {t for t, info in bag.topics.items() if header_first(info)}
     parts: dict[str, list[tuple[I64, I64, I64, I64]]] = {}
     for block in bag.blocks(sorted(bag.topics), start_ns=start_ns, stop_ns=stop_ns):
         for k, topic in enumerate(block.topics):
@@ -54,7 +60,7 @@ def read_messages(
                 _, got, ok = header_columns(block, rows)
                 stamps[ok] = got[ok]
             seq = np.full(len(rows), -1, np.int64) if block.seq is None else block.seq[rows]
-            parts.setdefault(topic, []).append((block.times_ns[rows], block.lengths[rows], stamps, seq))
+            parts.setdefault(topic, []).append((block.times_ns[rows], block.stored_lengths[rows], stamps, seq))
     return {t: tuple(np.concatenate(c) for c in zip(*p, strict=True)) for t, p in parts.items()}  # type: ignore[misc]
 
 
@@ -84,6 +90,7 @@ def health(
     order = np.argsort(times, kind="stable")
     times, sizes, stamps = times[order], sizes[order], stamps[order]
     grid = np.arange(int(times[0]), int(times[-1]) + 1, period_ns, dtype=np.int64)
+    grid = grid if grid[-1] == times[-1] else np.r_[grid, times[-1]]  # the last message counted too
     hi = np.searchsorted(times, grid, side="right")
     lo = np.searchsorted(times, grid - window_ns, side="right")
     span = np.minimum(window_ns, np.maximum(grid - int(times[0]), 1)) / 1e9  # the window, or what of it has passed
@@ -108,12 +115,25 @@ def health(
 
 
 def bag_health(bag: Bag, start_ns: int | None = None, stop_ns: int | None = None) -> list[TopicHealth]:
-    """Every topic's :class:`TopicHealth` over the stretch (the whole bag by default)."""
+    """Every topic's :class:`TopicHealth` over the stretch ``[start_ns, stop_ns)`` (the whole bag by default)."""
+    return series(bag, read_messages(bag, start_ns, stop_ns))
+
+
+def series(bag: Bag, messages: dict[str, tuple[I64, I64, I64, I64]]) -> list[TopicHealth]:
+    """Each topic's :class:`TopicHealth` from its messages (:func:`read_messages`)."""
     out = []
-    for t, (times, sizes, stamps, seq) in sorted(read_messages(bag, start_ns, stop_ns).items()):
+    for t, (times, sizes, stamps, seq) in sorted(messages.items()):
         one = bag.topics[t].publishers == 1  # several publishers count each its own
         out.append(health(t, times, sizes, stamps, seq if one else None))
     return out
+
+
+def messages_base(messages: dict[str, tuple[I64, I64, I64, I64]]) -> TimeBase:
+    """The header clock against the receive clock (:func:`~.time_base.header_base`) of the messages with a header."""
+    if not messages:
+        return header_base(np.zeros(0, np.int64), np.zeros(0, np.int64))
+    receive = np.concatenate([m[0] for m in messages.values()])
+    return header_base(receive, np.concatenate([m[2] for m in messages.values()]))
 
 
 class LiveHealth:

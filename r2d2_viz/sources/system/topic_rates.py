@@ -17,7 +17,8 @@ from r2d2_viz.sources.system.topic_health import seq_gaps
 
 @dataclass(frozen=True)
 class TopicRate:
-    """A topic's messages read, their bytes (CDR, as stored), first and last receive times (ns) and drops."""
+    """A topic's messages read, their bytes as the bag stores them (a ROS 1 bag's own, not their CDR), first and last
+    receive times (ns) and drops."""
 
     count: int
     nbytes: int
@@ -55,7 +56,7 @@ def topic_rates(bag: Bag) -> dict[str, TopicRate]:
         seqs.add(block)
         index = np.array([where[t] for t in block.topics], np.int64)[block.topic_index]
         count += np.bincount(index, minlength=len(names))
-        nbytes += np.bincount(index, weights=block.lengths, minlength=len(names)).astype(np.int64)
+        nbytes += np.bincount(index, weights=block.stored_lengths, minlength=len(names)).astype(np.int64)
         np.minimum.at(first, index, block.times_ns)
         np.maximum.at(last, index, block.times_ns)
     return {

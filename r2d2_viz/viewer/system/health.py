@@ -10,9 +10,11 @@ import rerun as rr
 
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.sources.plan import BagReplay
-from r2d2_viz.sources.system.topic_health import TopicHealth, bag_health
+from r2d2_viz.sources.system.time_base import RECEIVE
+from r2d2_viz.sources.system.topic_health import TopicHealth, messages_base, read_messages, series
 from r2d2_viz.viewer import entities
 from r2d2_viz.viewer.columns import encoded, send, time_array
+from r2d2_viz.viewer.system.tf_graph import WINDOW_NS as TF_WINDOW_NS
 from r2d2_viz.viewer.system.tf_graph import TfGraph
 
 ROOT = "/health"
@@ -45,7 +47,13 @@ def log_health(rec: rr.RecordingStream, series: list[TopicHealth], clock: Clock)
 
 def system_views(rec: rr.RecordingStream, clock: Clock, replay: BagReplay | None) -> TfGraph:
     """``--tf-tree`` with a sink: the TF graph (fed as transforms are logged) and, replaying a bag, every topic's
-    health over the replayed stretch."""
-    if replay is not None:
-        log_health(rec, bag_health(replay.bag, *replay.span), clock)
-    return TfGraph(rec, clock=clock)
+    health over the replayed stretch (its last message included), both on the run's time base: with ``--time
+    header``, the header clock as the bag's headers give it (:mod:`~r2d2_viz.sources.system.time_base`)."""
+    if replay is None:
+        return TfGraph(rec, clock=clock)
+    start, stop = replay.span[0], replay.segments[-1].stop_ns
+    messages = read_messages(replay.bag, start, stop)
+    base = messages_base(messages) if replay.time == "header" else RECEIVE
+    log_health(rec, [h.retimed(base) for h in series(replay.bag, messages)], clock)
+    length = (stop if stop is not None else replay.span[1]) - start
+    return TfGraph(rec, clock=clock, time_base=base, horizon_ns=length + TF_WINDOW_NS)

@@ -16,6 +16,7 @@ import rerun as rr
 from r2d2_viz.arrays import I64
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.sources.system.tf_tree import STALE_MIN_S, STALE_PERIODS
+from r2d2_viz.sources.system.time_base import RECEIVE, TimeBase
 from r2d2_viz.viewer import entities
 from r2d2_viz.viewer.columns import encoded, send, time_array
 
@@ -42,14 +43,20 @@ class TfGraph:
         timeline: str = entities.TIMELINE,
         period_ns: int = PERIOD_NS,
         window_ns: int = WINDOW_NS,
+        time_base: TimeBase = RECEIVE,
+        horizon_ns: int | None = None,
     ) -> None:
         self.rec, self.clock, self.timeline = rec, clock, timeline
         self.period_ns, self.window_ns = period_ns, window_ns
+        self.time_base, self.horizon_ns = time_base, horizon_ns
+        """Receive times (of ``/tf_static``, of :meth:`advance`) → the run's; :meth:`advance` fills at most this far
+        past the newest transform (a run's clock and its transforms' that disagree fill nothing)."""
         self.edges: list[tuple[str, str]] = []
         self._index: dict[tuple[str, str], int] = {}
         self.static: set[int] = set()
         self._first = np.zeros(0, np.int64)
         self._last = np.zeros(0, np.int64)
+        self._count = np.zeros(0, np.int64)
         self._recent = (np.zeros(0, np.int64), np.zeros(0, np.int64))  # codes, times within the window
         self._next: int | None = None
         self.snapshots = 0
@@ -62,7 +69,7 @@ class TfGraph:
         times = np.asarray(records.times_ns, np.int64)
         if records.static:
             self.static |= {int(c) for c in np.unique(codes)}
-            self._log_snapshots(np.array([int(times.max())]), codes[:0], times[:0])
+            self._log_snapshots(np.array([self.time_base.at(int(times.max()))]), codes[:0], times[:0])
             return
         order = np.argsort(times, kind="stable")
         codes, times = codes[order], times[order]
@@ -73,9 +80,23 @@ class TfGraph:
             self._log_snapshots(due, codes, times)
             self._next = int(due[-1]) + self.period_ns
         np.maximum.at(self._last, codes, times)
+        self._count += np.bincount(codes, minlength=len(self.edges))
         recent_codes, recent_times = (np.r_[a, b] for a, b in zip(self._recent, (codes, times), strict=True))
         keep = recent_times > int(times[-1]) - self.window_ns
         self._recent = (recent_codes[keep], recent_times[keep])
+
+    def advance(self, receive_ns: int) -> None:
+        """The run has got to ``receive_ns`` (every transform before it given): the snapshots due by then, so a frame
+        whose transforms stopped ages and turns stale while the bag goes on."""
+        if self._next is None:
+            return  # no moving edge yet: the static graph's one snapshot holds
+        upto = self.time_base.at(receive_ns)
+        if self.horizon_ns is not None and upto - int(self._last.max()) > self.horizon_ns:
+            return
+        due = np.arange(self._next, upto + 1, self.period_ns, dtype=np.int64)
+        if len(due):
+            self._log_snapshots(due, np.zeros(0, np.int64), np.zeros(0, np.int64))
+            self._next = int(due[-1]) + self.period_ns
 
     def _codes(self, parents: tuple[str, ...], children: tuple[str, ...]) -> I64:
         """Each row's edge number (new edges numbered as they come)."""
@@ -92,6 +113,7 @@ class TfGraph:
         if grow:
             self._first = np.r_[self._first, np.full(grow, np.iinfo(np.int64).max)]
             self._last = np.r_[self._last, np.full(grow, NEVER)]
+            self._count = np.r_[self._count, np.zeros(grow, np.int64)]
         return numbers[np.asarray(inverse).reshape(-1)]
 
     def _log_snapshots(self, due: I64, codes: I64, times: I64) -> None:
@@ -110,6 +132,9 @@ class TfGraph:
             last = self._last.copy()
             upto = int(np.searchsorted(times, t, side="right"))
             np.maximum.at(last, codes[:upto], times[:upto])
+            seen = self._count + np.bincount(codes[:upto], minlength=len(self.edges))
+            with np.errstate(divide="ignore", invalid="ignore"):  # the edge's average period so far (the tree's)
+                period = np.where(seen > 1, (last - self._first) / (seen - 1) / 1e9, np.nan)
             span = np.minimum(self.window_ns, t - self._first) / 1e9
             partial = t - self.window_ns < self._first  # the edge's first message starts the span
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -122,7 +147,7 @@ class TfGraph:
                 if e in self.static and np.isnan(age[e]):  # on /tf too: dynamic from its first message there
                     text[i], color[i] = f"{c}\nstatic", STATIC_COLOR
                 elif not np.isnan(age[e]):
-                    stale = counts[e] == 0 or age[e] > max(STALE_PERIODS / rate[e], STALE_MIN_S)
+                    stale = bool(age[e] > max(STALE_PERIODS * period[e], STALE_MIN_S))  # NaN: one message, never
                     text[i] = f"{c}\n{rate[e]:.3g} Hz · {age[e]:.2g} s"
                     color[i] = STALE_COLOR if stale else FRESH_COLOR
             labels += text

@@ -11,7 +11,7 @@ from rosbags.highlevel import AnyReader
 from tfbags import MS, T0, TS, bag, edge_every, point, real_bag, spec
 
 from r2d2_viz.sources.bags.bag import open_bag
-from r2d2_viz.sources.system.tf_read import has_header, read_bag
+from r2d2_viz.sources.system.tf_read import bag_tree, has_header, read_bag
 
 
 def reference_headers(path: Path) -> list[tuple[str, str, int, int]]:
@@ -58,3 +58,26 @@ def test_header_frames_of_a_real_bag_agree_with_rosbags() -> None:
     path = real_bag("webots_epuck")
     expected = reference_headers(path)
     assert len(expected) > 10_000 and ours(path) == expected
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_a_vendors_header_type_and_big_endian_headers(tmp_path: Path, storage: str) -> None:
+    """Header-first by the bag's own definition (a vendor's type Humble does not have) and headers read in their
+    CDR's endianness (a big-endian PointStamped): every frame and stamp as rosbags deserialises them (with the
+    bag's definitions), and both unreached frames named."""
+    from headerbags import write
+
+    path = write(tmp_path / "b", storage)
+    expected = []
+    with AnyReader([path]) as reader:
+        assert reader.connections and all(c.msgtype in reader.typestore.fielddefs for c in reader.connections)
+        for conn, t, data in reader.messages([c for c in reader.connections if c.topic != "/tf"]):
+            h = reader.deserialize(data, conn.msgtype).header
+            expected.append((conn.topic, h.frame_id, h.stamp.sec * 1_000_000_000 + h.stamp.nanosec, t))
+    assert len(expected) == 100 and ours(path) == sorted(expected)
+    with open_bag(path) as b:
+        tree = bag_tree(b)
+    assert tree.problems == (
+        "frame camera: named in the headers of /points_be; no transform reaches it",
+        "frame sensor: named in the headers of /reading; no transform reaches it",
+    )

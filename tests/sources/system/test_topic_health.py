@@ -111,3 +111,38 @@ def test_live_health_fed_in_pieces_by_hand() -> None:
     assert ("/fast", 0) not in got  # nothing to divide by at the first message
     assert got[("/one", 3 * s // 2)] == pytest.approx((0.0, 0.0))  # its first message starts the span: none after
     assert sorted(t for topic, t in got if topic == "/fast") == [k * s // 2 for k in range(1, 9)]
+
+
+def test_ros1_bandwidth_counts_the_bags_own_bytes(tmp_path: Path) -> None:
+    """A ROS 1 ``/clock`` of 8-byte messages every 100 ms (rosbags' writer; its CDR would be 12 bytes): by hand the
+    window (3 s, 5 s] holds 20 messages, 160 bytes over 2 s → 80 B/s."""
+    from seqbags import T0 as ST0
+    from seqbags import write_clock
+
+    with open_bag(write_clock(tmp_path / "clock.bag")) as b:
+        (h,) = bag_health(b)
+    k = int(np.flatnonzero(h.times_ns == ST0 + 5 * S)[0])
+    assert (h.rate_hz[k], h.bandwidth[k]) == (pytest.approx(10.0), pytest.approx(80.0))
+
+
+def test_latency_of_a_vendors_header_type_and_big_endian_headers(tmp_path: Path) -> None:
+    """The bag of ``tests/headerbags.py``: ``/reading`` (a type only the bag defines) received 5 ms after its slot
+    and stamped 30 ms before it, ``/points_be`` (big-endian CDR) 6 ms after and 40 ms before: by hand, latencies of
+    35 and 46 ms in every window."""
+    from headerbags import write
+
+    with open_bag(write(tmp_path / "b")) as b:
+        got = {h.topic: h for h in bag_health(b)}
+    assert np.allclose(got["/reading"].latency_s, 0.035) and np.allclose(got["/points_be"].latency_s, 0.046)
+    assert np.isnan(got["/tf"].latency_s).all()
+
+
+def test_the_last_message_is_counted() -> None:
+    """Messages every 3 s from 0 to 51 s, then a topic of two messages 0.3 s apart. By hand: the first's series
+    ends at 51 s with its last message (1 in (49 s, 51 s] → 0.5 Hz); the second's at 0.3 s (1 after the first over
+    the 0.3 s since it → 3.33 Hz), off the half-second grid."""
+    t = np.arange(18, dtype=np.int64) * 3 * S
+    h = health("/slow", t, np.full(len(t), 10, np.int64), np.full(len(t), -1, np.int64))
+    assert h.times_ns[-1] == 51 * S and h.rate_hz[-1] == pytest.approx(0.5) and h.bandwidth[-1] == pytest.approx(5)
+    two = health("/two", np.array([0, 300 * MS]), np.array([10, 10]), np.array([-1, -1]))
+    assert list(two.times_ns) == [0, 300 * MS] and two.rate_hz[-1] == pytest.approx(1 / 0.3)

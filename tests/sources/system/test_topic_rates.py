@@ -108,3 +108,69 @@ def test_the_real_turtlesim_rosout_has_no_drops_to_speak_of() -> None:
     assert any(b <= a for a, b in itertools.pairwise(got))
     with open_bag(path) as b:
         assert topic_rates(b)["/rosout"].drops is None
+
+
+def ros1_reference(path: Path) -> dict[str, tuple[int, int, int, int]]:
+    """topic → (count, bytes, first, last) by rosbags' own ROS 1 reader: the raw (ROS 1 serialised) messages."""
+    from rosbags.rosbag1 import Reader
+
+    out: dict[str, list[int]] = {}
+    with Reader(path) as reader:
+        for conn, t, data in reader.messages():
+            got = out.setdefault("/" + conn.topic.lstrip("/"), [0, 0, t, t])
+            got[0] += 1
+            got[1] += len(data)
+            got[2], got[3] = min(got[2], t), max(got[3], t)
+    return {k: (v[0], v[1], v[2], v[3]) for k, v in out.items()}
+
+
+def test_ros1_bytes_are_the_bags_own(tmp_path: Path) -> None:
+    """A ROS 1 topic's bytes are its messages as the bag stores them (ROS 1 serialised), not their conversion to
+    CDR: every topic of the real turtlesim bag and of two bags written with rosbags agrees with rosbags' ROS 1
+    reader; ``/clock`` by hand: 101 messages of 8 bytes over 10 s, 80.8 B/s (its CDR would be 12 bytes each)."""
+    from seqbags import write, write_clock
+
+    real = Path(__file__).parents[2] / "data/bags/ros1/example-lz4.bag"
+    for path in (real, write(tmp_path / "seq.bag"), write_clock(tmp_path / "clock.bag")):
+        expected = ros1_reference(path)
+        assert len(expected) >= 2 or path.name == "clock.bag"
+        assert ours(path) == expected
+    with open_bag(tmp_path / "clock.bag") as b:
+        clock = topic_rates(b)["/clock"]
+    assert (clock.count, clock.nbytes, clock.bandwidth) == (101, 808, pytest.approx(80.8))
+    # the same bag cut after its one chunk, before the chunk's index records (a killed recorder): read by a scan
+    data = (tmp_path / "clock.bag").read_bytes()
+    records, at = [], 13  # after '#ROSBAG V2.0\n': header length, header, data length, data
+    while at < len(data):
+        header = int.from_bytes(data[at : at + 4], "little")
+        at += 8 + header + int.from_bytes(data[at + 4 + header : at + 8 + header], "little")
+        records.append(at)
+    (tmp_path / "cut.bag").write_bytes(data[: records[1]])  # the bag header, the chunk
+    assert ours(tmp_path / "cut.bag") == ros1_reference(tmp_path / "clock.bag")
+    done = cli("--bag", str(tmp_path / "clock.bag"), "--list")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == ["/clock [rosgraph_msgs/msg/Clock] 101 messages, 10 Hz, 80.8 B/s"]
+
+
+def test_a_layout_converted_to_humbles_counts_the_bags_own_bytes(tmp_path: Path) -> None:
+    """``/temp`` whose bag defines ``sensor_msgs/msg/Temperature`` with a field Humble's lacks (a 40-character
+    ``note``): its messages are converted to Humble's layout to be read, but its bytes are the bag's own, as
+    rosbags' reader hands them out (979 over 1 s; converted, 484)."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.EMPTY)
+    store.register({k: TS.fielddefs[k] for k in ("std_msgs/msg/Header", "builtin_interfaces/msg/Time")})
+    text = "std_msgs/Header header\nfloat64 temperature\nfloat64 variance\nstring note\n"
+    store.register(get_types_from_msg(text, "sensor_msgs/msg/Temperature"))
+    temp = store.types["sensor_msgs/msg/Temperature"]
+    header, time = store.types["std_msgs/msg/Header"], store.types["builtin_interfaces/msg/Time"]
+    path = tmp_path / "b"
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        conn = writer.add_connection("/temp", "sensor_msgs/msg/Temperature", typestore=store)
+        for k in range(11):
+            msg = temp(header(time(T0 // 1_000_000_000, k * 100 * MS), "probe"), 20.0, 0.5, "x" * 40)
+            writer.write(conn, T0 + k * 100 * MS, bytes(store.serialize_cdr(msg, "sensor_msgs/msg/Temperature")))
+    with open_bag(path) as b:
+        assert b.humble_topics == {"/temp"}  # converted to be read
+    assert ours(path) == reference(path) and reference(path)["/temp"][1] == 979

@@ -11,7 +11,20 @@ import pytest
 import rerun as rr
 from conftest import cli
 from rrd import blueprint_components, read_recording
-from tfbags import MS, T0, S, bag, edge_every, receive_times, reference_edges, reference_static, rover, spec, static
+from tfbags import (
+    MS,
+    T0,
+    S,
+    bag,
+    edge_every,
+    point,
+    receive_times,
+    reference_edges,
+    reference_static,
+    rover,
+    spec,
+    static,
+)
 
 from r2d2_viz.sources.base import TfRecords
 from r2d2_viz.viewer.system.tf_graph import FRESH_COLOR, STALE_COLOR, STATIC_COLOR, TfGraph, _layout
@@ -165,3 +178,47 @@ def test_the_tutorial_robot_has_its_graph(tmp_path: Path) -> None:
         ("head", "rod"),
         ("rod", "box"),
     }
+
+
+def test_snapshots_go_on_after_the_transforms_stop(tmp_path: Path) -> None:
+    """odom → base_link at 10 Hz from 0 to 2.9 s, then nothing while the run goes on to 7 s (:meth:`advance`, as a
+    replay's windows end). By hand, with the printed tree's rule (stale: older than 5 of its average periods, 0.5 s,
+    and 0.5 s): at 3 s the window (1 s, 3 s] holds 19 → 9.5 Hz, 0.1 s old, green; at 3.5 s 14 → 7 Hz, 0.6 s old:
+    red (the rate over the window would have allowed 5 / 7 Hz = 0.71 s); at 7 s none, 4.1 s old, red. Advancing to
+    where the graph's clock and the run's disagree beyond the horizon logs nothing."""
+    out = tmp_path / "g.rrd"
+    rec = rr.RecordingStream("test")
+    rec.save(out)
+    graph = TfGraph(rec, clock="timestamp", horizon_ns=10 * S)
+    graph.advance(T0)  # nothing moves yet: no snapshot
+    graph.add(records(T0 + np.arange(30) * 100 * MS, ["odom"] * 30, ["base_link"] * 30))
+    graph.advance(T0 + 5 * S)
+    graph.advance(T0 + 7 * S)
+    graph.advance(T0 + 60 * S)  # 57 s past the newest transform, beyond the 10 s horizon
+    rec.flush()
+    rec.disconnect()
+    rows = read_recording(out)["/tf_tree"]
+    assert rows.times == list(range(T0, T0 + 7 * S + 1, S // 2))
+    assert snapshot(rows, rows.times.index(T0 + 3 * S))["base_link"] == ("base_link\n9.5 Hz · 0.1 s", FRESH_COLOR)
+    assert snapshot(rows, rows.times.index(T0 + 7 * S // 2))["base_link"] == ("base_link\n7 Hz · 0.6 s", STALE_COLOR)
+    assert snapshot(rows, rows.times.index(T0 + 7 * S))["base_link"] == ("base_link\n0 Hz · 4.1 s", STALE_COLOR)
+
+
+def test_a_bag_whose_tf_stops_while_it_goes_on(tmp_path: Path) -> None:
+    """A saved replay: /tf at 10 Hz to 3.9 s, /points to 10 s. The graph gets a snapshot every half second to the
+    bag's end (it stopped at 3.5 s with the last transform, "10 Hz · 0 s" in green for the rest of the bag); at the
+    end odom's frame is red, 6.1 s old (by hand), as the printed tree says it stale, 6.1 s before the end."""
+    s = spec()
+    edge_every(s, "map", "odom", T0 + np.arange(40) * 100 * MS)
+    for k in range(101):
+        s.add("/points", T0 + k * 100 * MS, point(T0, "odom"))
+    path = bag(tmp_path / "b", s)
+    out = tmp_path / "g.rrd"
+    done = cli("--bag", str(path), "--tf-tree", "--save", str(out))
+    assert done.returncode == 0, done.stderr
+    rows = read_recording(out)["/tf_tree"]
+    assert rows.times == list(range(T0, T0 + 10 * S + 1, S // 2))
+    assert snapshot(rows, len(rows.times) - 1)["odom"] == ("odom\n0 Hz · 6.1 s", STALE_COLOR)
+    assert snapshot(rows, rows.times.index(T0 + 4 * S))["odom"] == ("odom\n9.5 Hz · 0.1 s", FRESH_COLOR)
+    printed = cli("--bag", str(path), "--tf-tree")
+    assert "frame odom: stale: its transform from map stopped 6.1 s before the end of the bag" in printed.stdout
