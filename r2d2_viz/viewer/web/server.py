@@ -10,8 +10,8 @@ after :data:`~r2d2_viz.viewer.web.door.READ_TIMEOUT_S` or when newer ones need i
 :data:`~r2d2_viz.viewer.web.door.MAX_SERVING` requests with the token at once. The event endpoint takes JSON
 bodies of at most :data:`MAX_EVENT_BYTES`, at most :data:`EVENTS_PER_S` a second on average (a burst of
 :data:`EVENT_BURST`); the ``eye`` endpoint (the 3D view's eye from the viewer's blueprint, for the pose tools:
-:mod:`.eye`) blueprints of at most :data:`~.eye.MAX_BLUEPRINT_BYTES`, under the same rate; anything else gets 4xx
-and changes nothing.
+:mod:`.eye`) blueprints of at most :data:`~.eye.MAX_BLUEPRINT_BYTES`, under the same rate, read by Rerun in a worker
+process (a malformed one is a 400, and cannot end the app); anything else gets 4xx and changes nothing.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from http.server import BaseHTTPRequestHandler
 from pathlib import Path
 from typing import Any
 
-from r2d2_viz.errors import R2d2VizError, SinkError, one_line, warn
+from r2d2_viz.errors import R2d2VizError, SinkError, ToolEventError, one_line, warn
 from r2d2_viz.viewer.web.assets import (
     HERE,
     PAGE_FILES,
@@ -46,7 +46,7 @@ from r2d2_viz.viewer.web.door import (
     host_allowed,
     origin_allowed,
 )
-from r2d2_viz.viewer.web.eye import MAX_BLUEPRINT_BYTES, blueprint_eye, hooked_widget
+from r2d2_viz.viewer.web.eye import MAX_BLUEPRINT_BYTES, EyeReader, hooked_widget
 from r2d2_viz.viewer.web.feed import RecordingFeed
 
 RECORDING = "recording.rrd"
@@ -169,7 +169,12 @@ class _Handler(BaseHTTPRequestHandler):
             self._reply(HTTPStatus.TOO_MANY_REQUESTS, b"too many events\n", "text/plain")
             return
         if name == "eye":
-            self._reply(HTTPStatus.OK, json.dumps({"eye": blueprint_eye(body)}).encode(), "application/json")
+            try:
+                eye = self.server.page.eyes.read(body)
+            except ToolEventError as exc:  # not a blueprint: said to the page only, nothing in the terminal
+                self._reply(HTTPStatus.BAD_REQUEST, f"{exc}\n".encode(), "text/plain")
+                return
+            self._reply(HTTPStatus.OK, json.dumps({"eye": eye}).encode(), "application/json")
             return
         try:
             event = json.loads(body)
@@ -249,6 +254,7 @@ class PageServer:
         self.config: dict[str, Any] = dict(config or {})
         self._handler = on_event
         self.limit = RateLimit(EVENTS_PER_S, EVENT_BURST)
+        self.eyes = EyeReader()
         self.hosts = allowed_hosts(bind)
         self._cache = cache
         self._wasm: tuple[Path, bool] | None = None
@@ -304,3 +310,4 @@ class PageServer:
         self._http.shutdown()
         self._http.server_close()
         self._thread.join(timeout=5)
+        self.eyes.close()
