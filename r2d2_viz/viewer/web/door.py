@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ipaddress
 import os
+import select
 import socket
 import threading
 from collections import Counter
@@ -67,6 +68,20 @@ def host_allowed(host_header: str | None, names: frozenset[str]) -> bool:
 def origin_allowed(origin: str | None, host_header: str | None) -> bool:
     """A POST's ``Origin``: none (not a browser) or this very page's (``http://`` and the same ``Host``)."""
     return origin is None or (host_header is not None and origin.lower() == f"http://{host_header.lower()}")
+
+
+def peer_gone(connection: socket.socket) -> bool:
+    """Whether the other end of ``connection`` has closed it (or it broke), without waiting or taking any byte: a
+    follower of the recording sends nothing after its request, so a readable socket with nothing to read is its
+    end."""
+    try:
+        if not select.select([connection], [], [], 0)[0]:
+            return False
+        return connection.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b""
+    except BlockingIOError:
+        return False
+    except (OSError, ValueError):  # reset, or already closed here
+        return True
 
 
 class DoorServer(ThreadingHTTPServer):

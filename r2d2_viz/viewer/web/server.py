@@ -45,6 +45,7 @@ from r2d2_viz.viewer.web.door import (
     allowed_hosts,
     host_allowed,
     origin_allowed,
+    peer_gone,
 )
 from r2d2_viz.viewer.web.eye import MAX_BLUEPRINT_BYTES, EyeReader, hooked_widget
 from r2d2_viz.viewer.web.feed import RecordingFeed
@@ -205,7 +206,8 @@ class _Handler(BaseHTTPRequestHandler):
 
     def _send_feed(self, feed: RecordingFeed) -> None:
         """The recording, from its first byte, then as it grows: an RRD file Rerun's viewer reads as it comes,
-        until the app ends (then the connection closes: the viewer keeps what it has)."""
+        until the app ends (then the connection closes: the viewer keeps what it has) or the follower leaves (seen
+        within :data:`~.feed.WAIT_S` while the recording is idle)."""
         self.close_connection = True
         self.send_response(HTTPStatus.OK)
         self.send_header("Content-Type", "application/octet-stream")
@@ -213,7 +215,7 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("X-Content-Type-Options", "nosniff")
         self.send_header("Connection", "close")
         self.end_headers()
-        for chunk in feed.follow():
+        for chunk in feed.follow(lambda: peer_gone(self.connection)):  # a gone follower frees its place at once
             self.wfile.write(chunk)
             self.wfile.flush()
 

@@ -10,7 +10,7 @@ from collections.abc import Iterator
 import pytest
 
 from r2d2_viz.viewer.web import door, server
-from r2d2_viz.viewer.web.door import allowed_hosts, host_allowed, origin_allowed
+from r2d2_viz.viewer.web.door import allowed_hosts, host_allowed, origin_allowed, peer_gone
 from r2d2_viz.viewer.web.server import PageServer
 
 
@@ -76,3 +76,14 @@ def test_the_names_a_request_may_carry() -> None:
 def test_the_limits_leave_room_for_the_page() -> None:
     """The page's browser holds a few keep-alive connections and one recording stream per tab."""
     assert door.MAX_SERVING >= 8 and door.MAX_WAITING >= 16 and door.READ_TIMEOUT_S <= 30
+
+
+def test_a_peer_that_closed_is_gone_and_one_that_sent_bytes_is_not() -> None:
+    ours, theirs = socket.socketpair()
+    with ours:
+        assert not peer_gone(ours)  # connected, silent: a follower waiting for bytes
+        theirs.sendall(b"x")
+        assert not peer_gone(ours) and ours.recv(1) == b"x"  # bytes are not an end (and none was taken)
+        theirs.close()
+        assert peer_gone(ours)
+    assert peer_gone(ours)  # closed here too
