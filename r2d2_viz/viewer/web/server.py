@@ -274,8 +274,10 @@ class PageServer:
         threading.Thread(target=self.wasm, name="r2d2-viz-wasm-gzip", daemon=True).start()
 
     def url(self, host: str | None = None) -> str:
-        """The page's address (with its token): what the user opens."""
-        name = host or ("localhost" if self.bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else self.bind)
+        """The page's address (with its token): what the user opens. ``localhost`` for 127.0.0.1 and every address
+        (what a browser on this machine reaches them by); otherwise the address bound, ``[::1]`` included (``localhost``
+        may resolve to 127.0.0.1 only, where nothing listens then)."""
+        name = host or ("localhost" if self.bind in ("127.0.0.1", "0.0.0.0", "::") else self.bind)
         name = f"[{name}]" if ":" in name else name
         return f"http://{name}:{self.port}/{self.token}/"
 
