@@ -145,14 +145,12 @@ class EyeReader:
 
 
 def _start_worker() -> subprocess.Popen[bytes]:
-    from r2d2_viz.viewer.sinks import ends_with_us  # (sinks imports the page's server, which imports this)
-
+    """The worker: it ends when its input does, so with the app, however the app ends (its pipe closes)."""
     return subprocess.Popen(
         [sys.executable, "-W", "ignore", "-m", __name__],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         stderr=None if os.environ.get(DEBUG_ENV) else subprocess.DEVNULL,
-        preexec_fn=ends_with_us,  # no worker left behind, however the app ends
     )
 
 

@@ -123,6 +123,9 @@ def test_the_served_app_outlives_malformed_blueprints(tmp_path: Path) -> None:
     short, with a 400 each, nothing in the terminal; it then still reads a good one and stops on Ctrl-C."""
     import socket
 
+    import psutil
+
+    workers: list[psutil.Process] = []
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = int(s.getsockname()[1])
@@ -144,6 +147,8 @@ def test_the_served_app_outlives_malformed_blueprints(tmp_path: Path) -> None:
             assert _post(port, eye, whole[:-40])[0] == 400
         assert _post(port, eye, whole) == (200, b'{"eye": [1.0, 2.0, 3.0]}')
         assert app.poll() is None
+        workers = psutil.Process(app.pid).children()
+        assert len(workers) == 1 and "r2d2_viz.viewer.web.eye" in workers[0].cmdline()
         new = err.read_text(errors="replace")[len(said) :]
         assert "RerunWarning" not in new and "r2d2-viz-eye" not in new and "panicked" not in new, new
     finally:
@@ -151,3 +156,5 @@ def test_the_served_app_outlives_malformed_blueprints(tmp_path: Path) -> None:
             app.send_signal(signal.SIGINT)
         code = app.wait(timeout=30)
     assert code == 0, err.read_text(errors="replace")
+    _, alive = psutil.wait_procs(workers, timeout=15)
+    assert alive == []  # the worker ended with the app
