@@ -97,11 +97,11 @@ def _start_guard(stack: ExitStack, catalog: str, *, bind: str, web_port: int) ->
     _check_port_free(bind, web_port, "web viewer")  # before anything starts, or after we said "serving"
     catalog_port = int(catalog.rsplit(":", 1)[1])
     viewer_port = _free_loopback_port()
-    public = f"rerun+http://{'localhost' if bind in ('127.0.0.1', '0.0.0.0', '::') else bind}:{web_port}"
-    command = ["--serve-web", "--bind", LOOPBACK, "--web-viewer-port", str(viewer_port), public]
-    stack.callback(_stop, _start_viewer("serve", "", command=command))
     guard = DatasetGuard((LOOPBACK, catalog_port), (LOOPBACK, viewer_port), bind, web_port)
     stack.callback(guard.close)
+    public = "rerun+" + guard.url().removesuffix(f"/{guard.token}/")  # the catalog, as the browser reaches it
+    command = ["--serve-web", "--bind", LOOPBACK, "--web-viewer-port", str(viewer_port), public]
+    stack.callback(_stop, _start_viewer("serve", "", command=command))
     return guard
 
 
