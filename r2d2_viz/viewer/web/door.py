@@ -84,6 +84,22 @@ def peer_gone(connection: socket.socket) -> bool:
         return True
 
 
+KEEPALIVE_PROBES = ((socket.SOL_SOCKET, "SO_KEEPALIVE", 1), (socket.IPPROTO_TCP, "TCP_KEEPIDLE", 30),
+                    (socket.IPPROTO_TCP, "TCP_KEEPINTVL", 10), (socket.IPPROTO_TCP, "TCP_KEEPCNT", 3))  # fmt: skip
+"""A long-lived connection whose peer vanished without closing it (a machine asleep, a cable out) breaks after about
+a minute of unanswered TCP keep-alive probes; :func:`peer_gone` then sees it (where the options exist: Linux)."""
+
+
+def probe_peer(connection: socket.socket) -> None:
+    """TCP keep-alive probes on ``connection`` (:data:`KEEPALIVE_PROBES`)."""
+    for level, name, value in KEEPALIVE_PROBES:
+        if hasattr(socket, name):
+            try:
+                connection.setsockopt(level, getattr(socket, name), value)
+            except OSError:
+                pass
+
+
 class DoorServer(ThreadingHTTPServer):
     """The bounded server (see the module's docstring); handlers call :meth:`waiting`, :meth:`admit` and
     :meth:`done` around each request."""

@@ -28,7 +28,7 @@ from typing import Any
 from urllib.parse import quote
 
 from r2d2_viz.errors import SinkError
-from r2d2_viz.viewer.web.door import READ_TIMEOUT_S, DoorServer, allowed_hosts, host_allowed, peer_gone
+from r2d2_viz.viewer.web.door import READ_TIMEOUT_S, DoorServer, allowed_hosts, host_allowed, peer_gone, probe_peer
 
 COOKIE = "r2d2_viz_dataset"
 MAX_BODY_BYTES = 16 << 20
@@ -139,6 +139,7 @@ class _Handler(BaseHTTPRequestHandler):
         """The answer from ``up`` to the client as it comes, until either ends (a client gone from a silent stream
         is seen at once, not when the stream next sends: Rerun's catalog waits for its streams when it stops)."""
         client = self.connection
+        probe_peer(client)  # (one that vanished without closing: seen in about a minute)
         while True:
             readable = select.select([up, client], [], [], UPSTREAM_TIMEOUT_S)[0]
             if not readable:

@@ -46,6 +46,7 @@ from r2d2_viz.viewer.web.door import (
     host_allowed,
     origin_allowed,
     peer_gone,
+    probe_peer,
 )
 from r2d2_viz.viewer.web.eye import MAX_BLUEPRINT_BYTES, EyeReader, hooked_widget
 from r2d2_viz.viewer.web.feed import RecordingFeed
@@ -215,6 +216,7 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("X-Content-Type-Options", "nosniff")
         self.send_header("Connection", "close")
         self.end_headers()
+        probe_peer(self.connection)  # a follower that vanished without closing is seen too, in about a minute
         for chunk in feed.follow(lambda: peer_gone(self.connection)):  # a gone follower frees its place at once
             self.wfile.write(chunk)
             self.wfile.flush()
