@@ -120,12 +120,12 @@ class _Handler(BaseHTTPRequestHandler):
             length = int(self.headers.get("Content-Length", "0"))
         except ValueError:
             length = -1
-        if "chunked" in self.headers.get("Transfer-Encoding", "").lower() or not 0 <= length <= MAX_BODY_BYTES:
+        if self.headers.get("Transfer-Encoding") is not None or not 0 <= length <= MAX_BODY_BYTES:
             self._answer(HTTPStatus.LENGTH_REQUIRED, "a body of known length, at most 16 MiB")
             return
         body = self.rfile.read(length)
         head = [f"{self.command} {self.path} HTTP/1.1", f"Host: {upstream[0]}:{upstream[1]}", "Connection: close"]
-        head += [f"{k}: {v}" for k, v in self.headers.items() if k.lower() not in HOP_HEADERS]
+        head += [f"{k}: {v}" for k, v in self.headers.items() if k.lower() not in HOP_HEADERS and v.isprintable()]
         guard = self.server.guard
         try:
             with socket.create_connection(upstream, timeout=UPSTREAM_TIMEOUT_S) as up:

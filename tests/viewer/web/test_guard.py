@@ -100,6 +100,9 @@ def test_the_printed_address_gives_the_cookie_and_the_viewer(guard: tuple[Datase
     status, _, body = _ask(door.port, "GET", "/index.html?url=x", cookie)
     assert status == 200 and body.startswith(b"viewer GET /index.html?url=x ")
     assert b"t0ken" not in body and "'Connection': 'close'" in body.decode()  # the cookie stays here
+    chunked = {**cookie, "Transfer-Encoding": "chunked"}
+    status, _, body = _ask(door.port, "POST", "/x", chunked, b"")
+    assert status == 411 and b"viewer" not in body  # only bodies of known length are relayed (no smuggling)
     grpc = {**cookie, "Content-Type": "application/grpc-web+proto"}
     status, _, body = _ask(door.port, "POST", "/rerun.cloud.v1alpha1.RerunCloudService/FindEntries", grpc, b"\0" * 5)
     assert (
