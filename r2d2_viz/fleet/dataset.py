@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import os
 import re
+import socket
 import subprocess
 import sys
 import time
 from collections.abc import Callable
+from contextlib import ExitStack
 from pathlib import Path
-from urllib.parse import quote
 
 import pyarrow as pa
 
@@ -23,8 +24,10 @@ from r2d2_viz.fleet.summary import summarise
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.viewer.catalog import catalog_server, read_fleet, register_layout, server_url
 from r2d2_viz.viewer.sinks import _check_port_free, ends_with_us, viewer_executable
+from r2d2_viz.viewer.web.guard import DatasetGuard
 
 DEFAULT_PORT = 51234
+LOOPBACK = "127.0.0.1"
 Say = Callable[[str], None]
 
 
@@ -58,50 +61,75 @@ def fleet_summary(directory: str | Path) -> pa.Table:
 def serve_dataset(
     directory: Path, *, bind: str, port: int, viewer: str, web_port: int, say: Say, stop_after: float | None = None
 ) -> None:
-    """Serve ``directory`` until Ctrl-C (or ``stop_after`` seconds); ``viewer``: spawn, serve or headless."""
+    """Serve ``directory`` until Ctrl-C (or ``stop_after`` seconds); ``viewer``: spawn, serve or headless.
+
+    ``serve``: Rerun's catalog and web viewer each on a free loopback port, reached only through the token's
+    guard (:mod:`r2d2_viz.viewer.web.guard`) on ``bind:web_port`` (neither of Rerun's servers takes a token)."""
     check_dataset_dir(directory, say)
     if viewer == "spawn" and sys.platform.startswith("linux"):
         if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
             raise SinkError("--spawn: no display to open the viewer on; use --serve or --headless instead")
     name = dataset_name(directory)
-    with catalog_server(directory, name=name, bind=bind, port=port) as server:
+    served = viewer == "serve"
+    with catalog_server(directory, name=name, bind=LOOPBACK if served else bind, port=0 if served else port) as server:
         register_layout(server, name, directory)
         local = server_url(server).replace("0.0.0.0", "127.0.0.1")
-        process = _start_viewer(viewer, local, bind=bind, web_port=web_port, say=say)
-        say(f"serving dataset {name!r} ({directory}) at {local}; Ctrl-C stops")
+        with ExitStack() as stack:
+            if served:
+                guard = _start_guard(stack, local, bind=bind, web_port=web_port)
+                say(f"open {guard.url()} in a browser (the viewer, on the dataset)")
+                where = f"{guard.url()} (behind the token)"
+            else:
+                stack.callback(_stop, _start_viewer(viewer, local))
+                where = local
+            say(f"serving dataset {name!r} ({directory}) at {where}; Ctrl-C stops")
+            try:
+                with sigterm_raises():  # SIGTERM stops it as Ctrl-C does
+                    deadline = None if stop_after is None else time.monotonic() + stop_after
+                    while deadline is None or time.monotonic() < deadline:
+                        time.sleep(0.2)
+            except KeyboardInterrupt:
+                pass
+
+
+def _start_guard(stack: ExitStack, catalog: str, *, bind: str, web_port: int) -> DatasetGuard:
+    """Rerun's web viewer on a free loopback port, and the token's guard in front of both it and the catalog."""
+    _check_port_free(bind, web_port, "web viewer")  # before anything starts, or after we said "serving"
+    catalog_port = int(catalog.rsplit(":", 1)[1])
+    viewer_port = _free_loopback_port()
+    guard = DatasetGuard((LOOPBACK, catalog_port), (LOOPBACK, viewer_port), bind, web_port)
+    stack.callback(guard.close)
+    public = "rerun+" + guard.url().removesuffix(f"/{guard.token}/")  # the catalog, as the browser reaches it
+    command = ["--serve-web", "--bind", LOOPBACK, "--web-viewer-port", str(viewer_port), public]
+    stack.callback(_stop, _start_viewer("serve", "", command=command))
+    return guard
+
+
+def _free_loopback_port() -> int:
+    with socket.socket() as s:
+        s.bind((LOOPBACK, 0))
+        return int(s.getsockname()[1])
+
+
+def _stop(process: subprocess.Popen[bytes] | None) -> None:
+    if process is not None and process.poll() is None:
+        process.terminate()
         try:
-            with sigterm_raises():  # SIGTERM stops it as Ctrl-C does
-                deadline = None if stop_after is None else time.monotonic() + stop_after
-                while deadline is None or time.monotonic() < deadline:
-                    time.sleep(0.2)
-        except KeyboardInterrupt:
-            pass
-        finally:
-            if process is not None and process.poll() is None:
-                process.terminate()
-                try:
-                    process.wait(timeout=10)
-                except subprocess.TimeoutExpired:
-                    process.kill()
-                    process.wait()
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
 
 
-def _start_viewer(viewer: str, url: str, *, bind: str, web_port: int, say: Say) -> subprocess.Popen[bytes] | None:
+def _start_viewer(viewer: str, url: str, *, command: list[str] | None = None) -> subprocess.Popen[bytes] | None:
     if viewer == "headless":
         return None
     executable = viewer_executable()
     if executable is None:
         raise SinkError("the 'rerun' viewer binary was not found; use --headless and open the URL yourself")
-    if viewer == "spawn":
-        command = [executable, url]
-    else:
-        _check_port_free(bind, web_port, "web viewer")  # else Rerun's viewer dies at once, after we said "serving"
-        command = [executable, "--serve-web", "--bind", bind, "--web-viewer-port", str(web_port), url]
-        host = "localhost" if bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else bind
-        say(f"open http://{host}:{web_port}/?url={quote(url, safe='')} in a browser")
     try:
         return subprocess.Popen(
-            command,
+            [executable, *(command or [url])],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,

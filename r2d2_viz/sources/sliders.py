@@ -121,9 +121,15 @@ class SliderBoard:
 
     @staticmethod
     def _position(name: str, value: Any) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ToolEventError(f"Joints: {name[:60]}: expected a finite position, got {str(value)[:40]!r}")
-        return float(value)
+        try:
+            position = float(value)  # an int of 400 digits (JSON has no limit) holds no float: out of range
+        except OverflowError:
+            raise ToolEventError(f"Joints: {name[:60]}: {str(value)[:20]}… is out of range") from None
+        if not math.isfinite(position):
+            raise ToolEventError(f"Joints: {name[:60]}: expected a finite position, got {str(value)[:40]!r}")
+        return position
 
     def _check(self, name: str, position: float) -> int:
         i = self._index.get(name)

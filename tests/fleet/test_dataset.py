@@ -1,16 +1,18 @@
 """``r2d2-viz --dataset DIR`` (issue 25): the real CLI serving a folder of fleet recordings through Rerun's catalog
 server on loopback — a catalog client sees one segment per recording, keyed by the bag's recording id; it listens
-on 127.0.0.1 only; ``--serve`` adds a web viewer; Ctrl-C stops both — and bad folders are one line."""
+on 127.0.0.1 only; ``--serve`` adds a web viewer, both behind the run's token; Ctrl-C stops both — and bad folders
+are one line."""
 
 from __future__ import annotations
 
+import http.client
 import os
+import re
 import signal
 import socket
 import subprocess
 import sys
 import time
-import urllib.request
 from pathlib import Path
 
 import pytest
@@ -88,24 +90,58 @@ def test_each_recording_has_its_layout_beside_it(fleet: Path) -> None:
         assert layout == blueprint_components(rrd) and any("View" in str(v) for v in layout.values())
 
 
-def test_serve_adds_a_web_viewer_and_ctrl_c_stops_both(fleet: Path) -> None:
+def _http(port: int, method: str, path: str, headers: dict[str, str] | None = None, body: bytes | None = None
+          ) -> tuple[int, dict[str, str], bytes]:  # fmt: skip
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
+    try:
+        conn.request(method, path, body=body, headers=headers or {})
+        response = conn.getresponse()
+        return response.status, dict(response.getheaders()), response.read()
+    finally:
+        conn.close()
+
+
+FIND_ENTRIES = "/rerun.cloud.v1alpha1.RerunCloudService/FindEntries"
+"""A gRPC-web call as Rerun's web viewer sends it to the catalog (seen in headless Chromium, 2026-11-28: WhoAmI,
+FindEntries, ReadDatasetEntry, … POSTed to the catalog's origin): an empty message, framed (flag 0, length 0)."""
+GRPC_WEB = {"Content-Type": "application/grpc-web+proto", "X-Grpc-Web": "1"}
+
+
+def test_serve_puts_the_catalog_and_the_web_viewer_behind_the_token(fleet: Path) -> None:
+    """Issue 44, item 19: ``--dataset --serve`` served Rerun's catalog (gRPC and gRPC-web) and web viewer to anyone
+    who could reach the ports, without a token. Now one port, behind the run's token: without it, neither the
+    viewer nor the catalog answers (403, nothing forwarded); the printed address gives the cookie and opens the
+    viewer on the catalog there; Ctrl-C stops it all."""
     port, web = _free_port(), _free_port()
     proc, said = _start("--dataset", str(fleet), "--serve", "--port", str(port), "--web-port", str(web))
     try:
-        assert f"open http://localhost:{web}/?url=rerun%2Bhttp%3A%2F%2F127.0.0.1%3A{port}" in said, said
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and not listening_addresses(web):
-            time.sleep(0.1)
-        with urllib.request.urlopen(f"http://127.0.0.1:{web}/", timeout=10) as page:
-            assert page.status == 200
-        assert listening_addresses(web) == {"127.0.0.1"}
+        found = re.search(rf"open http://localhost:{web}/([A-Za-z0-9_-]{{32}})/ in a browser", said)
+        assert found, said
+        token = found.group(1)
+        assert listening_addresses(web) == {"127.0.0.1"} and not listening_addresses(port)  # the catalog: inside
+        for path, method, headers in [("/", "GET", {}), ("/re_viewer_bg.wasm", "GET", {}),
+                                      (FIND_ENTRIES, "POST", GRPC_WEB),
+                                      (FIND_ENTRIES, "POST", {**GRPC_WEB, "Cookie": f"r2d2_viz_dataset={token[:-1]}x"}),
+                                      (f"/{token[:-1]}x/", "GET", {})]:  # fmt: skip
+            status, _, body = _http(web, method, path, headers, b"\0" * 5 if method == "POST" else None)
+            assert status == 403 and b"open the address the app printed" in body, (path, status)
+        status, headers, _ = _http(web, "GET", f"/{token}/", {"Host": f"localhost:{web}"})
+        assert status == 303 and headers["Location"] == f"/?url=rerun%2Bhttp%3A%2F%2Flocalhost%3A{web}"
+        cookie = headers["Set-Cookie"]
+        assert cookie == f"r2d2_viz_dataset={token}; Path=/; HttpOnly; SameSite=Strict"
+        with_token = {"Cookie": cookie.split(";")[0]}
+        status, _, page = _http(web, "GET", "/?url=x", with_token)
+        assert status == 200 and b"<html>" in page and b"re_viewer" in page  # Rerun's web viewer
+        status, headers, answer = _http(web, "POST", FIND_ENTRIES, {**GRPC_WEB, **with_token}, b"\0" * 5)
+        assert status == 200 and headers["content-type"] == "application/grpc-web+proto"
+        assert b"\x03out" in answer and answer.endswith(b"grpc-status:0\r\n")  # the dataset named after the folder
     finally:
         code = _stop(proc)
     assert code == 0
     deadline = time.monotonic() + 10
-    while time.monotonic() < deadline and (listening_addresses(web) or listening_addresses(port)):
+    while time.monotonic() < deadline and listening_addresses(web):
         time.sleep(0.1)
-    assert not listening_addresses(web) and not listening_addresses(port)
+    assert not listening_addresses(web)
 
 
 def test_bad_folders_are_one_line(fleet: Path, tmp_path: Path) -> None:

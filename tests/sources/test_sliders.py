@@ -11,6 +11,7 @@ import socket
 import subprocess
 import sys
 import time
+import urllib.error
 import urllib.request
 from pathlib import Path
 
@@ -69,6 +70,8 @@ def test_a_range_without_zero_starts_in_its_middle_and_mimics_have_no_slider() -
         {"tool": "Joints", "action": "dance"},
         {"tool": "Joints", "positions": {"lift": 0.2, "finger": 9.0}},  # one bad: none set
         {"tool": "Joints", "positions": [0.2]},
+        {"tool": "Joints", "joint": "finger", "position": 10**400},  # JSON's ints have no limit; floats do
+        {"tool": "Joints", "positions": {"lift": 0.2, "finger": -(10**400)}},
     ],
 )
 def test_bad_slider_events_are_refused_and_change_nothing(event: dict[str, object]) -> None:
@@ -142,6 +145,18 @@ def test_a_slider_moved_in_the_page_is_in_the_recording(tmp_path: Path) -> None:
         with urllib.request.urlopen(page + "sliders.js", timeout=30) as answer:
             assert b'tool: "Joints"' in answer.read()
         time.sleep(1.0)  # some samples at the starting value first
+        for huge in (
+            '{"tool": "Joints", "joint": "tilt", "position": 1%s}',
+            '{"tool": "Joints", "positions": {"tilt": -1%s}}',
+        ):
+            # issue 44, item 16: a 400-digit number dropped the connection unanswered (float() of it overflows)
+            request = urllib.request.Request(page + "event", data=(huge % ("0" * 400)).encode(),
+                                             headers={"Content-Type": "application/json"})  # fmt: skip
+            with pytest.raises(urllib.error.HTTPError) as refused:
+                urllib.request.urlopen(request, timeout=30)
+            assert refused.value.code == 400 and re.search(
+                r"tilt: -?10+… is out of range", json.loads(refused.value.read())["error"]
+            )
         event = json.dumps({"tool": "Joints", "joint": "tilt", "position": -0.3}).encode()
         request = urllib.request.Request(page + "event", data=event, headers={"Content-Type": "application/json"})
         with urllib.request.urlopen(request, timeout=30) as answer:

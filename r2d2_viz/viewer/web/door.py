@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ipaddress
 import os
+import select
 import socket
 import threading
 from collections import Counter
@@ -67,6 +68,36 @@ def host_allowed(host_header: str | None, names: frozenset[str]) -> bool:
 def origin_allowed(origin: str | None, host_header: str | None) -> bool:
     """A POST's ``Origin``: none (not a browser) or this very page's (``http://`` and the same ``Host``)."""
     return origin is None or (host_header is not None and origin.lower() == f"http://{host_header.lower()}")
+
+
+def peer_gone(connection: socket.socket) -> bool:
+    """Whether the other end of ``connection`` has closed it (or it broke), without waiting or taking any byte: a
+    follower of the recording sends nothing after its request, so a readable socket with nothing to read is its
+    end."""
+    try:
+        if not select.select([connection], [], [], 0)[0]:
+            return False
+        return connection.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT) == b""
+    except BlockingIOError:
+        return False
+    except (OSError, ValueError):  # reset, or already closed here
+        return True
+
+
+KEEPALIVE_PROBES = ((socket.SOL_SOCKET, "SO_KEEPALIVE", 1), (socket.IPPROTO_TCP, "TCP_KEEPIDLE", 30),
+                    (socket.IPPROTO_TCP, "TCP_KEEPINTVL", 10), (socket.IPPROTO_TCP, "TCP_KEEPCNT", 3))  # fmt: skip
+"""A long-lived connection whose peer vanished without closing it (a machine asleep, a cable out) breaks after about
+a minute of unanswered TCP keep-alive probes; :func:`peer_gone` then sees it (where the options exist: Linux)."""
+
+
+def probe_peer(connection: socket.socket) -> None:
+    """TCP keep-alive probes on ``connection`` (:data:`KEEPALIVE_PROBES`)."""
+    for level, name, value in KEEPALIVE_PROBES:
+        if hasattr(socket, name):
+            try:
+                connection.setsockopt(level, getattr(socket, name), value)
+            except OSError:
+                pass
 
 
 class DoorServer(ThreadingHTTPServer):

@@ -98,9 +98,11 @@ class RecordingFeed:
         while not self._stopping.wait(self._period):
             self._take()
 
-    def follow(self) -> Iterator[bytes]:
+    def follow(self, gone: Callable[[], bool] = lambda: False) -> Iterator[bytes]:
         """Every chunk kept, from the first; then the new ones as they come (each wait at most :data:`WAIT_S`)
-        until closed. A follower that fell behind what was dropped goes on from the oldest kept."""
+        until closed, or until ``gone()`` says the follower is (asked after each wait that brought nothing: a
+        follower that left an idle recording must not hold its place until new bytes fail to reach it). A follower
+        that fell behind what was dropped goes on from the oldest kept."""
         sent = 0  # reads yielded or skipped, dropped ones included
         while True:
             with self._changed:
@@ -108,6 +110,8 @@ class RecordingFeed:
                     if self._closed.is_set():
                         return
                     self._changed.wait(WAIT_S)
+                    if sent == self._dropped + len(self._chunks) and gone():
+                        return
                 new = self._chunks[max(sent - self._dropped, 1) if sent else 0 :]
                 sent = self._dropped + len(self._chunks)
             yield from new

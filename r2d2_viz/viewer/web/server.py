@@ -10,8 +10,8 @@ after :data:`~r2d2_viz.viewer.web.door.READ_TIMEOUT_S` or when newer ones need i
 :data:`~r2d2_viz.viewer.web.door.MAX_SERVING` requests with the token at once. The event endpoint takes JSON
 bodies of at most :data:`MAX_EVENT_BYTES`, at most :data:`EVENTS_PER_S` a second on average (a burst of
 :data:`EVENT_BURST`); the ``eye`` endpoint (the 3D view's eye from the viewer's blueprint, for the pose tools:
-:mod:`.eye`) blueprints of at most :data:`~.eye.MAX_BLUEPRINT_BYTES`, under the same rate; anything else gets 4xx
-and changes nothing.
+:mod:`.eye`) blueprints of at most :data:`~.eye.MAX_BLUEPRINT_BYTES`, under the same rate, read by Rerun in a worker
+process (a malformed one is a 400, and cannot end the app); anything else gets 4xx and changes nothing.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from http.server import BaseHTTPRequestHandler
 from pathlib import Path
 from typing import Any
 
-from r2d2_viz.errors import R2d2VizError, SinkError, one_line, warn
+from r2d2_viz.errors import R2d2VizError, SinkError, ToolEventError, one_line, warn
 from r2d2_viz.viewer.web.assets import (
     HERE,
     PAGE_FILES,
@@ -45,8 +45,10 @@ from r2d2_viz.viewer.web.door import (
     allowed_hosts,
     host_allowed,
     origin_allowed,
+    peer_gone,
+    probe_peer,
 )
-from r2d2_viz.viewer.web.eye import MAX_BLUEPRINT_BYTES, blueprint_eye, hooked_widget
+from r2d2_viz.viewer.web.eye import MAX_BLUEPRINT_BYTES, EyeReader, hooked_widget
 from r2d2_viz.viewer.web.feed import RecordingFeed
 
 RECORDING = "recording.rrd"
@@ -169,7 +171,12 @@ class _Handler(BaseHTTPRequestHandler):
             self._reply(HTTPStatus.TOO_MANY_REQUESTS, b"too many events\n", "text/plain")
             return
         if name == "eye":
-            self._reply(HTTPStatus.OK, json.dumps({"eye": blueprint_eye(body)}).encode(), "application/json")
+            try:
+                eye = self.server.page.eyes.read(body)
+            except ToolEventError as exc:  # not a blueprint: said to the page only, nothing in the terminal
+                self._reply(HTTPStatus.BAD_REQUEST, f"{exc}\n".encode(), "text/plain")
+                return
+            self._reply(HTTPStatus.OK, json.dumps({"eye": eye}).encode(), "application/json")
             return
         try:
             event = json.loads(body)
@@ -200,7 +207,8 @@ class _Handler(BaseHTTPRequestHandler):
 
     def _send_feed(self, feed: RecordingFeed) -> None:
         """The recording, from its first byte, then as it grows: an RRD file Rerun's viewer reads as it comes,
-        until the app ends (then the connection closes: the viewer keeps what it has)."""
+        until the app ends (then the connection closes: the viewer keeps what it has) or the follower leaves (seen
+        within :data:`~.feed.WAIT_S` while the recording is idle)."""
         self.close_connection = True
         self.send_response(HTTPStatus.OK)
         self.send_header("Content-Type", "application/octet-stream")
@@ -208,7 +216,8 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("X-Content-Type-Options", "nosniff")
         self.send_header("Connection", "close")
         self.end_headers()
-        for chunk in feed.follow():
+        probe_peer(self.connection)  # a follower that vanished without closing is seen too, in about a minute
+        for chunk in feed.follow(lambda: peer_gone(self.connection)):  # a gone follower frees its place at once
             self.wfile.write(chunk)
             self.wfile.flush()
 
@@ -249,6 +258,7 @@ class PageServer:
         self.config: dict[str, Any] = dict(config or {})
         self._handler = on_event
         self.limit = RateLimit(EVENTS_PER_S, EVENT_BURST)
+        self.eyes = EyeReader()
         self.hosts = allowed_hosts(bind)
         self._cache = cache
         self._wasm: tuple[Path, bool] | None = None
@@ -266,8 +276,10 @@ class PageServer:
         threading.Thread(target=self.wasm, name="r2d2-viz-wasm-gzip", daemon=True).start()
 
     def url(self, host: str | None = None) -> str:
-        """The page's address (with its token): what the user opens."""
-        name = host or ("localhost" if self.bind in ("127.0.0.1", "::1", "0.0.0.0", "::") else self.bind)
+        """The page's address (with its token): what the user opens. ``localhost`` for 127.0.0.1 and every address
+        (what a browser on this machine reaches them by); otherwise the address bound, ``[::1]`` included (``localhost``
+        may resolve to 127.0.0.1 only, where nothing listens then)."""
+        name = host or ("localhost" if self.bind in ("127.0.0.1", "0.0.0.0", "::") else self.bind)
         name = f"[{name}]" if ":" in name else name
         return f"http://{name}:{self.port}/{self.token}/"
 
@@ -304,3 +316,4 @@ class PageServer:
         self._http.shutdown()
         self._http.server_close()
         self._thread.join(timeout=5)
+        self.eyes.close()

@@ -10,7 +10,7 @@ from collections.abc import Iterator
 import pytest
 
 from r2d2_viz.viewer.web import door, server
-from r2d2_viz.viewer.web.door import allowed_hosts, host_allowed, origin_allowed
+from r2d2_viz.viewer.web.door import allowed_hosts, host_allowed, origin_allowed, peer_gone, probe_peer
 from r2d2_viz.viewer.web.server import PageServer
 
 
@@ -76,3 +76,28 @@ def test_the_names_a_request_may_carry() -> None:
 def test_the_limits_leave_room_for_the_page() -> None:
     """The page's browser holds a few keep-alive connections and one recording stream per tab."""
     assert door.MAX_SERVING >= 8 and door.MAX_WAITING >= 16 and door.READ_TIMEOUT_S <= 30
+
+
+def test_a_peer_that_closed_is_gone_and_one_that_sent_bytes_is_not() -> None:
+    ours, theirs = socket.socketpair()
+    with ours:
+        assert not peer_gone(ours)  # connected, silent: a follower waiting for bytes
+        theirs.sendall(b"x")
+        assert not peer_gone(ours) and ours.recv(1) == b"x"  # bytes are not an end (and none was taken)
+        theirs.close()
+        assert peer_gone(ours)
+    assert peer_gone(ours)  # closed here too
+
+
+def test_a_follower_is_probed_so_that_a_vanished_one_is_seen() -> None:
+    """A peer gone without a FIN sends nothing to see: TCP keep-alive probes break the connection after
+    30 + 3 x 10 s of silence (Linux's defaults would wait two hours)."""
+    with socket.create_server(("127.0.0.1", 0)) as listener:
+        with socket.create_connection(listener.getsockname()) as ours, listener.accept()[0]:
+            probe_peer(ours)
+            assert ours.getsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE) == 1
+            if hasattr(socket, "TCP_KEEPIDLE"):
+                idle = ours.getsockopt(socket.IPPROTO_TCP, socket.TCP_KEEPIDLE)
+                interval = ours.getsockopt(socket.IPPROTO_TCP, socket.TCP_KEEPINTVL)
+                count = ours.getsockopt(socket.IPPROTO_TCP, socket.TCP_KEEPCNT)
+                assert idle + interval * count == 60

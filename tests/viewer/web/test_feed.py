@@ -39,6 +39,25 @@ def test_a_late_follower_gets_everything_from_the_first_byte() -> None:
     assert feed.size == len(b"headerfirstsecondlast")
 
 
+def test_a_follower_gone_while_the_feed_is_idle_ends() -> None:
+    """Nothing new comes: the follower is asked whether it is gone after each wait, and ends when it is (it held a
+    serving place until new bytes failed to reach it)."""
+    pending = [b"header"]
+    feed = RecordingFeed(lambda: pending.pop() if pending else None, period=0.01)
+    asked: list[int] = []
+
+    def gone() -> bool:
+        asked.append(1)
+        return len(asked) >= 2
+
+    try:
+        follower = feed.follow(gone)
+        assert next(follower) == b"header"
+        assert list(follower) == [] and len(asked) == 2  # ended by its second idle wait, the feed still open
+    finally:
+        feed.close()
+
+
 def test_the_history_is_bounded_but_keeps_the_first_read() -> None:
     """Past the history's bytes the oldest reads go, never the first (the recording's identity and layout)."""
     reads = [b"F" * 10]

@@ -119,3 +119,51 @@ def test_a_hostile_bag_served_until_ctrl_c(tmp_path: Path) -> None:
         assert b"\x1b" not in text and b"\x07" not in text and b"Traceback" not in text
     assert stdout.count(b"clicked: ") == 1 and b"\\x1b[2A" in stdout  # the one event let in, its frame shown
     assert stderr.count(b"cannot keep the compressed viewer") == 1
+
+
+def test_followers_that_left_an_idle_recording_free_their_places(tmp_path: Path) -> None:
+    """Issue 44, item 12: 16 followers of ``recording.rrd`` (MAX_SERVING) read some of it and go, while the
+    recording is idle (the bag has ended): the page was 503 from then on, until new data came (none would); now a
+    gone follower is seen within a second and the page answers."""
+    import socket
+
+    from r2d2_viz.viewer.web.door import MAX_SERVING
+
+    spec = BagSpec()
+    for k in range(5):
+        t = T0 + k * 100_000_000
+        spec.add("/tf", t, tf_message([(t, "odom", "base_link", [k * 0.1, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])]))
+    bag = write_bag(tmp_path / "idle", spec)
+    web_port, err = _free_port(), tmp_path / "stderr"
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    with err.open("wb") as e:
+        command = [str(exe), "--bag", str(bag), "--serve", "--web-port", str(web_port)]
+        app = subprocess.Popen(
+            command, stdout=subprocess.DEVNULL, stderr=e, stdin=subprocess.DEVNULL, start_new_session=True
+        )
+    try:
+        url = _wait_for(err, r"serving: open (\S+) in a browser", app).group(1)
+        base = f"/{url.rstrip('/').rsplit('/', 1)[1]}/"
+        _wait_for(err, r"the bag has ended; still serving until Ctrl-C", app)
+        followers = []
+        for _ in range(MAX_SERVING):
+            s = socket.create_connection(("127.0.0.1", web_port), timeout=10)
+            s.sendall(f"GET {base}recording.rrd HTTP/1.1\r\nHost: 127.0.0.1:{web_port}\r\n\r\n".encode())
+            assert s.recv(12).startswith(b"HTTP/1.1 200")
+            followers.append(s)
+        assert _get(web_port, base)[0] == 503  # every place taken (the followers are there)
+        for s in followers:
+            s.close()
+        statuses = []
+        for _ in range(50):  # the followers' waits are a second each: the page answers within a few
+            statuses.append(_get(web_port, base)[0])
+            if statuses[-1] == 200:
+                break
+            time.sleep(0.1)
+        assert statuses[-1] == 200 and len(statuses) <= 30, statuses
+        app.send_signal(signal.SIGINT)
+        assert app.wait(timeout=60) == 0
+    finally:
+        if app.poll() is None:
+            app.kill()
+            app.wait()

@@ -192,3 +192,43 @@ def test_an_unwritable_cache_still_serves_the_viewer(tmp_path: Path, capfd: pyte
     assert body == (viewer_static() / "re_viewer_bg.wasm").read_bytes()
     err = capfd.readouterr().err
     assert err.count("\n") == 1 and "cannot keep the compressed viewer" in err and "Traceback" not in err
+
+
+def test_the_url_printed_for_bind_ipv6_loopback_is_where_the_server_listens(tmp_path: Path) -> None:
+    """Issue 44, item 16: with ``--bind ::1`` the app printed ``http://localhost:PORT/…``, and ``localhost`` may
+    name 127.0.0.1 only (it does here: /etc/hosts), where nothing listens. The installed CLI now prints
+    ``http://[::1]:PORT/…``, and the page is there."""
+    import re
+    import signal
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    with socket.socket(socket.AF_INET6) as s:
+        s.bind(("::1", 0))
+        port = int(s.getsockname()[1])
+    err = tmp_path / "stderr"
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    with err.open("wb") as e:
+        app = subprocess.Popen(
+            [str(exe), "--serve", "--bind", "::1", "--web-port", str(port)],
+            stdout=subprocess.DEVNULL, stderr=e, stdin=subprocess.DEVNULL, start_new_session=True,
+        )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 90
+        while not (found := re.search(r"serving: open (\S+) in a browser", err.read_text(errors="replace"))):
+            assert app.poll() is None and time.monotonic() < deadline, err.read_text(errors="replace")
+            time.sleep(0.1)
+        url = found.group(1)
+        assert re.fullmatch(rf"http://\[::1\]:{port}/[A-Za-z0-9_-]+/", url), url
+        conn = http.client.HTTPConnection("::1", port, timeout=60)
+        try:
+            conn.request("GET", url.split(f":{port}", 1)[1], headers={"Host": f"[::1]:{port}"})
+            assert conn.getresponse().status == 200
+        finally:
+            conn.close()
+    finally:
+        if app.poll() is None:
+            app.send_signal(signal.SIGINT)
+        assert app.wait(timeout=30) == 0
