@@ -69,6 +69,15 @@ def test_a_live_replay_shows_its_position(tmp_path: Path, monkeypatch: pytest.Mo
     assert shown.startswith("walk ") and shown.rstrip().endswith("3.0 / 9.9 s")
 
 
+def test_a_live_replay_shows_where_it_has_got_between_windows(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    err = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", err)
+    with _bag(tmp_path) as bag, progress_bar(plan_bag(bag), _Config(live=True)) as bar:
+        assert bar is not None
+        bar.at(T0 + 45 * S // 10)  # 4.5 s into the bag, the window not done
+    assert err.getvalue().rstrip().endswith("4.5 / 9.9 s")
+
+
 def test_no_bar_when_not_wanted_or_not_a_bag(tmp_path: Path) -> None:
     with _bag(tmp_path) as bag, progress_bar(plan_bag(bag), _Config(progress=False)) as advance:
         assert advance is None
