@@ -44,6 +44,15 @@ class SinkError(R2d2VizError):
     """A sink cannot be opened: no viewer possible, port in use, unwritable output."""
 
 
+class ListenError(SinkError):
+    """A port cannot be listened on (in use, not allowed): ``port`` says which, so the CLI can name the flag that
+    sets it."""
+
+    def __init__(self, message: str, port: int) -> None:
+        super().__init__(message)
+        self.port = port
+
+
 class ToolEventError(R2d2VizError):
     """A tool event from the web page that is not one of the tools' messages (refused, nothing sent)."""
 

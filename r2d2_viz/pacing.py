@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Iterable
 from contextlib import nullcontext
 from dataclasses import dataclass, field
-from typing import TextIO
+from typing import Protocol, TextIO
 
 import numpy as np
 
@@ -34,6 +34,14 @@ PACING_LOG_ENV = "R2D2_VIZ_PACING_LOG"
 messages), ``f lateness_seconds`` of the earliest item handed over. Off by default; costs nothing when unset."""
 MAX_SLEEP = 0.1
 """Sleep at most this long at a time, so a signal (which sets the stop event) is seen soon."""
+
+
+class Progress(Protocol):
+    """What a live replay tells its progress bar (:mod:`r2d2_viz.progress`): each window when done, and between
+    windows where the replay has got (so the bar moves as the bag plays, and stops where a signal stopped it)."""
+
+    def __call__(self, window: Window) -> None: ...
+    def at(self, t_ns: int) -> None: ...
 
 
 class LatenessLog:
@@ -173,21 +181,28 @@ def paced(
     feeds: Feeds,
     *,
     speed: float = 1.0,
-    progress: Callable[[Window], None] | None = None,
+    progress: Progress | None = None,
     wall: WallClock | None = None,
     stop: threading.Event | None = None,
 ) -> tuple[int, bool]:
     """Send each robot sample and every feed item of each window when due on ``wall``, until done or signalled
     (``stop``: set by a signal that came before); returns the samples sent (or, without a robot, the items) and
-    whether a signal stopped it."""
-    wall = wall or WallClock()
+    whether a signal stopped it. ``progress`` hears where the replay is each time it waits, and where it stopped."""
     stop = stop if stop is not None else threading.Event()
     sent = 0
     log_path = os.environ.get(PACING_LOG_ENV)
     clock: _Clock | None = None
+    end_ns = 0  # the end of the window being played: the bar does not run ahead of what was read
+
+    def reached() -> None:
+        if progress is not None and clock is not None:
+            progress.at(min(clock.now_ns(), end_ns))
+
+    wall = _telling(wall or WallClock(), reached)
     with signals_set(stop), open(log_path, "w") if log_path else nullcontext() as log:
         for window in windows:
             feeds.push(window)
+            end_ns = window.end_ns
             chunk = window.joints if streamer is not None else None
             if clock is None:  # the schedule starts when the first item is ready to go
                 first = [t for t in (feeds.next_time_ns,) if t is not None]
@@ -201,10 +216,11 @@ def paced(
                 sent += _paced_samples(streamer, chunk, feeds, clock, stop, log, sent)
             if not stop.is_set():
                 _feed_until(clock, feeds, clock.due(window.end_ns), stop, log)
+            if stop.is_set():
+                reached()  # where it stopped, not the end of the window it stopped in
+                break
             if progress is not None:
                 progress(window)
-            if stop.is_set():
-                break
             if streamer is not None:
                 # Backpressure, once a window: wait until the sinks have taken what was sent, so a sink slower
                 # than the sample rate makes samples late instead of piling them up in memory.
@@ -213,6 +229,16 @@ def paced(
             _feed_until(clock, feeds, math.inf, stop, log)
             feeds.until(None)  # nothing left but the run's end
     return (sent if streamer is not None and sent else feeds.sent), stop.is_set()
+
+
+def _telling(wall: WallClock, reached: Callable[[], None]) -> WallClock:
+    """``wall`` whose every wait ends by calling ``reached``."""
+
+    def sleep(seconds: float) -> None:
+        wall.sleep(seconds)
+        reached()
+
+    return WallClock(wall.now, sleep)
 
 
 def _paced_samples(

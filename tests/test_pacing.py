@@ -87,6 +87,21 @@ class _Items:
             self.at.append((self.clock.now(), self.next_time_ns))
 
 
+class _Bar:
+    """A stand-in for the progress bar: the windows done and each position it was told, in order."""
+
+    def __init__(self) -> None:
+        self.windows: list[Window] = []
+        self.positions: list[int] = []
+
+    def __call__(self, window: Window) -> None:
+        self.windows.append(window)
+        self.positions.append(window.end_ns)
+
+    def at(self, t_ns: int) -> None:
+        self.positions.append(t_ns)
+
+
 MS = 1_000_000
 
 
@@ -104,10 +119,10 @@ def test_paced_samples_go_out_in_order_and_not_before_they_are_due() -> None:
     source = ArraySource(times, ["j"], np.zeros((n, 1)))
     clock = _SimClock()
     streamer = _Recorder(clock)
-    seen: list[Window] = []
+    seen = _Bar()
     windows = list(source_windows(source, 5))
-    sent, stopped = paced(streamer, windows, _NoFeeds(), speed=2.0, progress=seen.append, wall=clock.wall)
-    assert sent == n and not stopped and seen == windows and len(windows) == 3
+    sent, stopped = paced(streamer, windows, _NoFeeds(), speed=2.0, progress=seen, wall=clock.wall)
+    assert sent == n and not stopped and seen.windows == windows and len(windows) == 3
     # twice as fast: sample k is due k * 10 ms after the first; a clock that wakes on time sends each alone, on time
     first = streamer.sent[0][0]
     assert [k for _, _, k in streamer.sent] == [1] * n
@@ -180,3 +195,34 @@ def test_pacing_sleeps_in_short_steps_so_a_signal_is_seen_soon() -> None:
     items = _Items(clock)
     paced(None, [Window(2000 * MS, displays=_messages(0, 2000))], items, wall=wall)
     assert [t for _, t in items.at] == [0, 2000 * MS] and len(asked) >= 20 and max(asked) <= 0.1
+
+
+def test_the_bar_moves_as_a_window_plays_not_when_it_ends() -> None:
+    # one window of 20 s of bag time (a small bag is one window), a message a second, at 1x: the bar is told where
+    # the replay is at every wait (at most MAX_SLEEP, 0.1 s, of bag time apart), up to the window's end
+    clock = _SimClock()
+    bar = _Bar()
+    window = Window(20_000 * MS, displays=_messages(*range(0, 20_001, 1000)))
+    paced(None, [window], _Items(clock), wall=clock.wall, progress=bar)
+    steps = np.diff(bar.positions)
+    assert bar.positions[-1] == 20_000 * MS and (steps >= 0).all()
+    assert max(steps) <= 100 * MS + 1 and len(bar.positions) > 190  # 20 s in steps of at most 0.1 s
+
+
+def test_a_stopped_replay_shows_where_it_stopped() -> None:
+    # Ctrl-C 7.5 s into a 20 s window: the bar stays at 7.5 s (it showed the window's end, 100 %, before)
+    import threading
+
+    clock = _SimClock()
+    stop = threading.Event()
+
+    def sleep(seconds: float) -> None:
+        clock.sleep(seconds)
+        if clock.t >= 1000.0 + 7.5:
+            stop.set()  # what the SIGINT handler does
+
+    bar = _Bar()
+    window = Window(20_000 * MS, displays=_messages(*range(0, 20_001, 1000)))
+    _, stopped = paced(None, [window], _Items(clock), wall=WallClock(clock.now, sleep), progress=bar, stop=stop)
+    assert stopped and bar.windows == []
+    assert abs(bar.positions[-1] - 7_500 * MS) <= 100 * MS and max(bar.positions) == bar.positions[-1]

@@ -69,6 +69,15 @@ def test_a_live_replay_shows_its_position(tmp_path: Path, monkeypatch: pytest.Mo
     assert shown.startswith("walk ") and shown.rstrip().endswith("3.0 / 9.9 s")
 
 
+def test_a_live_replay_shows_where_it_has_got_between_windows(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    err = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", err)
+    with _bag(tmp_path) as bag, progress_bar(plan_bag(bag), _Config(live=True)) as bar:
+        assert bar is not None
+        bar.at(T0 + 45 * S // 10)  # 4.5 s into the bag, the window not done
+    assert err.getvalue().rstrip().endswith("4.5 / 9.9 s")
+
+
 def test_no_bar_when_not_wanted_or_not_a_bag(tmp_path: Path) -> None:
     with _bag(tmp_path) as bag, progress_bar(plan_bag(bag), _Config(progress=False)) as advance:
         assert advance is None
@@ -117,3 +126,41 @@ def test_a_live_replay_shows_its_position_in_the_bag(tmp_path: Path) -> None:
     code, shown = on_a_terminal("--bag", str(bag), "--save", str(tmp_path / "out.rrd"), "--realtime", "--speed", "10")
     assert code == 0, shown
     assert "/ 20.0 s" in shown  # "12.3 / 20.0 s": its position in the 19.99 s bag
+
+
+def test_ctrl_c_leaves_a_live_replays_bar_where_it_stopped(tmp_path: Path) -> None:
+    # issue 44: the bar sat at 0.0 (a small bag is one window) and, after Ctrl-C, showed the whole bag replayed
+    import os
+    import pty
+    import re
+    import signal
+    import subprocess
+    import time
+
+    bag = _arm_bag(tmp_path / "arm")
+    leader, follower = pty.openpty()
+    exe = str(Path(sys.executable).parent / "r2d2-viz")
+    env = {**os.environ, "COLUMNS": "160", "TERM": "xterm"}
+    out = tmp_path / "out.rrd"
+    command = [exe, "--bag", str(bag), "--save", str(out), "--realtime"]  # 20 s at 1x
+    proc = subprocess.Popen(command, stdin=follower, stdout=follower, stderr=follower, env=env)
+    os.close(follower)
+    shown, interrupted_at = b"", None
+    while True:
+        try:
+            data = os.read(leader, 65536)
+        except OSError:
+            break
+        if not data:
+            break
+        shown += data
+        if interrupted_at is None and b"/ 20.0 s" in shown:
+            interrupted_at = time.monotonic() + 3  # Ctrl-C some 3 s into the bag (a wait, not a measurement)
+        if interrupted_at is not None and interrupted_at <= time.monotonic() and proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+            interrupted_at = float("inf")
+    os.close(leader)
+    assert proc.wait(timeout=60) == 0
+    positions = [float(p) for p in re.findall(r"(\d+\.\d) / 20\.0 s", shown.decode(errors="replace"))]
+    assert len(set(positions)) > 2, positions  # it moved while the bag played
+    assert 0 < positions[-1] < 20.0, positions  # and stayed where the replay stopped

@@ -23,7 +23,7 @@ from r2d2_viz.cli.parser import (
     SAVE_SUFFIXES,
     build_parser,
 )
-from r2d2_viz.errors import DEBUG_ENV, R2d2VizError, UsageError, shown, stderr_line
+from r2d2_viz.errors import DEBUG_ENV, ListenError, R2d2VizError, UsageError, shown, stderr_line
 
 EXIT_STDOUT_CLOSED = 141
 """stdout closed early (``r2d2-viz --bag b --list | head``): quiet, with the status a shell gives ``seq`` or ``cat``
@@ -74,7 +74,7 @@ def _checked_main(argv: list[str] | None) -> int:
     except BrokenPipeError:
         raise
     except R2d2VizError as exc:
-        print(stderr_line(f"error: {exc}"), file=sys.stderr)
+        print(stderr_line(f"error: {exc}{_which_flag(exc, args)}"), file=sys.stderr)
         if getattr(exc, "stuck", False):  # Rerun's file sink deadlocked (a full disk): its threads would hold the exit
             sys.stdout.flush()
             sys.stderr.flush()
@@ -91,6 +91,13 @@ def _checked_main(argv: list[str] | None) -> int:
             file=sys.stderr,
         )
         return EXIT_UNEXPECTED
+
+
+def _which_flag(exc: R2d2VizError, args: argparse.Namespace) -> str:
+    """The flag that sets a port that could not be listened on (the library's error knows the port, not the flag)."""
+    if isinstance(exc, ListenError) and exc.port == getattr(args, "web_port", None):
+        return "; choose another port with --web-port PORT"
+    return ""
 
 
 def _quiet_rerun() -> None:
@@ -241,7 +248,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         result = run(config, on_ready=on_ready)
     except SinkError as exc:
         if fallback:  # the user typed no --serve: say why it was tried
-            raise SinkError(f"no display for a viewer window, and the web viewer instead failed: {exc}") from None
+            why = f"no display for a viewer window, and the web viewer instead failed: {exc}"
+            raise (ListenError(why, exc.port) if isinstance(exc, ListenError) else SinkError(why)) from None
         raise
     print_summary(result, config)
     return EXIT_OK

@@ -9,16 +9,23 @@ only the stamps and the numbers differ. A layout's :attr:`key` is the bytes from
 end of the last name (and count), so a message has that layout exactly when its bytes there equal the key.
 
 Pure: ``struct`` and numpy. Anything not little-endian CDR, or malformed, raises ``ValueError`` (callers then
-use the generic deserializer of ``rosbags``, which reports what is wrong).
+use the generic deserializer of ``rosbags``, which reports what is wrong). An Odometry's pose (either byte order)
+is read where it sits, after the header and ``child_frame_id``: NaN when the bytes are not an Odometry.
 """
 
 from __future__ import annotations
 
 import struct
+from collections.abc import Sequence
 from dataclasses import dataclass
+
+import numpy as np
+
+from r2d2_viz.arrays import F64
 
 _U32 = struct.Struct("<I")
 CDR_LE = b"\x00\x01"
+_NAN_POSE = np.full(7, np.nan)
 STAMP = slice(4, 12)
 """``header.stamp`` (``int32 sec``, ``uint32 nanosec``) of a JointState: right after the encapsulation header."""
 
@@ -140,3 +147,27 @@ def tf_layout(data: bytes | memoryview) -> TfLayout:
     return TfLayout(
         bytes(data[4 : c.offset]), tuple(parents), tuple(children), tuple(stamps), tuple(translations), c.offset
     )
+
+
+def odometry_pose(data: bytes | memoryview) -> F64:
+    """An Odometry's ``pose.pose`` as ``(x, y, z, qx, qy, qz, qw)`` (float64) from its CDR bytes; all NaN when the
+    bytes are not a readable Odometry (its decoder then says what is wrong)."""
+    if len(data) < 12 or data[0] != 0 or data[1] not in (0, 1):
+        return _NAN_POSE
+    order = "<" if data[1] == 1 else ">"
+    offset = 4 + 8  # encapsulation header, header.stamp
+    for _ in range(2):  # header.frame_id, child_frame_id
+        offset += -(offset - 4) % 4
+        if offset + 4 > len(data):
+            return _NAN_POSE
+        (length,) = struct.unpack_from(order + "I", data, offset)
+        offset += 4 + length
+    offset += -(offset - 4) % 8
+    if offset + 56 > len(data):
+        return _NAN_POSE
+    return np.frombuffer(data, dtype=order + "f8", count=7, offset=offset).astype(np.float64)
+
+
+def odometry_poses(messages: Sequence[bytes | memoryview]) -> F64:
+    """:func:`odometry_pose` of each message, one row each: ``(n, 7)``."""
+    return np.array([odometry_pose(m) for m in messages], dtype=np.float64).reshape(-1, 7)

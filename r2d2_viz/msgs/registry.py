@@ -70,8 +70,8 @@ def in_3d(msgtype: str) -> bool:
 SHOWN_AS: dict[str, tuple[str, str]] = {
     "sensor_msgs/msg/LaserScan": (
         "LaserScan",
-        "`Points3D` in the scan's frame; NaN/inf and ranges outside [range_min, range_max] dropped; intensity "
-        "rainbow (min/max of each scan), else the flat colour",
+        "`Points3D` in the scan's frame; kept as laser_geometry keeps them: range_min ≤ range < range_max (NaN, inf "
+        "and range_max itself dropped); intensity rainbow (min/max of each scan), else the flat colour",
     ),
     "sensor_msgs/msg/PointCloud2": (
         "PointCloud2",
@@ -97,7 +97,8 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     "nav_msgs/msg/Path": ("Path", "`LineStrips3D` through the poses"),
     "nav_msgs/msg/Odometry": (
         "Odometry",
-        "`Arrows3D` along the pose's x, the last Keep (100) poses kept; covariance ellipsoid when asked",
+        "`Arrows3D` along the pose's x; a pose kept when it moved 0.1 m or turned 0.1 rad from the last one kept "
+        "(RViz's Position / Angle Tolerance), the last Keep (100) of those drawn; covariance ellipsoid when asked",
     ),
     "nav_msgs/msg/OccupancyGrid": (
         "Map",

@@ -16,8 +16,11 @@ CONE_SEGMENTS = 16
 
 
 def decode_laserscan(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
-    """Points at ``angle_min + i * angle_increment``; NaN / inf and ranges outside [range_min, range_max] dropped;
-    coloured by ``intensities`` (RViz's rainbow over the kept points) when there is one per range."""
+    """Points at ``angle_min + i * angle_increment``, kept as laser_geometry's ``projectLaser`` (RViz's LaserScan
+    display) keeps them: ``range < range_max && range >= range_min`` (so NaN, inf and a range of exactly
+    ``range_max``, a sensor's "no return", are dropped; and a non-finite point, which only ``range_min = -inf``
+    could let through); coloured by ``intensities`` (RViz's rainbow over the kept points) when there is one per
+    range."""
     msg = deserialize(data, "sensor_msgs/msg/LaserScan")
     frame, stamp = header_of(msg)
     ranges = np.asarray(msg.ranges, dtype=np.float32)
@@ -26,7 +29,7 @@ def decode_laserscan(data: bytes | memoryview, options: DecodeOptions) -> Decode
         raise MsgError(f"{intensities.size} intensities for {ranges.size} ranges")
     with np.errstate(invalid="ignore", over="ignore"):
         angles = float(msg.angle_min) + np.arange(ranges.size, dtype=np.float64) * float(msg.angle_increment)
-        keep = np.isfinite(ranges) & (ranges >= msg.range_min) & (ranges <= msg.range_max) & np.isfinite(angles)
+        keep = (ranges < msg.range_max) & (ranges >= msg.range_min) & np.isfinite(ranges) & np.isfinite(angles)
         r = ranges[keep].astype(np.float64)
         a = angles[keep]
         xyz: F32 = np.stack([r * np.cos(a), r * np.sin(a), np.zeros_like(r)], axis=1).astype(np.float32)

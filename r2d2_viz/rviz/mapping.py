@@ -82,7 +82,12 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "not mapped on markers",
     ),
     ("Map", "Color Scheme", "map, costmap or raw colours (RViz's palettes)"),
-    ("Odometry", "Keep, Covariance", "the last Keep poses stay drawn (`/odom/<k>`); the covariance ellipsoid"),
+    (
+        "Odometry",
+        "Keep, Position Tolerance, Angle Tolerance, Covariance",
+        "a pose is kept when it moved Position Tolerance (m) or turned Angle Tolerance (rad) from the last one kept "
+        "(RViz's test); the last Keep poses kept stay drawn (`/odom/<k>`); the covariance ellipsoid",
+    ),
     ("Image, Camera", "Topic / Image Topic, Enabled", "a 2D view of that topic's entity beside the plots"),
     (
         "moveit_rviz_plugin/MotionPlanning, PlanningScene",

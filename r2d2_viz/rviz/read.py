@@ -245,6 +245,8 @@ def display_style(self: Reader, display: Mapping[str, Any], where: str) -> Displ
         keep=int(keep) if keep is not None and keep >= 0 else None,
         color_scheme=str(display["Color Scheme"]) if display.get("Color Scheme") else None,
         covariance=self.flag(covariance, "Value", False, where) if isinstance(covariance, dict) else None,
+        position_tolerance=number("Position Tolerance"),
+        angle_tolerance=number("Angle Tolerance"),
     )
 
 

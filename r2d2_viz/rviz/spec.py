@@ -134,6 +134,9 @@ class DisplayStyleSpec:
     keep: int | None = None
     color_scheme: str | None = None
     covariance: bool | None = None
+    position_tolerance: float | None = None
+    """Odometry's Position Tolerance (m) and Angle Tolerance (rad)."""
+    angle_tolerance: float | None = None
 
 
 @dataclass(frozen=True)

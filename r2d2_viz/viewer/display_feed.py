@@ -2,15 +2,12 @@
 recorded transforms): each message decoded (:mod:`r2d2_viz.msgs`) and logged in its TF frame at its time.
 
 An empty frame id is drawn in the fixed frame (said once per topic); a message that cannot be decoded is said once per
-topic and counted (the count is said at the end). Odometry keeps RViz's history (Keep, default 100): its poses go round
-``<topic>/<k mod keep>``, so the last ``keep`` stay in view.
+topic and counted (the count is said at the end). Odometry keeps RViz's history: a pose is kept only when it moved
+Position Tolerance or turned Angle Tolerance from the last one kept (:mod:`~r2d2_viz.viewer.blocks.odometry_keep`),
+and the poses kept go round ``<topic>/<k mod keep>`` (Keep, default 100), so the last ``keep`` stay in view.
 
-Cameras become Rerun ``VideoStream`` s (:class:`VideoFeed`): each raw 8-bit camera topic encoded as it is read
-(``--video``; a bag's reader thread or a live receiver: the encoders release the GIL), samples compressed already
-passed through. A stream's codec is logged statically once on its entity, its samples at their times on the same
-entity (the 2D view and the camera's pinhole in 3D show them as they showed images). A stream shows from its first
-keyframe: an encoded one starts with one (at a seek too); a passed-through one that starts without is skipped to
-its first keyframe (said once).
+Cameras become Rerun ``VideoStream`` s (:class:`VideoFeed`, ``--video``: raw 8-bit images encoded as they are read,
+compressed samples passed through), shown from their first keyframe (the samples before it skipped, said once).
 """
 
 from __future__ import annotations
@@ -26,20 +23,12 @@ from r2d2_viz.errors import short
 from r2d2_viz.msgs.images import EncoderName, VideoEncoder
 from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.shapes import (
-    Decoded,
-    DecodeOptions,
-    GridMap,
-    Image,
-    MarkerOp,
-    MeshResource,
-    VideoSample,
-    is_plain,
-)
+from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, GridMap, Image, MarkerOp, MeshResource, VideoSample, is_plain
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_images
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
+from r2d2_viz.viewer.blocks.odometry_keep import OdometryKeep, Tolerance
 from r2d2_viz.viewer.decay import FixedFramePlacer
 from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, PlainBook, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
@@ -62,6 +51,8 @@ class DisplayStyle:
     """History length (Odometry's Keep); None: the type's default."""
     decay: bool = False
     """RViz's Decay Time is set: the drawings are logged in the fixed frame (:mod:`r2d2_viz.viewer.decay`)."""
+    tolerance: Tolerance = field(default_factory=Tolerance)
+    """Odometry's Position and Angle Tolerance (:mod:`r2d2_viz.viewer.blocks.odometry_keep`)."""
 
 
 @dataclass
@@ -185,6 +176,7 @@ class DisplayFeed:
         self.on_map: Callable[[str, GridMap], object] | None = None
         """Called with each map drawn and its frame (the tools' ground grows to cover it)."""
         self.columns = ColumnRuns(self.rec, timeline, clock, hold=hold)  # images, points: columns (until())
+        self.odometry = OdometryKeep(lambda topic: (self.styles.get(topic) or DisplayStyle()).tolerance)
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -216,27 +208,32 @@ class DisplayFeed:
         return self._pending[0].time_ns if self._pending else None
 
     def until(self, time_ns: int | None = None) -> int:
-        """Log the pending messages received up to ``time_ns`` (inclusive; all when None); how many."""
-        logged = 0
+        """Log the pending messages received up to ``time_ns`` (inclusive; all when None); how many were due."""
+        due: list[TopicMessage] = []
         while self._pending and (time_ns is None or self._pending[0].time_ns <= time_ns):
-            message = self.decode(self._pending.popleft())
+            due.append(self._pending.popleft())
+        for message in self.odometry.kept(due):  # before a pose takes a slot of its history
+            message = self.decode(message)
             if _simple(self, message, message.decoded):
                 entity = _count(self, message)[1]
                 self.columns.add(message, entity, self.cameras.get(message.topic, ()), header_time=self.header_time)
             else:  # on its own: after what its entities' runs hold, at the time the runs left
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
-                self.log(message)
-            logged += 1
+                self._log(message)
         self.columns.interrupt(everything=time_ns is None)  # everything taken: held runs too
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
             if state.markers.live:
                 expire_markers(
                     self.rec, state.markers, self.timeline, _FOREVER if time_ns is None else time_ns, self.clock
                 )
-        return logged
+        return len(due)
 
     def log(self, message: TopicMessage) -> None:
-        """Decode and log one message (a live source calls this as messages arrive)."""
+        """Decode and log one message (a live source calls this as messages arrive), unless RViz would not draw it."""
+        if self.odometry.kept([message]):
+            self._log(message)
+
+    def _log(self, message: TopicMessage) -> None:
         if message.msgtype == GRID_UPDATE:
             _update_map(self, message)
             return
@@ -261,7 +258,7 @@ class DisplayFeed:
             self.notices.report(f"{self._where(message.topic)}: {note}", key=f"video {message.topic} {note}")
         if not self.video.ready(self.rec, message.topic, decoded):
             return
-        placed = self._placed(message.topic, decoded)
+        placed = _placed(self, message.topic, decoded)
         if self.on_map is not None and isinstance(placed, Decoded):
             for item in placed.items:
                 if isinstance(item, GridMap):
@@ -314,23 +311,6 @@ class DisplayFeed:
     def _where(self, topic: str) -> str:
         # the topic's problem follows: the name gets less room than in a list of names
         return f"{self.source_name}: {short(topic, 60)}" if self.source_name else short(topic, 60)
-
-    def _placed(self, topic: str, decoded: Decoded | list[MarkerOp]) -> Decoded | list[MarkerOp]:
-        """An empty frame id → the fixed frame (said once per topic)."""
-
-        def fix(d: Decoded) -> Decoded:
-            if d.frame_id or all(is_plain(item) for item in d.items):  # a log, a plot: in no frame
-                return d
-            self.notices.report(
-                f"{self._where(topic)}: messages with an empty frame_id are drawn in the fixed frame "
-                f"[{self.fixed_frame}]",
-                key=f"empty frame {topic}",
-            )
-            return dataclasses.replace(d, frame_id=self.fixed_frame)
-
-        if isinstance(decoded, Decoded):
-            return fix(decoded)
-        return [dataclasses.replace(op, decoded=fix(op.decoded)) if op.decoded else op for op in decoded]
 
     def finish(self) -> None:
         """Send the runs still held; say, per topic, how many messages could not be shown (beyond the first)."""
@@ -397,3 +377,20 @@ def _ahead(feed: DisplayFeed, message: TopicMessage, decoded: Decoded) -> bool:
 
 def _first_stamp(ops: list[MarkerOp]) -> int:
     return next((op.decoded.stamp_ns for op in ops if op.decoded is not None and op.decoded.stamp_ns), 0)
+
+
+def _placed(feed: DisplayFeed, topic: str, decoded: Decoded | list[MarkerOp]) -> Decoded | list[MarkerOp]:
+    """An empty frame id → the fixed frame (said once per topic)."""
+
+    def fix(d: Decoded) -> Decoded:
+        if d.frame_id or all(is_plain(item) for item in d.items):  # a log, a plot: in no frame
+            return d
+        feed.notices.report(
+            f"{feed._where(topic)}: messages with an empty frame_id are drawn in the fixed frame [{feed.fixed_frame}]",
+            key=f"empty frame {topic}",
+        )
+        return dataclasses.replace(d, frame_id=feed.fixed_frame)
+
+    if isinstance(decoded, Decoded):
+        return fix(decoded)
+    return [dataclasses.replace(op, decoded=fix(op.decoded)) if op.decoded else op for op in decoded]

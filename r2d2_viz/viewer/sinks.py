@@ -23,7 +23,7 @@ from urllib.parse import urlsplit
 import rerun as rr
 import rerun.blueprint as rrb
 
-from r2d2_viz.errors import DEBUG_ENV, SinkError, UsageError, one_line
+from r2d2_viz.errors import DEBUG_ENV, ListenError, SinkError, UsageError, one_line
 from r2d2_viz.viewer.entities import APP_ID
 from r2d2_viz.viewer.files.whole import flush_file
 from r2d2_viz.viewer.web.assets import viewer_static
@@ -122,7 +122,7 @@ def _check_port_free(bind: str, port: int, what: str) -> None:
         try:
             s.bind((bind, port))
         except OSError as exc:
-            raise SinkError(f"--serve: cannot listen on {bind}:{port} for the {what}: {exc.strerror}") from None
+            raise ListenError(f"--serve: cannot listen on {bind}:{port} for the {what}: {exc.strerror}", port) from None
 
 
 def open_recording(

@@ -394,3 +394,17 @@ def test_start_up_imports_run_without_the_cyclic_collector_then_it_runs_again(mo
     assert "robot name is: r2d2" in capsys.readouterr().out
     assert main(["--save", "x.txt"]) == 2  # refused before the imports
     assert gc.isenabled()
+
+
+def test_a_busy_web_port_names_the_flag_that_sets_it() -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        served = cli("--serve", "--web-port", str(port), "--duration", "0.2")
+        fallback = cli("--web-port", str(port), "--duration", "0.2", env={"DISPLAY": "", "WAYLAND_DISPLAY": ""})
+    for result in (served, fallback):
+        assert result.returncode == 2, result.stderr
+        (line,) = result.stderr.splitlines()
+        assert f"cannot listen on 127.0.0.1:{port} for the web page: Address already in use" in line
+        assert line.endswith("; choose another port with --web-port PORT"), line

@@ -217,6 +217,7 @@ def test_a_busy_web_port_is_one_line(fleet: Path) -> None:
         result = cli("--dataset", str(fleet), "--serve", "--port", str(_free_port()), "--web-port", str(web))
     assert result.returncode == 2, result.stderr
     assert result.stderr.splitlines() == [
-        f"error: --serve: cannot listen on 127.0.0.1:{web} for the web viewer: Address already in use"
+        f"error: --serve: cannot listen on 127.0.0.1:{web} for the web viewer: Address already in use; "
+        "choose another port with --web-port PORT"
     ]
     assert "serving" not in result.stderr

@@ -7,8 +7,9 @@ import pytest
 from bagmaker import TS, joint_state, tf_message
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from msgs_build import T, header, pose, quat, vec
 
-from r2d2_viz.msgs.layouts import joint_state_layout, tf_layout
+from r2d2_viz.msgs.layouts import joint_state_layout, odometry_pose, odometry_poses, tf_layout
 
 names = st.lists(st.text(alphabet="abcxyz_0123456789é", min_size=1, max_size=9), min_size=0, max_size=6, unique=True)
 
@@ -94,3 +95,32 @@ def test_tf_decoder_keeps_the_transforms_after_an_empty_message() -> None:
     messages = [(1, tf_message([])), (2, tf_message([(5, "a", f"b{k}", np.zeros(3), q) for k in range(3)]))]
     decoder = TfDecoder(lambda d, t: TS.deserialize_cdr(bytes(d), t), static=True, time="receive")
     assert decoder.decode(messages).children == ("b0", "b1", "b2")
+
+
+def _odometry(frame: str, child: str, xyz: tuple[float, float, float], q: tuple[float, ...], *, le: bool = True):
+    cov = np.zeros(36)
+    msg = T("nav_msgs/msg/Odometry")(
+        header=header(frame, 3, 4),
+        child_frame_id=child,
+        pose=T("geometry_msgs/msg/PoseWithCovariance")(pose=pose(*xyz, quat(*q)), covariance=cov),
+        twist=T("geometry_msgs/msg/TwistWithCovariance")(
+            twist=T("geometry_msgs/msg/Twist")(linear=vec(), angular=vec()), covariance=cov
+        ),
+    )
+    return bytes(TS.serialize_cdr(msg, msg.__msgtype__, little_endian=le))
+
+
+@pytest.mark.parametrize("le", [True, False], ids=["little-endian", "big-endian"])
+@pytest.mark.parametrize("names", [("", ""), ("odom", "base_link"), ("o", "ab"), ("odom_x", "b" * 13)])
+def test_the_pose_read_from_the_bytes_is_rosbags_reading(names: tuple[str, str], le: bool) -> None:
+    data = _odometry(*names, (1.5, -2.25, 0.125), (0.1, 0.2, 0.3, 0.927), le=le)
+    p = TS.deserialize_cdr(data, "nav_msgs/msg/Odometry").pose.pose
+    expected = [p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y, p.orientation.z]
+    assert odometry_pose(data).tolist() == [*expected, p.orientation.w]
+
+
+def test_bytes_that_are_no_odometry_read_as_nan() -> None:
+    good = _odometry("odom", "base_link", (1.0, 2.0, 3.0), (0, 0, 0, 1))
+    for bad in (b"", b"\x00\x01\x00\x00garbage", good[:60], b"\x07\x07" + good[2:], b"\x00\x01\x00\x00" + b"\xff" * 80):
+        assert np.isnan(odometry_pose(bad)).all()
+    assert odometry_poses([good, b""]).shape == (2, 7)

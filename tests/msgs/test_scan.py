@@ -33,15 +33,44 @@ def scan(ranges: list[float], intensities: list[float] | None = None, frame: str
 
 
 def test_points_at_their_angles_with_nan_inf_and_out_of_range_dropped() -> None:
-    # beams at -90°, 0°, +90°, 180°, 270°: 1 m, NaN, 2 m, 0.2 m (< range_min), inf, then 11 m (> range_max), 3 m
-    decoded = decode_laserscan(scan([1.0, math.nan, 2.0, 0.2, math.inf, 11.0, 10.0]), OPTIONS)
+    # beams at -90°, 0°, +90°, 180°, 270°, …: 1 m, NaN, 2 m, 0.2 m (< range_min), inf, 11 m (> range_max), 10 m
+    # (= range_max: no return, dropped), 9.5 m, 0.5 m (= range_min: kept)
+    decoded = decode_laserscan(scan([1.0, math.nan, 2.0, 0.2, math.inf, 11.0, 10.0, 9.5, 0.5]), OPTIONS)
     assert decoded.frame_id == "base_laser"  # leading '/' dropped, as tf2 does
     assert decoded.stamp_ns == 7_500_000_000
     (points,) = decoded.items
     assert isinstance(points, Points)
-    # by hand: beam 0 at -90° → (0, -1); beam 2 at +90° → (0, 2); beam 6 at -90° + 6·90° = 450° ≡ 90° → (0, 10)
-    np.testing.assert_allclose(points.positions, [[0, -1, 0], [0, 2, 0], [0, 10, 0]], atol=1e-5)  # float32 angles
+    # by hand: beam 0 at -90° → (0, -1); beam 2 at +90° → (0, 2); beam 7 at -90° + 7·90° = 540° ≡ 180° → (-9.5, 0);
+    # beam 8 at 630° ≡ 270° → (0, -0.5)
+    expected = [[0, -1, 0], [0, 2, 0], [-9.5, 0, 0], [0, -0.5, 0]]
+    np.testing.assert_allclose(points.positions, expected, atol=1e-5)  # float32 angles
     assert points.colors.tolist() == [[255, 255, 255, 255]]  # no intensities: one flat colour
+
+
+def _laser_geometry_kept(ranges: list[float], range_min: float, range_max: float) -> list[int]:
+    """laser_geometry's keep-test, transcribed (ros-perception/laser_geometry, ROS 2 branch):
+    src/laser_geometry.cpp, ``LaserProjection::projectLaser_``::
+
+        if (range_cutoff < 0) { range_cutoff = scan_in.range_max; }
+        ...
+        const float range = scan_in.ranges[i];
+        if (range < range_cutoff && range >= scan_in.range_min) {
+
+    and src/laser_geometry/laser_geometry.py, ``__projectLaser``: ``if ri < range_cutoff and ri >= scan_in.range_min``
+    (``range_cutoff`` -1, RViz's LaserScan display's call, becomes ``range_max``). The ranges and limits are floats."""
+    f = np.float32
+    return [i for i, r in enumerate(ranges) if f(r) < f(range_max) and f(r) >= f(range_min)]
+
+
+def test_the_rays_kept_are_laser_geometrys() -> None:
+    ranges = [0.4999, 0.5, 0.5001, 5.0, 9.9999, 10.0, 10.0001, math.inf, -math.inf, math.nan, 0.0, -1.0]
+    expected = _laser_geometry_kept(ranges, 0.5, 10.0)
+    assert expected == [1, 2, 3, 4]  # by hand: range_min itself in, range_max itself out
+    (points,) = decode_laserscan(scan(ranges), OPTIONS).items
+    assert isinstance(points, Points)
+    beams = -math.pi / 2 + np.array(expected) * math.pi / 2  # each kept beam's angle and range, back from its point
+    r = np.float32(ranges)[expected]
+    np.testing.assert_allclose(points.positions[:, :2], np.stack([r * np.cos(beams), r * np.sin(beams)], 1), atol=1e-5)
 
 
 def test_intensities_colour_the_kept_points_with_rvizs_rainbow() -> None:

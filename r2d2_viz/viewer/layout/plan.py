@@ -25,6 +25,7 @@ from r2d2_viz.sources.base import JointState, SampleChunk, TfRecords, reachable
 from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
+from r2d2_viz.viewer.blocks.odometry_keep import ANGLE_TOLERANCE, POSITION_TOLERANCE, Tolerance
 from r2d2_viz.viewer.display_feed import DisplayStyle
 from r2d2_viz.viewer.layout.blueprint import Layout, robot_display
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
@@ -187,7 +188,8 @@ MAP_SCHEMES = ("map", "costmap", "raw")
 
 def _styles(spec: ViewSpec) -> dict[str, DisplayStyle]:
     """How the config's topic displays draw: colour and alpha, point size, the flat-colour transformer, a
-    map's colour scheme, Odometry's Keep and Covariance (what a display leaves unset keeps RViz's default)."""
+    map's colour scheme, Odometry's Keep, Covariance, Position and Angle Tolerance (what a display leaves unset keeps
+    RViz's default)."""
     styles = {}
     for display in spec.topics:
         s = display.style
@@ -206,7 +208,11 @@ def _styles(spec: ViewSpec) -> dict[str, DisplayStyle]:
         keep = s.keep if s.keep and s.keep > 0 else None
         decay = s.decay_time is not None and s.decay_time > 0 and display.enabled
         options = dataclasses.replace(DecodeOptions(), **changes)
-        styles[display.topic] = DisplayStyle(options, keep=keep, decay=decay)
+        tolerance = Tolerance(  # RViz's FloatProperty has a minimum of 0
+            max(s.position_tolerance, 0.0) if s.position_tolerance is not None else POSITION_TOLERANCE,
+            max(s.angle_tolerance, 0.0) if s.angle_tolerance is not None else ANGLE_TOLERANCE,
+        )
+        styles[display.topic] = DisplayStyle(options, keep=keep, decay=decay, tolerance=tolerance)
     return styles
 
 

@@ -27,7 +27,7 @@ from http.server import BaseHTTPRequestHandler
 from pathlib import Path
 from typing import Any
 
-from r2d2_viz.errors import R2d2VizError, SinkError, ToolEventError, one_line, warn
+from r2d2_viz.errors import ListenError, R2d2VizError, SinkError, ToolEventError, one_line, warn
 from r2d2_viz.viewer.web.assets import (
     HERE,
     PAGE_FILES,
@@ -267,7 +267,9 @@ class PageServer:
         try:
             self._http = _Server((bind, port), family, _Handler)
         except OSError as exc:
-            raise SinkError(f"--serve: cannot listen on {bind}:{port} for the web page: {exc.strerror}") from None
+            raise ListenError(
+                f"--serve: cannot listen on {bind}:{port} for the web page: {exc.strerror}", port
+            ) from None
         self._http.page = self
         self.port = int(self._http.server_address[1])
         self.bind = bind

@@ -6,7 +6,8 @@
 * ``/robot/axes/<link>`` — the link's axes (``TransformAxes3D``).
 
 The maths is :mod:`r2d2_viz.robot.inertial`'s. An impossible inertia (RViz draws no box for it either) is one
-notice line, said when the inertia is asked for.
+notice line, said when the inertia is asked for; so is a robot with no ``<inertial>`` at all when mass or inertia
+is asked for (nothing would show, and nothing would say why).
 """
 
 from __future__ import annotations
@@ -46,6 +47,8 @@ def log_mass_properties(
     if display.inertia:
         for line in inertia_problems(robot):
             notices.report(line)
+    if (display.mass or display.inertia) and all(link.inertial is None for link in robot.links):
+        notices.report(f"{robot.source}: no link has an inertial: nothing to show")
     root, logged = entities.robot_root(robot_name), 0
     every_axis = ALL_LINKS in display.axes
     for link in robot.links:

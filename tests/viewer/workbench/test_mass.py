@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 import numpy as np
-from conftest import cli
+from conftest import REPO, cli
 from rrd import read_recording
 
 # 'base' (8 kg, moments 1, 2, 2.5 in a frame turned 90° about z), 'arm' (impossible: 0.001 + 0.001 < 0.01),
@@ -105,3 +105,16 @@ def test_an_rviz_configs_mass_properties_and_show_axes(tmp_path: Path) -> None:
         "/robot/axes/tip",
     }
     assert "triangle" not in result.stderr  # Inertia is off: its problems are not asked for
+
+
+def test_a_robot_with_no_inertial_says_there_is_nothing_to_show(tmp_path: Path) -> None:
+    # examples/arm6.urdf has no <inertial>: --mass used to show nothing and say nothing
+    arm = REPO / "examples" / "arm6.urdf"
+    assert "<inertial" not in arm.read_text()
+    for flag in ("--mass", "--inertia"):
+        result = cli("--urdf", str(arm), flag, "--save", str(tmp_path / "a.rrd"), "--duration", "0.2")
+        assert result.returncode == 0, result.stderr
+        lines = [x for x in result.stderr.splitlines() if "no link has" in x]
+        assert len(lines) == 1 and lines[0].endswith("arm6.urdf: no link has an inertial: nothing to show"), lines
+    result = cli("--urdf", str(_urdf(tmp_path)), "--mass", "--save", str(tmp_path / "m.rrd"), "--duration", "0.2")
+    assert "no link has an inertial" not in result.stderr  # a robot with some says nothing of the kind
