@@ -205,4 +205,11 @@ def _serve(source: IO[bytes], sink: IO[bytes]) -> None:
 
 
 if __name__ == "__main__":
+    import argparse
+
+    argparse.ArgumentParser(
+        prog="python -m r2d2_viz.viewer.web.eye",
+        description="The page's eye reader: blueprints on standard input (each its length, then its bytes), one JSON "
+        "line each on standard output. Started by r2d2-viz --serve; not for use by hand.",
+    ).parse_args()
     _serve(sys.stdin.buffer, sys.stdout.buffer)
