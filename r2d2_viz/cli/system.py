@@ -9,18 +9,21 @@ import sys
 from pathlib import Path
 
 from r2d2_viz.cli.parser import EXIT_OK
-from r2d2_viz.errors import UsageError
+from r2d2_viz.errors import UsageError, shown_in_line
 
 LISTEN_SECONDS = 5.0
 """How long ``--ros --tf-tree`` listens without ``--duration``."""
 
 
 def tf_tree_main(args: argparse.Namespace) -> int:
-    from r2d2_viz.sources.system.tf_report import GRAPH_SUFFIXES, tree_lines, write_graph
+    from r2d2_viz.sources.system.tf_report import GRAPH_SUFFIXES, graph_data, tree_lines
+    from r2d2_viz.viewer.files.whole_file import check_target, write_whole
 
     out = None if args.tf_tree == "-" else Path(args.tf_tree)
     if out is not None and out.suffix not in GRAPH_SUFFIXES:
         raise UsageError(f"--tf-tree {out}: unknown extension {out.suffix or '(none)'!r}; write .dot or .svg")
+    if out is not None:
+        check_target(out)  # before the bag is read or the graph listened to
     if args.ros:
         if args.bag is not None:
             raise UsageError("--ros shows the live graph; it cannot be combined with --bag")
@@ -41,11 +44,11 @@ def tf_tree_main(args: argparse.Namespace) -> int:
     else:
         raise UsageError("--tf-tree prints the TF tree of a bag or a live graph: use it with --bag PATH or --ros")
     if out is not None:
-        write_graph(tree, out, title)
+        write_whole(out, graph_data(tree, out, title))  # a hidden partial renamed over ``out`` when whole
     for line in tree_lines(tree, title):
-        print(line, flush=True)
+        print(shown_in_line(line), flush=True)  # a frame name's escapes and line breaks shown, never sent
     if out is not None:
-        print(f"r2d2-viz: wrote {out}", file=sys.stderr)
+        print(shown_in_line(f"r2d2-viz: wrote {out}"), file=sys.stderr)
     return EXIT_OK
 
 
