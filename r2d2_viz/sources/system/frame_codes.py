@@ -13,7 +13,9 @@ import numpy as np
 import numpy.typing as npt
 
 
-def frame_codes(names: Collection[str] | npt.NDArray[np.object_]) -> tuple[npt.NDArray[np.object_], npt.NDArray[np.intp]]:
+def frame_codes(
+    names: Collection[str] | npt.NDArray[np.object_],
+) -> tuple[npt.NDArray[np.object_], npt.NDArray[np.intp]]:
     """The distinct ``names`` sorted (an object array) and each name's index in them, as ``np.unique`` with
     ``return_inverse`` gives them."""
     index: dict[str, int] = {}

@@ -93,7 +93,8 @@ class TfGraph:
         if grow:
             self._first = np.r_[self._first, np.full(grow, np.iinfo(np.int64).max)]
             self._last = np.r_[self._last, np.full(grow, NEVER)]
-        return numbers[np.asarray(inverse).reshape(-1)]
+        out: I64 = numbers[inverse.reshape(-1)]
+        return out
 
     def _log_snapshots(self, due: I64, codes: I64, times: I64) -> None:
         """A snapshot at each time of ``due`` from the rows before this feed and ``codes, times`` (this feed's)."""
