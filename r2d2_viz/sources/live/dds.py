@@ -20,6 +20,7 @@ from __future__ import annotations
 import ctypes
 import importlib
 import os
+import socket
 import threading
 import time
 from collections import deque
@@ -28,7 +29,7 @@ from dataclasses import dataclass
 from types import ModuleType, TracebackType
 from typing import Any, NamedTuple
 
-from r2d2_viz.errors import DEBUG_ENV
+from r2d2_viz.errors import DEBUG_ENV, short
 from r2d2_viz.msgs.typestore import MsgError, typestore
 from r2d2_viz.sources.live.idl_types import IdlTypes, RawSample
 from r2d2_viz.sources.live.names import LiveError, RosDiscovery, dds_topic, ros_topic, ros_type
@@ -112,6 +113,19 @@ def _publication(sample: Any, dds: Mapping[str, ModuleType]) -> Publication | No
     return Publication(topic, rtype, reliable, transient_local)
 
 
+def resolvable(peers: tuple[str, ...], uri: str = "") -> None:
+    """LiveError for a static peer Cyclone cannot resolve: it aborts the whole process on one (``add_peer_address:
+    …: unknown address``, then SIGABRT), an IPv6 address included when it runs on IPv4 (its default, unless
+    ``CYCLONEDDS_URI`` asks for udp6)."""
+    family = socket.AF_UNSPEC if "udp6" in uri else socket.AF_INET
+    for peer in peers:
+        try:
+            socket.getaddrinfo(peer, None, family)
+        except (OSError, UnicodeError):
+            why = "an IPv4 address or a host name" if family == socket.AF_INET else "an address or a host name"
+            raise LiveError(f"ROS_STATIC_PEERS: cannot resolve {short(peer)!r} ({why})") from None
+
+
 class LiveGraph:
     """A DDS participant on the ROS 2 graph of ``env`` (default: this process's environment).
 
@@ -132,6 +146,7 @@ class LiveGraph:
         self.discovery = RosDiscovery.from_env(env)
         config = self.discovery.cyclone_xml()
         uri = (os.environ if env is None else env).get("CYCLONEDDS_URI", "")
+        resolvable(self.discovery.static_peers, uri)
         if uri:
             config += "," + uri
         try:

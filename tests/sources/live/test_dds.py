@@ -123,3 +123,15 @@ def test_cyclones_own_lines_are_off_unless_debugging() -> None:
     }
     assert runs[""].returncode == 0 and runs[""].stderr == "", runs[""].stderr
     assert runs["1"].returncode == 0 and "deprecated element" in runs["1"].stderr, runs["1"].stderr
+
+
+@pytest.mark.parametrize("peer", ["nonexistent.invalid", "::1"])
+def test_a_static_peer_cyclone_cannot_resolve_is_one_line(peer: str) -> None:
+    """Cyclone aborts the process (SIGABRT, exit 134) on a static peer it cannot resolve — a name that does not
+    resolve (``.invalid`` never does, RFC 2606), or an IPv6 address while it runs on IPv4 — so it is refused first."""
+    if (missing := ros_node.netns_missing()) is not None:
+        ros_node.unavailable(missing)
+    exe = str(Path(sys.executable).parent / "r2d2-viz")
+    done = ros_node.in_netns([exe, "--ros", "--list"], 60, env={"ROS_STATIC_PEERS": f"127.0.0.1;{peer}"})
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, (done.returncode, done.stderr)
+    assert f"ROS_STATIC_PEERS: cannot resolve '{peer}'" in done.stderr and not done.stdout
