@@ -6,8 +6,11 @@ from __future__ import annotations
 import tracemalloc
 
 import numpy as np
+from tfbags import MS, T0, tf_message
 
+from r2d2_viz.sources.live.dds import Sample
 from r2d2_viz.sources.system.frame_codes import frame_codes
+from r2d2_viz.sources.system.tf_live import samples_tree
 from r2d2_viz.sources.system.tf_tree import analyse, tf_rows
 
 
@@ -39,3 +42,23 @@ def test_a_long_frame_name_costs_its_own_length_not_every_rows() -> None:
         tracemalloc.stop()
     assert {(e.parent, e.child) for e in tree.edges} == {("map", "odom"), ("map", "x" * 10_000), ("odom", "base_link")}
     assert peak < 5_000_000, peak
+
+
+def test_the_live_tree_of_a_long_frame_name() -> None:
+    # --ros --tf-tree: 40 /tf messages of 50 transforms, one each to a 10,000-character child (2,000 rows, as a
+    # peer publishing it would send them; measured on a real DDS peer with 500 transforms a message over 4 s: the
+    # CLI's peak went from 6.25 GB to 136 MB)
+    q, long = (0.0, 0.0, 0.0, 1.0), "x" * 10_000
+    samples = []
+    for k in range(40):
+        t = T0 + k * 100 * MS
+        items = [(t, "odom", f"l{i}", (0.0, 0.0, 0.0), q) for i in range(49)] + [(t, "odom", long, (0.0, 0.0, 0.0), q)]
+        samples.append(Sample("/tf", "tf2_msgs/msg/TFMessage", t, tf_message(items)))
+    tracemalloc.start()
+    try:
+        tree = samples_tree(samples, (T0, T0 + 4000 * MS))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(tree.edges) == 50 and ("odom", long) in {(e.parent, e.child) for e in tree.edges}
+    assert peak < 10_000_000, peak  # by hand: the rows and 40 messages of ~12 kB; a fixed-width copy is 160 MB
