@@ -102,6 +102,12 @@ def shown(text: str) -> str:
     return CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
 
 
+def shown_in_line(text: str) -> str:
+    """``text`` as one line of a listing: :func:`shown`, and its line breaks and tabs shown too (``\\x0a``), so
+    that a name that holds them (a hostile frame or node name) cannot print lines of its own."""
+    return shown(text).replace("\n", "\\x0a").replace("\t", "\\x09")
+
+
 def stderr_line(text: str, limit: int = LINE_LIMIT) -> str:
     """``text`` with its control characters shown (:func:`shown`) and each of its lines at most ``limit``
     characters: a longer one keeps its start and its last 80 characters (where "(further problems … are

@@ -105,7 +105,7 @@ def run_live(
 ) -> tuple[int, bool, Path | None]:
     """Run until ``config.duration`` s pass or a signal; returns (joint states shown, signalled, the file saved)."""
     stop = threading.Event()
-    with signals_set(stop), LiveGraph(env, fast_dds_types=config.tf_tree) as graph:  # for NodeWatch
+    with signals_set(stop), LiveGraph(env) as graph:
         return run_on(config, graph, stop, on_ready)
 
 

@@ -84,3 +84,8 @@ def test_control_characters_are_shown_not_sent(capsys: pytest.CaptureFixture[str
     err = capsys.readouterr().err
     assert err == "warning: no transform to base\\x1b[2A\\x1b[2Kr2d2-viz: all fine\\x1b]0;pwned\\x07\\x0d\\x9b\n"
     assert errors.shown("tab\tand\nnewline") == "tab\tand\nnewline"  # the two a line may hold
+
+
+def test_a_name_in_a_listing_stays_on_its_line() -> None:
+    # by hand: every control character, tab and newline included, as its \x escape
+    assert errors.shown_in_line("node\n/fake\tx\x1b[2J\x00") == "node\\x0a/fake\\x09x\\x1b[2J\\x00"

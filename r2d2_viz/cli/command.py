@@ -23,7 +23,7 @@ from r2d2_viz.cli.parser import (
     SAVE_SUFFIXES,
     build_parser,
 )
-from r2d2_viz.errors import DEBUG_ENV, ListenError, R2d2VizError, UsageError, shown, stderr_line
+from r2d2_viz.errors import DEBUG_ENV, ListenError, R2d2VizError, UsageError, shown, shown_in_line, stderr_line
 
 EXIT_STDOUT_CLOSED = 141
 """stdout closed early (``r2d2-viz --bag b --list | head``): quiet, with the status a shell gives ``seq`` or ``cat``
@@ -330,13 +330,15 @@ def _list_topics() -> int:
     from r2d2_viz.sources.live.names import EMPTY_GRAPH_HINT, EMPTY_LIST_NEXT
 
     topics, nodes, discovery = list_topics()
+    # a participant names its nodes (and DDS its topics) as it likes: a line break in one would print lines of
+    # nodes and topics that do not exist, so each name stays on its line (shown_in_line)
     for topic, msgtype, publishers in topics:
-        print(shown(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}"), flush=True)
+        print(shown_in_line(f"{topic} [{msgtype}] {publishers} publisher{'' if publishers == 1 else 's'}"), flush=True)
     for node in nodes:  # then ros2 node list, each with ros2 node info's topics
-        print(shown(f"node {node.name}"), flush=True)
+        print(shown_in_line(f"node {node.name}"), flush=True)
         for verb, ends in (("publishes", node.publishes), ("subscribes", node.subscribes)):
             for topic, msgtype in ends:
-                print(shown(f"  {verb} {topic} [{msgtype}]"), flush=True)
+                print(shown_in_line(f"  {verb} {topic} [{msgtype}]"), flush=True)
     if not topics:
         searched = f"no topics after {max(LIST_SECONDS, NODE_SECONDS):g} s of discovery on {discovery.searched()}"
         print(shown(f"r2d2-viz: {searched}"), file=sys.stderr)  # what was searched, then how to check: two short lines

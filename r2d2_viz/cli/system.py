@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from r2d2_viz.cli.parser import EXIT_OK
-from r2d2_viz.errors import BagError, UrdfError, UsageError, stderr_line
+from r2d2_viz.errors import BagError, UrdfError, UsageError, shown_in_line, stderr_line
 
 if TYPE_CHECKING:
     from r2d2_viz.robot.model import Robot
@@ -26,11 +26,14 @@ LISTEN_SECONDS = 5.0
 
 
 def tf_tree_main(args: argparse.Namespace) -> int:
-    from r2d2_viz.sources.system.tf_report import GRAPH_SUFFIXES, tree_lines, write_graph
+    from r2d2_viz.sources.system.tf_report import GRAPH_SUFFIXES, graph_data, tree_lines
+    from r2d2_viz.viewer.files.whole_file import check_target, write_whole
 
     out = None if args.tf_tree == "-" else Path(args.tf_tree)
     if out is not None and out.suffix not in GRAPH_SUFFIXES:
         raise UsageError(f"--tf-tree {out}: unknown extension {out.suffix or '(none)'!r}; write .dot or .svg")
+    if out is not None:
+        check_target(out)  # before the bag is read or the graph listened to
     if args.ros:
         if args.bag is not None:
             raise UsageError("--ros shows the live graph; it cannot be combined with --bag")
@@ -51,11 +54,11 @@ def tf_tree_main(args: argparse.Namespace) -> int:
     else:
         tree, title = _motion_tree(args)
     if out is not None:
-        write_graph(tree, out, title)
+        write_whole(out, graph_data(tree, out, title))  # a hidden partial renamed over ``out`` when whole
     for line in tree_lines(tree, title):
-        print(line, flush=True)
+        print(shown_in_line(line), flush=True)  # a frame name's escapes and line breaks shown, never sent
     if out is not None:
-        print(f"r2d2-viz: wrote {out}", file=sys.stderr)
+        print(shown_in_line(f"r2d2-viz: wrote {out}"), file=sys.stderr)
     return EXIT_OK
 
 

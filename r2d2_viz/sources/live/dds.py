@@ -17,8 +17,10 @@ A drain thread moves samples from the readers into a bounded queue per topic (ol
 
 from __future__ import annotations
 
+import ctypes
 import importlib
 import os
+import socket
 import threading
 import time
 from collections import deque
@@ -27,6 +29,7 @@ from dataclasses import dataclass
 from types import ModuleType, TracebackType
 from typing import Any, NamedTuple
 
+from r2d2_viz.errors import DEBUG_ENV, short
 from r2d2_viz.msgs.typestore import MsgError, typestore
 from r2d2_viz.sources.live.idl_types import IdlTypes, RawSample
 from r2d2_viz.sources.live.names import LiveError, RosDiscovery, dds_topic, ros_topic, ros_type
@@ -72,12 +75,29 @@ reader the latched samples on its next heartbeat (every 3 s by default)."""
 
 
 def cyclonedds_modules() -> dict[str, ModuleType]:
-    """cyclonedds' modules, imported on first use; LiveError naming ``pip install cyclonedds`` if missing."""
+    """cyclonedds' modules, imported on first use (Cyclone's own log lines off: :func:`quiet_cyclone`); LiveError
+    naming ``pip install cyclonedds`` if missing."""
     names = ("core", "domain", "topic", "sub", "pub", "builtin", "idl", "idl.types", "util")
     try:
-        return {name: importlib.import_module(f"cyclonedds.{name}") for name in names}
+        modules = {name: importlib.import_module(f"cyclonedds.{name}") for name in names}
     except ImportError as exc:
         raise LiveError(f"--ros needs Cyclone DDS for Python: pip install 'cyclonedds>=11,<12' ({exc})") from None
+    quiet_cyclone()
+    return modules
+
+
+def quiet_cyclone() -> None:
+    """Cyclone's own log lines off, unless ``R2D2_VIZ_DEBUG`` is set (as Rerun's are): the C library prints its
+    warnings to the process's stderr (``1795867552.750 [0] dq.builtin: type [...]: ddsi_xt_type_init_impl with
+    invalid type object`` for a Kilted peer), whatever ``CYCLONEDDS_URI``'s Tracing says; its log mask (fatal,
+    error and warning by default) is set to none. Our own lines say what went wrong."""
+    if os.environ.get(DEBUG_ENV):
+        return
+    from cyclonedds.internal import load_cyclonedds  # the library cyclonedds loaded (dlopen: the same one)
+
+    library = load_cyclonedds()
+    if library is not None:  # None: CYCLONEDDS_PYTHON_NO_IMPORT_LIBS
+        library.dds_set_log_mask(ctypes.c_uint32(0))
 
 
 def _publication(sample: Any, dds: Mapping[str, ModuleType]) -> Publication | None:
@@ -91,6 +111,19 @@ def _publication(sample: Any, dds: Mapping[str, ModuleType]) -> Publication | No
     transient_local = durability is not None and durability != policy.Durability.Volatile
     # (an absent policy is the default, volatile; transient and persistent writers also serve late joiners)
     return Publication(topic, rtype, reliable, transient_local)
+
+
+def resolvable(peers: tuple[str, ...], uri: str = "") -> None:
+    """LiveError for a static peer Cyclone cannot resolve: it aborts the whole process on one (``add_peer_address:
+    …: unknown address``, then SIGABRT), an IPv6 address included when it runs on IPv4 (its default, unless
+    ``CYCLONEDDS_URI`` asks for udp6)."""
+    family = socket.AF_UNSPEC if "udp6" in uri else socket.AF_INET
+    for peer in peers:
+        try:
+            socket.getaddrinfo(peer, None, family)
+        except (OSError, UnicodeError):
+            why = "an IPv4 address or a host name" if family == socket.AF_INET else "an address or a host name"
+            raise LiveError(f"ROS_STATIC_PEERS: cannot resolve {short(peer)!r} ({why})") from None
 
 
 class LiveGraph:
@@ -107,20 +140,21 @@ class LiveGraph:
         distro: str = "jazzy",
         queue: int = 2000,
         latched_depth: int = 100,
-        fast_dds_types: bool = False,
     ) -> None:
         self._dds = cyclonedds_modules()
         self.distro = distro
         self.discovery = RosDiscovery.from_env(env)
-        config = self.discovery.cyclone_xml(fast_dds_types=fast_dds_types)  # True: for nodes() (see cyclone_xml)
+        config = self.discovery.cyclone_xml()
         uri = (os.environ if env is None else env).get("CYCLONEDDS_URI", "")
+        resolvable(self.discovery.static_peers, uri)
         if uri:
             config += "," + uri
         try:
             self._domain = self._dds["domain"].Domain(self.discovery.domain_id, config)
             self._participant = self._dds["domain"].DomainParticipant(self.discovery.domain_id)
         except Exception as exc:
-            raise LiveError(f"cannot join ROS 2 domain {self.discovery.domain_id}: {exc}") from None
+            why = f"{exc}; set {DEBUG_ENV}=1 for Cyclone's own lines (CYCLONEDDS_URI?)"
+            raise LiveError(f"cannot join ROS 2 domain {self.discovery.domain_id}: {why}") from None
         builtin = self._dds["builtin"]
         self._publications = builtin.BuiltinDataReader(self._participant, builtin.BuiltinTopicDcpsPublication)
         core = self._dds["core"]
@@ -350,6 +384,6 @@ def list_topics(
 ) -> tuple[list[tuple[str, str, int]], list[Node], RosDiscovery]:
     """``(topic, type, publisher count)`` of the ROS 2 graph, like ``ros2 topic list -t`` (``--ros --list``), its
     nodes (``ros2 node list`` and ``ros2 node info``), and where discovery looked."""
-    with LiveGraph(env, fast_dds_types=True) as graph:  # reads no data topic
+    with LiveGraph(env) as graph:
         nodes = graph.nodes(max(timeout, NODE_SECONDS))
         return graph.topics(0.0), nodes, graph.discovery

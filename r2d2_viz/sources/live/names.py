@@ -134,10 +134,11 @@ class RosDiscovery:
         peers = f", and the static peers {listed(self.static_peers)}" if self.static_peers else ""
         return f"ROS_DOMAIN_ID {self.domain_id}, discovery range {self.range.value} ({where}{peers})"
 
-    def cyclone_xml(self, pid: int | None = None, *, fast_dds_types: bool = False) -> str:
-        """The Cyclone DDS configuration fragment for this environment (``CYCLONEDDS_URI`` is added after it);
-        ``fast_dds_types``: keep Fast DDS's type information (a graph that reads ``ros_discovery_info`` from Fast
-        DDS participants: without it that topic never matches; a graph reading data topics ignores it)."""
+    def cyclone_xml(self, pid: int | None = None) -> str:
+        """The Cyclone DDS configuration fragment for this environment (``CYCLONEDDS_URI`` is added after it).
+        Fast DDS's type information is ignored for every topic, ``ros_discovery_info`` included: Kilted's (Fast
+        DDS 3) is one Cyclone rejects ("invalid type object"), and the topic then never matched, so ``--ros --list``
+        named no node; Jazzy's (Fast DDS 2.14) matches by name as well."""
         add_localhost = self.range is DiscoveryRange.LOCALHOST
         add_peers = self.range in (DiscoveryRange.LOCALHOST, DiscoveryRange.SUBNET)
         no_multicast = self.range in (DiscoveryRange.LOCALHOST, DiscoveryRange.OFF)
@@ -155,8 +156,6 @@ class RosDiscovery:
             )
         compatibility = (
             f"<Compatibility><IgnoreTypeInformation>{FAST_DDS_VENDOR}</IgnoreTypeInformation></Compatibility>"
-            if not fast_dds_types
-            else ""
         )
         internal = f'<Internal><SocketReceiveBufferSize max="{RECEIVE_BUFFER}"/></Internal>'
         return f"<CycloneDDS><Domain>{general}{compatibility}{internal}{discovery}</Domain></CycloneDDS>"

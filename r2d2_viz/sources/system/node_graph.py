@@ -86,7 +86,7 @@ def nodes_of(infos: Iterable[Any], endpoints: Mapping[bytes, tuple[str, str, boo
 class NodeWatch:
     """The nodes of a :class:`LiveGraph`, read again at each :meth:`poll` (never blocks). The reader of
     ``ros_discovery_info`` is made once a writer of it is known (Fast DDS's writers send a reader made earlier
-    nothing: seen with rclpy, Jazzy); the graph should be joined with ``fast_dds_types=True``."""
+    nothing: seen with rclpy, Jazzy)."""
 
     def __init__(self, graph: LiveGraph) -> None:
         self.graph = graph

@@ -4,11 +4,12 @@ text (``--tf-tree FILE.dot``; ``FILE.svg`` through graphviz's ``dot`` where it i
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 from pathlib import Path
 
-from r2d2_viz.errors import UsageError
+from r2d2_viz.errors import UsageError, shown_in_line
 from r2d2_viz.sources.system.tf_tree import Edge, TfTree
 
 GRAPH_SUFFIXES = (".dot", ".gv", ".svg")
@@ -62,7 +63,17 @@ def tree_lines(tree: TfTree, title: str) -> list[str]:
     return lines
 
 
-def _quoted(text: str) -> str:
+NOT_XML = re.compile(r"[\ud800-\udfff\ufffe\uffff]")
+"""Characters XML 1.0 allows in no document (beside the control characters :func:`shown_in_line` shows)."""
+
+
+def _quoted(*lines: str) -> str:
+    """Names or a label's lines as a dot string that graphviz draws as it reads and writes into valid SVG: control
+    characters shown (``\\x00``: XML 1.0 allows none but tab and newline, and a frame named ``&#0;`` … does not
+    become NUL either), '&' as ``&amp;`` (graphviz copies a character reference such as ``&#0;`` into its SVG
+    as it is, and draws ``&amp;`` as '&'), backslashes doubled (``\\N`` would be the node's name) and quotes
+    escaped; the lines joined by line breaks."""
+    text = "\n".join(NOT_XML.sub("\ufffd", shown_in_line(line)).replace("&", "&amp;") for line in lines)
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
@@ -80,31 +91,31 @@ def dot_text(tree: TfTree, title: str) -> str:
         colour = ', color="#c62828", fillcolor="#fde0dc"' if frame in tree.problem_frames else ""
         out.append(f"  {_quoted(frame)} [label={_quoted(frame)}{colour}];")
     for e in tree.edges:
-        label = edge_text(e).replace(", ", "\n")
         style = ", style=dashed" if e.static else ""
-        out.append(f"  {_quoted(e.parent)} -> {_quoted(e.child)} [label={_quoted(label)}{style}];")
+        out.append(f"  {_quoted(e.parent)} -> {_quoted(e.child)} [label={_quoted(*edge_text(e).split(', '))}{style}];")
     out.append("}")
     return "\n".join(out) + "\n"
 
 
-def write_graph(tree: TfTree, path: Path, title: str) -> None:
-    """``path`` (.dot/.gv: dot text; .svg: drawn by graphviz's ``dot``) — a UsageError, and nothing written,
-    for another extension or an .svg without graphviz."""
+def graph_data(tree: TfTree, path: Path, title: str) -> bytes:
+    """What ``path`` holds (.dot/.gv: dot text; .svg: drawn by graphviz's ``dot``) — a UsageError for another
+    extension or an .svg without graphviz."""
     if path.suffix not in GRAPH_SUFFIXES:
         raise UsageError(f"--tf-tree {path}: unknown extension {path.suffix or '(none)'!r}; write .dot or .svg")
-    if not path.parent.is_dir():
-        raise UsageError(f"--tf-tree {path}: no such directory {path.parent}")
     text = dot_text(tree, title)
     if path.suffix != ".svg":
-        path.write_text(text)
-        return
+        return text.encode()
     dot = shutil.which("dot")
     if dot is None:
         raise UsageError(
             f"--tf-tree {path}: drawing an .svg needs graphviz's dot (apt install graphviz); "
             f"--tf-tree {path.with_suffix('.dot')} writes the graph's dot text"
         )
-    done = subprocess.run([dot, "-Tsvg"], input=text.encode(), capture_output=True, timeout=60, check=False)
+    try:
+        done = subprocess.run([dot, "-Tsvg"], input=text.encode(), capture_output=True, timeout=60, check=False)
+    except subprocess.TimeoutExpired:
+        raise UsageError(f"--tf-tree {path}: graphviz's dot took over 60 s; write .dot instead") from None
     if done.returncode != 0:
-        raise UsageError(f"--tf-tree {path}: graphviz's dot failed: {done.stderr.decode(errors='replace')[:200]}")
-    path.write_bytes(done.stdout)
+        said = " ".join(done.stderr.decode(errors="replace").split())[:200]
+        raise UsageError(f"--tf-tree {path}: graphviz's dot failed: {said}")
+    return done.stdout

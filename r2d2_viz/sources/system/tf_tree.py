@@ -13,6 +13,7 @@ import numpy.typing as npt
 
 from r2d2_viz.arrays import I64
 from r2d2_viz.msgs.geometry import frame_of
+from r2d2_viz.sources.system.frame_codes import frame_codes
 
 STALE_PERIODS = 5.0
 """A dynamic edge whose last message came more than this many of its periods before the end is stale…"""
@@ -105,7 +106,7 @@ def edge_stats(rows: TfRows) -> list[Edge]:
     n = len(rows)
     if n == 0:
         return []
-    names, inverse = np.unique(np.concatenate([rows.parents, rows.children]).astype(str), return_inverse=True)
+    names, inverse = frame_codes(np.concatenate([rows.parents, rows.children]))
     code = inverse[:n].astype(np.int64) * len(names) + inverse[n:]
     order = np.lexsort((rows.receive_ns, code))
     code_s, t_s = code[order], rows.receive_ns[order]
@@ -257,7 +258,7 @@ def _unreached(headers: HeaderRows, up: dict[str, str], frames: set[str]) -> lis
     out: list[tuple[str, str]] = []
     if not len(headers.frames) or not frames:  # no transforms at all: every message is in the one fixed frame
         return out
-    names, inverse = np.unique(headers.frames.astype(str), return_inverse=True)
+    names, inverse = frame_codes(headers.frames)
     for k, name in enumerate(names):
         if not name or name in frames:
             continue
@@ -273,14 +274,12 @@ def _older(headers: HeaderRows, dynamic: TfRows, edges: list[Edge], up: dict[str
         return []
     by_edge = {(e.parent, e.child): e for e in edges if not e.static and e.rate_hz is not None}
     n = len(dynamic)
-    frames, inverse_rows = np.unique(
-        np.concatenate([dynamic.parents, dynamic.children]).astype(str), return_inverse=True
-    )
+    frames, inverse_rows = frame_codes(np.concatenate([dynamic.parents, dynamic.children]))
     code = inverse_rows[:n].astype(np.int64) * len(frames) + inverse_rows[n:]
     index = {str(f): i for i, f in enumerate(frames)}
     held: dict[tuple[str, str], tuple[I64, I64]] = {}
     out = []
-    names, inverse = np.unique(headers.frames.astype(str), return_inverse=True)
+    names, inverse = frame_codes(headers.frames)
     for k, name in enumerate(names):
         links = [by_edge[link] for link in chain(str(name), up) if link in by_edge]
         if not links:

@@ -15,6 +15,7 @@ import rerun as rr
 
 from r2d2_viz.arrays import I64
 from r2d2_viz.sources.base import Clock, TfRecords
+from r2d2_viz.sources.system.frame_codes import frame_codes
 from r2d2_viz.sources.system.tf_tree import STALE_MIN_S, STALE_PERIODS
 from r2d2_viz.sources.system.time_base import RECEIVE, TimeBase
 from r2d2_viz.viewer import entities
@@ -100,11 +101,12 @@ class TfGraph:
 
     def _codes(self, parents: tuple[str, ...], children: tuple[str, ...]) -> I64:
         """Each row's edge number (new edges numbered as they come)."""
-        pairs = np.array([parents, children], dtype=str).T if parents else np.zeros((0, 2), str)
-        uniq, inverse = np.unique(pairs, axis=0, return_inverse=True)
+        above, up = frame_codes(parents)  # not a fixed-width str array: one long name made every cell as long
+        below, down = frame_codes(children)
+        uniq, inverse = np.unique(up.astype(np.int64) * len(below) + down, return_inverse=True)
         numbers = np.empty(len(uniq), np.int64)
-        for k, (p, c) in enumerate(uniq):
-            edge = (str(p), str(c))
+        for k, pair in enumerate(uniq):
+            edge = (str(above[pair // len(below)]), str(below[pair % len(below)]))
             if edge not in self._index:
                 self._index[edge] = len(self.edges)
                 self.edges.append(edge)
@@ -114,7 +116,8 @@ class TfGraph:
             self._first = np.r_[self._first, np.full(grow, np.iinfo(np.int64).max)]
             self._last = np.r_[self._last, np.full(grow, NEVER)]
             self._count = np.r_[self._count, np.zeros(grow, np.int64)]
-        return numbers[np.asarray(inverse).reshape(-1)]
+        out: I64 = numbers[inverse.reshape(-1)]
+        return out
 
     def _log_snapshots(self, due: I64, codes: I64, times: I64) -> None:
         """A snapshot at each time of ``due`` from the rows before this feed and ``codes, times`` (this feed's)."""

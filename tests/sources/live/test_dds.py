@@ -84,3 +84,54 @@ def test_list_names_real_nodes_and_their_topics() -> None:
     subscribed = [line for line in lines[start + 1 :] if line.startswith("  subscribes")]
     assert {line.split()[1] for line in subscribed} >= {"/clicked_point", "/goal_pose", "/initialpose", "/cmd_vel"}
     assert "  publishes /map [nav_msgs/msg/OccupancyGrid]" in lines[start + 1 :]
+
+
+def test_list_names_kilted_nodes_and_keeps_a_lying_name_on_its_line() -> None:
+    """``--ros --list`` beside a real Kilted node (rclpy 9.1, Fast DDS 3: Cyclone rejected the type information of
+    its ros_discovery_info, so no node was named, and said so in its own lines on stderr) and a participant whose
+    ros_discovery_info names a node with line breaks that print a node and a topic that do not exist
+    (nodes/hostile_node_peer.py). Expected from the nodes' sources: tool_listener.py's node publishes /map; the
+    peer's one node writes /chatter; its name prints on one line, each line break as ``\\x0a``."""
+    python = ros_node.require_live("kilted")
+    nodes = Path(ros_node.__file__).with_name("nodes")
+    exe = str(Path(sys.executable).parent / "r2d2-viz")
+    listener = f'"{python}" "{nodes / "tool_listener.py"}" --seconds 25'
+    peer = f'"{sys.executable}" "{nodes / "hostile_node_peer.py"}" 25'
+    listing = f'sleep 2; "{exe}" --ros --list; rc=$?; kill $a $b 2>/dev/null; exit $rc'
+    script = f"{listener} >/dev/null 2>&1 & a=$!; {peer} >/dev/null 2>&1 & b=$!; {listing}"
+    done = ros_node.in_netns(["sh", "-c", script], timeout=120, env={"R2D2_VIZ_DEBUG": ""})
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = done.stdout.splitlines()
+    lie = "node /evil\\x0anode /fake\\x0a  publishes /fake_topic [std_msgs/msg/String]"
+    assert {line for line in lines if line.startswith("node ")} == {"node /tool_listener", lie}, done.stdout
+    assert lines[lines.index(lie) + 1] == "  publishes /chatter [std_msgs/msg/String]"
+    assert "  publishes /map [nav_msgs/msg/OccupancyGrid]" in lines[lines.index("node /tool_listener") + 1 :]
+    assert done.stderr == "", done.stderr  # nothing of Cyclone's own ("dq.builtin: … invalid type object")
+
+
+def test_cyclones_own_lines_are_off_unless_debugging() -> None:
+    """Cyclone prints its warnings to the process's stderr itself; a deprecated element in ``CYCLONEDDS_URI`` makes
+    it say one when the domain is joined: heard with ``R2D2_VIZ_DEBUG=1`` only."""
+    if (missing := ros_node.netns_missing()) is not None:
+        ros_node.unavailable(missing)
+    deprecated = "<General><NetworkInterfaceAddress>lo</NetworkInterfaceAddress></General>"
+    uri = f"<CycloneDDS><Domain>{deprecated}</Domain></CycloneDDS>"
+    join = "from r2d2_viz.sources.live.dds import LiveGraph\nwith LiveGraph():\n    pass"
+    runs = {
+        debug: ros_node.in_netns([sys.executable, "-c", join], 60, env={"CYCLONEDDS_URI": uri, "R2D2_VIZ_DEBUG": debug})
+        for debug in ("", "1")
+    }
+    assert runs[""].returncode == 0 and runs[""].stderr == "", runs[""].stderr
+    assert runs["1"].returncode == 0 and "deprecated element" in runs["1"].stderr, runs["1"].stderr
+
+
+@pytest.mark.parametrize("peer", ["nonexistent.invalid", "::1"])
+def test_a_static_peer_cyclone_cannot_resolve_is_one_line(peer: str) -> None:
+    """Cyclone aborts the process (SIGABRT, exit 134) on a static peer it cannot resolve — a name that does not
+    resolve (``.invalid`` never does, RFC 2606), or an IPv6 address while it runs on IPv4 — so it is refused first."""
+    if (missing := ros_node.netns_missing()) is not None:
+        ros_node.unavailable(missing)
+    exe = str(Path(sys.executable).parent / "r2d2-viz")
+    done = ros_node.in_netns([exe, "--ros", "--list"], 60, env={"ROS_STATIC_PEERS": f"127.0.0.1;{peer}"})
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, (done.returncode, done.stderr)
+    assert f"ROS_STATIC_PEERS: cannot resolve '{peer}'" in done.stderr and not done.stdout

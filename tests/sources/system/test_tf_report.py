@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from r2d2_viz.errors import UsageError
-from r2d2_viz.sources.system.tf_report import dot_text, edge_text, tree_lines, write_graph
+from r2d2_viz.sources.system.tf_report import dot_text, edge_text, graph_data, tree_lines
 from r2d2_viz.sources.system.tf_tree import Edge, TfTree
 
 TREE = TfTree(
@@ -55,15 +55,12 @@ def test_dot_names_every_frame_and_edge_and_marks_problems() -> None:
     assert '"map" [label="map"];' in text
 
 
-def test_write_graph(tmp_path: Path) -> None:
-    write_graph(TREE, tmp_path / "t.dot", "t")
-    assert (tmp_path / "t.dot").read_text() == dot_text(TREE, "t")
+def test_graph_data(tmp_path: Path) -> None:
+    assert graph_data(TREE, tmp_path / "t.dot", "t") == dot_text(TREE, "t").encode()
     with pytest.raises(UsageError, match=r"t\.png: unknown extension '\.png'"):
-        write_graph(TREE, tmp_path / "t.png", "t")
+        graph_data(TREE, tmp_path / "t.png", "t")
     if shutil.which("dot") is None:
         with pytest.raises(UsageError, match="needs graphviz's dot"):
-            write_graph(TREE, tmp_path / "t.svg", "t")
-        assert not (tmp_path / "t.svg").exists()
+            graph_data(TREE, tmp_path / "t.svg", "t")
     else:
-        write_graph(TREE, tmp_path / "t.svg", "t")
-        assert "<svg" in (tmp_path / "t.svg").read_text()
+        assert b"<svg" in graph_data(TREE, tmp_path / "t.svg", "t")
