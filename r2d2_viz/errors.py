@@ -46,9 +46,9 @@ class SinkError(R2d2VizError):
 
 class ListenError(SinkError):
     """A port cannot be listened on (in use, not allowed): ``port`` says which, so the CLI can name the flag that
-    sets it."""
+    sets it (None: not known)."""
 
-    def __init__(self, message: str, port: int) -> None:
+    def __init__(self, message: str, port: int | None = None) -> None:
         super().__init__(message)
         self.port = port
 

@@ -95,7 +95,7 @@ def _checked_main(argv: list[str] | None) -> int:
 
 def _which_flag(exc: R2d2VizError, args: argparse.Namespace) -> str:
     """The flag that sets a port that could not be listened on (the library's error knows the port, not the flag)."""
-    if isinstance(exc, ListenError) and exc.port == getattr(args, "web_port", None):
+    if isinstance(exc, ListenError) and exc.port is not None and exc.port == getattr(args, "web_port", None):
         return "; choose another port with --web-port PORT"
     return ""
 

@@ -27,7 +27,7 @@ from http.server import BaseHTTPRequestHandler
 from typing import Any
 from urllib.parse import quote
 
-from r2d2_viz.errors import SinkError
+from r2d2_viz.errors import ListenError
 from r2d2_viz.viewer.web.door import READ_TIMEOUT_S, DoorServer, allowed_hosts, host_allowed, peer_gone, probe_peer
 
 COOKIE = "r2d2_viz_dataset"
@@ -165,7 +165,8 @@ class DatasetGuard:
         try:
             self._http = _Server((bind, port), family, _Handler)
         except OSError as exc:
-            raise SinkError(f"--serve: cannot listen on {bind}:{port} for the web viewer: {exc.strerror}") from None
+            why = f"--serve: cannot listen on {bind}:{port} for the web viewer: {exc.strerror}"
+            raise ListenError(why, port) from None
         self._http.guard = self
         self._relays: set[socket.socket] = set()
         self._lock = threading.Lock()
