@@ -27,6 +27,7 @@ from urllib.parse import unquote, urlsplit
 from lxml import etree
 
 from r2d2_viz.errors import SHOWN, PackageError, UsageError, listed
+from r2d2_viz.robot.regular_file import read_regular
 
 SCAN_DEPTH = 3
 """How deep a folder of packages is searched for ``package.xml`` files."""
@@ -44,8 +45,7 @@ _PARSER = etree.XMLParser(
 def package_xml_name(folder: Path) -> str | None:
     """The ``<name>`` declared by ``folder/package.xml``, or None (no file, unreadable, malformed)."""
     try:
-        with (folder / "package.xml").open("rb") as fh:
-            data = fh.read(MAX_PACKAGE_XML_BYTES + 1)
+        data = read_regular(folder / "package.xml", MAX_PACKAGE_XML_BYTES)
         if len(data) > MAX_PACKAGE_XML_BYTES or b"<!ENTITY" in data:
             return None
         root = etree.fromstring(data, _PARSER)

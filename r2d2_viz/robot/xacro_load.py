@@ -25,6 +25,7 @@ from lxml import etree
 
 from r2d2_viz.errors import UrdfError, UsageError, XacroError
 from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.regular_file import NotRegularFileError, read_regular
 from r2d2_viz.robot.urdf_xml import MAX_FILE_BYTES
 from r2d2_viz.robot.xacro_sandbox import MEMORY_BYTES
 
@@ -107,8 +108,7 @@ def load_robot(
 def _peek(path: Path) -> bytes:
     """The file's bytes up to the size limit; nothing if it cannot be read (:func:`load_urdf` then says why)."""
     try:
-        with path.open("rb") as fh:
-            return fh.read(MAX_FILE_BYTES + 1) if path.is_file() else b""
+        return read_regular(path, MAX_FILE_BYTES)
     except OSError:
         return b""
 
@@ -164,8 +164,9 @@ def read_bounded(path: Path) -> bytes:
     if not stat.S_ISREG(st.st_mode):
         raise UrdfError(f"{name}: is not a regular file")
     try:
-        with path.open("rb") as fh:
-            data = fh.read(MAX_FILE_BYTES + 1)
+        data = read_regular(path, MAX_FILE_BYTES)  # never a FIFO put there since the stat: its open would block
+    except NotRegularFileError:
+        raise UrdfError(f"{name}: is not a regular file") from None
     except OSError as exc:
         raise UrdfError(f"{name}: cannot read file: {exc.strerror or exc}") from None
     if len(data) > MAX_FILE_BYTES:

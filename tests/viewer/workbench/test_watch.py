@@ -4,8 +4,11 @@ with Rerun's reader. Runs at 10 Hz: sample k is at k × 0.1 s; the poller is ask
 
 from __future__ import annotations
 
+import os
+import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -246,3 +249,66 @@ def test_a_new_robots_warnings_are_on_the_time_line_at_the_reload(
     warnings = read_recording(out)["/warnings"]
     assert warnings.times == [6 * NS // 10]  # where the Warnings view shows it (a row without a time: it does not)
     assert "gone.stl" in warnings.temporal["TextLog:text"][0][0]
+
+
+class Live:
+    """``r2d2-viz ARGS`` in a subprocess, its stderr lines gathered as they come (a thread reads them)."""
+
+    def __init__(self, *args: str, cwd: Path | None = None) -> None:
+        exe = Path(sys.executable).parent / "r2d2-viz"
+        command = [str(exe)] if exe.exists() else [sys.executable, "-m", "r2d2_viz"]
+        self.child = subprocess.Popen([*command, *args], stderr=subprocess.PIPE, text=True, cwd=cwd)
+        self.lines: list[str] = []
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
+
+    def _read(self) -> None:
+        assert self.child.stderr is not None
+        for line in self.child.stderr:
+            self.lines.append(line.rstrip("\n"))
+
+    def wait_for(self, text: str, timeout: float = 60) -> bool:
+        """Whether a line holding ``text`` came within ``timeout`` s (polled; no time is asserted)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and self.child.poll() is None:
+            if any(text in line for line in self.lines):
+                return True
+            time.sleep(0.05)
+        return any(text in line for line in self.lines)
+
+    def wait_for_file(self, path: Path, timeout: float = 60) -> None:
+        deadline = time.monotonic() + timeout
+        while not path.exists() and self.child.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+
+    def end(self, signum: int = signal.SIGTERM, timeout: float = 20) -> int | None:
+        """Send ``signum``; the exit status, or None if the app was still running ``timeout`` s later (then killed)."""
+        if self.child.poll() is None:
+            self.child.send_signal(signum)
+        try:
+            code: int | None = self.child.wait(timeout)
+        except subprocess.TimeoutExpired:
+            code = None
+            self.child.kill()
+            self.child.wait()
+        self.reader.join(10)
+        return code
+
+
+def test_the_description_replaced_by_a_fifo_is_one_line_and_sigterm_still_ends_the_app(tmp_path: Path) -> None:
+    """A FIFO is never opened (its open waits for a writer, and no signal ended that wait)."""
+    urdf = tmp_path / "w.urdf"
+    urdf.write_text(ROBOT.format(more=""))
+    out = tmp_path / "out.rrd"
+    run = Live("--urdf", str(urdf), "--watch", "--save", str(out), "--realtime", "--duration", "120", "--rate", "10")
+    run.wait_for_file(tmp_path / f".out.rrd.{run.child.pid}.partial")
+    urdf.unlink()
+    os.mkfifo(urdf)
+    said = run.wait_for("is not a regular file")
+    code = run.end(signal.SIGTERM)
+    assert said, run.lines
+    assert code == 0, run.lines
+    assert [line for line in run.lines if "w.urdf" in line] == [
+        "warning: w.urdf: is not a regular file (--watch: the last good robot stays)"
+    ]
+    assert out.exists()
