@@ -209,7 +209,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     view = dataclasses.replace(view, layout=layout)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     stop = threading.Event()  # live: a signal that comes before the pacing (the viewer told where to look) stops too
-    with saved_rrd(tmp, save), signals_set(stop) if config.live else nullcontext():  # renamed when whole, or removed
+    with saved_rrd(tmp, save), signals_set(stop) if config.live else nullcontext(), ExitStack() as ends:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         tools = attach_view_tools(recording, view, dict(config.tool_topics), source=plan.source)
         try:
@@ -247,7 +247,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             feeds = Feeds(
                 TfFeed(recorded), displays, [RobotFeed(s) for s in streamers[1:]], fields.feed(rec) if fields else None
             )
-            watching = config.watch and watch_robot(recording, plan.source, streamer, config, _packages(config))
+            watching = config.watch and watch_robot(recording, plan.source, streamer, config, _packages(config), ends)
             for robot in streamers:
                 (watching or robot).log_static(view.spec.robot)
             with progress_bar(plan, config) as shown:

@@ -305,6 +305,22 @@ class PackageIndex:
             return candidate, ""
         return None, f"mesh {_quote(uri)} not found in package {package!r} ({str(folder)!r})"
 
+    def expected_path(self, uri: str, *, base_dir: Path) -> Path | None:
+        """Where :meth:`resolve_uri` would find ``uri``'s file, whether or not it is there (``--watch`` watches a
+        missing mesh); None when no place can be named (a package not found, another scheme)."""
+        parts = urlsplit(uri)
+        scheme = parts.scheme.lower() if len(parts.scheme) > 1 else ""
+        if scheme == "package":
+            package, rest = unquote(parts.netloc), unquote(parts.path).lstrip("/")
+            if not package:
+                package, _, rest = rest.partition("/")
+            folder = self.lookup(package, near=base_dir)
+            return folder / rest if folder is not None else None
+        if scheme and scheme != "file":
+            return None
+        local = Path(unquote(parts.netloc + parts.path)) if scheme else Path(uri)
+        return local if local.is_absolute() else base_dir / local
+
     def iter_known(self) -> Iterator[tuple[str, Path]]:
         """Pinned and scanned packages found so far (for diagnostics and tests)."""
         yield from self.pins.items()

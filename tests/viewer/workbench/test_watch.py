@@ -107,9 +107,12 @@ def test_a_broken_edit_is_one_line_and_the_robot_stays_until_a_good_edit(
     monkeypatch.setattr(watch, "POLLER", script)
     out = tmp_path / "out.rrd"
     _run(urdf, out)
-    err = [line for line in capsys.readouterr().err.splitlines() if "w.urdf" in line]
+    said = [line for line in capsys.readouterr().err.splitlines() if "w.urdf" in line]
+    err = [line for line in said if line.startswith("warning:")]
     assert len(err) == 1, err
     assert "w.urdf" in err[0] and "'bse'" in err[0] and "last good robot stays" in err[0]
+    # the good edit says so, once (issue 44, item 18: a good edit loaded in silence): base and arm2
+    assert [line for line in said if not line.startswith("warning:")] == ["r2d2-viz: reloaded w.urdf: 2 links"]
     rec = read_recording(out)
     warnings = rec["/warnings"]
     assert warnings.times == [4 * NS // 10]  # on the time line, where the Warnings view shows it
@@ -226,7 +229,7 @@ def test_sliders_keep_their_board_and_the_page_gets_the_new_joints(tmp_path: Pat
     page = SimpleNamespace(config={"joints": board.describe()})
     recording = SimpleNamespace(page=page, rec=rec)
     script = Script({})
-    watching = watch.watch_robot(recording, motion, stream, RunConfig(urdf=urdf), PackageIndex(), script)  # type: ignore[arg-type]
+    watching = watch.watch_robot(recording, motion, stream, RunConfig(urdf=urdf), PackageIndex(), poller=script)  # type: ignore[arg-type]
     watching.log_static()
     urdf.write_text(ROBOT.format(more=two))
     assert watching.reload(3)
