@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
@@ -320,6 +320,11 @@ class PackageIndex:
             return None
         local = Path(unquote(parts.netloc + parts.path)) if scheme else Path(uri)
         return local if local.is_absolute() else base_dir / local
+
+    def missing(self, uris: Iterable[str], *, base_dir: Path) -> tuple[Path, ...]:
+        """Where the files of ``uris`` that are not there would be (:meth:`expected_path`), each once."""
+        wanted = (self.expected_path(uri, base_dir=base_dir) for uri in uris)
+        return tuple(dict.fromkeys(p for p in wanted if p is not None and not _is_file(p)))
 
     def iter_known(self) -> Iterator[tuple[str, Path]]:
         """Pinned and scanned packages found so far (for diagnostics and tests)."""

@@ -16,7 +16,6 @@ from typing import Generic, TypeVar
 
 from r2d2_viz.errors import R2d2VizError
 from r2d2_viz.robot.model import MeshFile, Robot
-from r2d2_viz.robot.packages import PackageIndex
 
 Signature = tuple[int, int] | None
 """A file's (mtime in ns, size), None when it cannot be stat'ed (deleted, or mid-rename)."""
@@ -37,22 +36,15 @@ def stat_signature(path: Path) -> Signature:
     return st.st_mtime_ns, st.st_size
 
 
-def robot_files(
-    description: Path, robot: Robot | None, read: Iterable[Path] = (), packages: PackageIndex | None = None
-) -> tuple[Path, ...]:
+def robot_files(description: Path, robot: Robot | None, read: Iterable[Path] = ()) -> tuple[Path, ...]:
     """The description, the files xacro read to make it (``read``), and every mesh file ``robot`` uses — a missing
-    one where it would be found (``packages`` resolves it; relative to the description), so that it appearing
-    reloads the robot."""
+    one where it would be found, so that it appearing reloads the robot."""
     files = {Path(description).absolute(), *(Path(p).absolute() for p in read)}
     for link in robot.links if robot is not None else ():
         for shape in (*link.visuals, *link.collisions):
-            if not isinstance(shape.geometry, MeshFile):
-                continue
-            path = shape.geometry.path
-            if path is None and packages is not None:
-                path = packages.expected_path(shape.geometry.filename, base_dir=Path(description).parent)
-            if path is not None:
-                files.add(Path(path).absolute())
+            if isinstance(shape.geometry, MeshFile) and shape.geometry.path is not None:
+                files.add(Path(shape.geometry.path).absolute())
+    files.update(Path(p).absolute() for p in (robot.missing_meshes if robot is not None else ()))
     return tuple(sorted(files))
 
 

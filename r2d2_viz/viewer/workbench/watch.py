@@ -84,29 +84,33 @@ class Watching:
         poller: PollerFactory,
         page_config: dict[str, Any] | None = None,
         *,
-        packages: PackageIndex | None = None,
         background: bool = False,
     ) -> None:
         self.stream, self.motion, self.description, self.load = stream, motion, description, load
         self.page_config = page_config
         """``--serve``'s page configuration: its sliders are the new robot's once the page is reloaded."""
-        self.packages, self.background = packages, background
+        self.background = background
         self.timed = _Timed(stream.rec, stream.timeline, stream.clock)
         self.display: RobotModel | None = None
-        self.files = robot_files(description, stream.tree.robot, self._xacro_files(), packages)
-        self.poller = poller(self.files)
-        self.reloads = 0
         self.loading: Loading[tuple[Robot, KinematicTree]] | None = None
         """A reload's load in flight (live runs)."""
+        self.first: Loading[tuple[Robot, KinematicTree]] | None = None
+        """A live run's first load, only to learn which files xacro reads (in a thread too: it may be slow)."""
+        read: list[Path] = []
+        if background:
+            self.first = self.loading = Loading(self._load_tree)
+        else:
+            self._xacro_files(read)
+        self.files = robot_files(description, stream.tree.robot, read)
+        self.poller = poller(self.files)
+        self.reloads = 0
         motion.before_chunk = self.before_chunk
 
-    def _xacro_files(self) -> list[Path]:
-        read: list[Path] = []
+    def _xacro_files(self, read: list[Path]) -> None:
         try:
             self.load(read, None)
         except R2d2VizError:
             pass
-        return read
 
     def _load_tree(self, read: list[Path], cancel: threading.Event) -> tuple[Robot, KinematicTree]:
         robot = self.load(read, cancel)
@@ -139,7 +143,11 @@ class Watching:
             self.loading = Loading(self._load_tree)
         if self.loading is not None and (self.loading.done or not self.background):  # batch: waited for
             loading, self.loading = self.loading, None
-            self._shown(k, loading)
+            if loading is self.first:  # what xacro read: watched from now on (an edit meanwhile is seen next)
+                self.files = tuple(sorted({*self.files, *robot_files(self.description, None, loading.read)}))
+                self.poller.watch(self.files)
+            else:
+                self._shown(k, loading)
 
     def reload(self, k: int) -> bool:
         """Load the robot again for sample ``k`` (waiting for it); True if it loaded (else one line, and the robot
@@ -166,7 +174,7 @@ class Watching:
         for entity in sorted(gone):
             self.timed.log(entity, rr.Clear(recursive=False))
         self.stream.rec.reset_time()
-        self.files = robot_files(self.description, robot, read, self.packages)
+        self.files = robot_files(self.description, robot, read)
         self.poller.watch(self.files)
         self.reloads += 1
         links = f"{len(robot.links)} link{'s' if len(robot.links) != 1 else ''}"
@@ -234,9 +242,7 @@ def watch_robot(
         return load_robot(description, mappings=mappings, packages=packages, read=read, cancel=cancel)
 
     page = recording.page.config if recording.page is not None else None
-    watching = Watching(
-        stream, source, description, load, poller or POLLER, page, packages=packages, background=config.live
-    )
+    watching = Watching(stream, source, description, load, poller or POLLER, page, background=config.live)
     if ends is not None:
         ends.callback(watching.close)
     return watching
