@@ -462,3 +462,13 @@ def test_the_xacro_sandbox_dies_with_a_killed_app(tmp_path: Path) -> None:
     for pid in alive:  # the old code's orphan: not left behind by the test
         os.kill(pid, signal.SIGKILL)
     assert not alive
+
+
+def test_watch_with_headless_is_refused_with_advice_for_what_was_typed(tmp_path: Path) -> None:
+    """Issue 44, item 18: ``--watch --headless`` was refused with advice about a ``--save`` never typed."""
+    result = cli("--watch", "--headless")
+    assert result.returncode == 2
+    assert result.stderr.strip() == (
+        "error: --watch reloads a generated motion's robot in a live run, not with --headless, which shows nothing "
+        "(use --serve, --spawn or --save FILE.rrd --realtime)"
+    )
