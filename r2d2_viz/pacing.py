@@ -164,10 +164,12 @@ def paced(
     progress: Callable[[Window], None] | None = None,
     wall: WallClock | None = None,
     stop: threading.Event | None = None,
+    flush: Callable[[], None] | None = None,
 ) -> tuple[int, bool]:
     """Send each robot sample and every feed item of each window when due on ``wall``, until done or signalled
     (``stop``: set by a signal that came before); returns the samples sent (or, without a robot, the items) and
-    whether a signal stopped it."""
+    whether a signal stopped it. ``flush`` waits for the sinks once a window (a saved file's: in slices that end a
+    run whose file cannot grow, :func:`r2d2_viz.viewer.files.whole.flush_file`; by default the stream's flush)."""
     wall = wall or WallClock()
     stop = stop if stop is not None else threading.Event()
     sent = 0
@@ -196,7 +198,7 @@ def paced(
             if streamer is not None:
                 # Backpressure, once a window: wait until the sinks have taken what was sent, so a sink slower
                 # than the sample rate makes samples late instead of piling them up in memory.
-                streamer.rec.flush()
+                (flush or streamer.rec.flush)()
         if not stop.is_set() and clock is not None:
             _feed_until(clock, feeds, math.inf, stop, log)
     return (sent if streamer is not None and sent else feeds.sent), stop.is_set()

@@ -213,7 +213,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         tools = attach_view_tools(recording, view, dict(config.tool_topics), source=plan.source)
         try:
-            rec = recording.rec
+            rec, flush = recording.rec, lambda: flush_file(recording.rec, tmp)  # a full disk ends the run
             gather = config.realtime and not config.sink.live  # saved only: no viewer waits for each sample
             streamers = _robot_streams(recording, plan, view, clock, gather) if tree is not None else []
             streamer = streamers[0] if streamers else None
@@ -254,12 +254,12 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                 windows = _windows(plan, config, displays, fields)
                 if config.live:
                     samples, interrupted = paced(
-                        streamer, windows, feeds, speed=config.speed, progress=shown, stop=stop
+                        streamer, windows, feeds, speed=config.speed, progress=shown, stop=stop, flush=flush
                     )
                 else:
                     with sigterm_raises():
-                        samples = _batch(streamer, windows, feeds, lambda: flush_file(rec, tmp), shown)
-            keep_serving(config.sink.serve and config.bag is not None and not interrupted, rec.flush)
+                        samples = _batch(streamer, windows, feeds, flush, shown)
+            keep_serving(config.sink.serve and config.bag is not None and not interrupted, flush)
             if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
                 notices.report(f"{config.bag}: {line}")
             if feeds.fields is not None:
