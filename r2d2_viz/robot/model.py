@@ -27,7 +27,7 @@ from lxml import etree
 
 from r2d2_viz.errors import listed
 from r2d2_viz.robot.inertial import Inertial, read_inertial
-from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.packages import PackageIndex, missing_files
 from r2d2_viz.robot.urdf_check import JOINT_TYPES, check_robot, parse_urdf_xml, read_urdf_xml
 
 JointType = str
@@ -219,7 +219,7 @@ def _validated(root: etree._Element, *, source: str, base_dir: Path, packages: P
     notes = check_robot(root, source=source, base_dir=base_dir, packages=packages)
     robot = build_robot(root, source=source, base_dir=base_dir, packages=packages)
     meshes = (str(m.get("filename")) for m in root.iter("mesh"))
-    return replace(robot, warnings=tuple(notes), missing_meshes=packages.missing(meshes, base_dir=base_dir))
+    return replace(robot, warnings=tuple(notes), missing_meshes=missing_files(packages, meshes, base_dir=base_dir))
 
 
 @contextmanager

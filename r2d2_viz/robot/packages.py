@@ -305,27 +305,6 @@ class PackageIndex:
             return candidate, ""
         return None, f"mesh {_quote(uri)} not found in package {package!r} ({str(folder)!r})"
 
-    def expected_path(self, uri: str, *, base_dir: Path) -> Path | None:
-        """Where :meth:`resolve_uri` would find ``uri``'s file, whether or not it is there (``--watch`` watches a
-        missing mesh); None when no place can be named (a package not found, another scheme)."""
-        parts = urlsplit(uri)
-        scheme = parts.scheme.lower() if len(parts.scheme) > 1 else ""
-        if scheme == "package":
-            package, rest = unquote(parts.netloc), unquote(parts.path).lstrip("/")
-            if not package:
-                package, _, rest = rest.partition("/")
-            folder = self.lookup(package, near=base_dir)
-            return folder / rest if folder is not None else None
-        if scheme and scheme != "file":
-            return None
-        local = Path(unquote(parts.netloc + parts.path)) if scheme else Path(uri)
-        return local if local.is_absolute() else base_dir / local
-
-    def missing(self, uris: Iterable[str], *, base_dir: Path) -> tuple[Path, ...]:
-        """Where the files of ``uris`` that are not there would be (:meth:`expected_path`), each once."""
-        wanted = (self.expected_path(uri, base_dir=base_dir) for uri in uris)
-        return tuple(dict.fromkeys(p for p in wanted if p is not None and not _is_file(p)))
-
     def iter_known(self) -> Iterator[tuple[str, Path]]:
         """Pinned and scanned packages found so far (for diagnostics and tests)."""
         yield from self.pins.items()
@@ -346,3 +325,26 @@ def uri_package(uri: str) -> str | None:
         return None
     package = unquote(parts.netloc) or unquote(parts.path).lstrip("/").partition("/")[0]
     return package or None
+
+
+def expected_path(packages: PackageIndex, uri: str, *, base_dir: Path) -> Path | None:
+    """Where :meth:`PackageIndex.resolve_uri` would find ``uri``'s file, whether or not it is there (``--watch``
+    watches a missing mesh); None when no place can be named (a package not found, another scheme)."""
+    parts = urlsplit(uri)
+    scheme = parts.scheme.lower() if len(parts.scheme) > 1 else ""
+    if scheme == "package":
+        package, rest = unquote(parts.netloc), unquote(parts.path).lstrip("/")
+        if not package:
+            package, _, rest = rest.partition("/")
+        folder = packages.lookup(package, near=base_dir)
+        return folder / rest if folder is not None else None
+    if scheme and scheme != "file":
+        return None
+    local = Path(unquote(parts.netloc + parts.path)) if scheme else Path(uri)
+    return local if local.is_absolute() else base_dir / local
+
+
+def missing_files(packages: PackageIndex, uris: Iterable[str], *, base_dir: Path) -> tuple[Path, ...]:
+    """Where the files of ``uris`` that are not there would be (:func:`expected_path`), each once."""
+    wanted = (expected_path(packages, uri, base_dir=base_dir) for uri in uris)
+    return tuple(dict.fromkeys(p for p in wanted if p is not None and not _is_file(p)))
