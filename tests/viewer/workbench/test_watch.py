@@ -304,11 +304,13 @@ def test_the_description_replaced_by_a_fifo_is_one_line_and_sigterm_still_ends_t
     urdf.write_text(ROBOT.format(more=""))
     out = tmp_path / "out.rrd"
     run = Live("--urdf", str(urdf), "--watch", "--save", str(out), "--realtime", "--duration", "120", "--rate", "10")
-    run.wait_for_file(tmp_path / f".out.rrd.{run.child.pid}.partial")
-    urdf.unlink()
-    os.mkfifo(urdf)
-    said = run.wait_for("is not a regular file")
-    code = run.end(signal.SIGTERM)
+    try:
+        run.wait_for_file(tmp_path / f".out.rrd.{run.child.pid}.partial")
+        urdf.unlink()
+        os.mkfifo(urdf)
+        said = run.wait_for("is not a regular file")
+    finally:
+        code = run.end(signal.SIGTERM)
     assert said, run.lines
     assert code == 0, run.lines
     assert [line for line in run.lines if "w.urdf" in line] == [
@@ -354,12 +356,16 @@ def _peak_rss_mb(tmp_path: Path, edits: int) -> float:
         *("--urdf", str(urdf), "--watch", "--save", str(tmp_path / "out.rrd"), "--realtime", "--rate", "10"),
         *("--motion", "still", "--duration", "1" if edits == 0 else "600"),
     )
-    run.wait_for_file(tmp_path / f".out.rrd.{run.child.pid}.partial")
-    for edit in range(1, edits + 1):
-        urdf.write_text(MESHED.format(red=edit / 100))
-        deadline = time.monotonic() + 60
-        while sum("reloaded m.urdf" in line for line in run.lines) < edit and time.monotonic() < deadline:
-            time.sleep(0.05)
+    try:
+        run.wait_for_file(tmp_path / f".out.rrd.{run.child.pid}.partial")
+        for edit in range(1, edits + 1):
+            urdf.write_text(MESHED.format(red=edit / 100))
+            deadline = time.monotonic() + 60
+            while sum("reloaded m.urdf" in line for line in run.lines) < edit and time.monotonic() < deadline:
+                time.sleep(0.05)
+    except BaseException:
+        run.end(signal.SIGKILL, timeout=10)
+        raise
     if edits:
         run.child.send_signal(signal.SIGINT)
     _, status, usage = os.wait4(run.child.pid, 0)
@@ -421,17 +427,21 @@ def _slow_edit(tmp_path: Path) -> tuple[Live, list[int]]:
     path = tmp_path / "w.xacro"
     path.write_text(SLOW.format(depth=0))
     run = Live("--urdf", str(path), "--watch", "--save", str(tmp_path / "out.rrd"), "--realtime", "--rate", "10")
-    run.wait_for_file(tmp_path / f".out.rrd.{run.child.pid}.partial")
-    for edit in range(100):  # quick edits first, until one's line says the run watches the files
-        path.write_text(SLOW.format(depth=1) + f"<!-- {edit} -->")
-        if run.wait_for("reloaded w.xacro", timeout=1):
-            break
-    assert any("reloaded w.xacro" in line for line in run.lines), run.lines
-    path.write_text(SLOW.format(depth=18))
-    deadline = time.monotonic() + 60
-    while not (children := _xacro_children(run.child.pid)) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert children, run.lines
+    try:
+        run.wait_for_file(tmp_path / f".out.rrd.{run.child.pid}.partial")
+        for edit in range(100):  # quick edits first, until one's line says the run watches the files
+            path.write_text(SLOW.format(depth=1) + f"<!-- {edit} -->")
+            if run.wait_for("reloaded w.xacro", timeout=1):
+                break
+        assert any("reloaded w.xacro" in line for line in run.lines), run.lines
+        path.write_text(SLOW.format(depth=18))
+        deadline = time.monotonic() + 60
+        while not (children := _xacro_children(run.child.pid)) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert children, run.lines
+    except BaseException:
+        run.end(signal.SIGKILL, timeout=10)  # not left running by a failed test
+        raise
     return run, children
 
 
