@@ -45,7 +45,7 @@ from r2d2_viz.sources.start import live_start_ns
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import LiveFields
-from r2d2_viz.viewer.files.whole import saved_rrd
+from r2d2_viz.viewer.files.whole import WriterStuckError, flush_file, not_saved, saved_rrd
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
@@ -147,7 +147,7 @@ def run_on(
                 view = dataclasses.replace(view, layout=layout)
                 update_blueprint(recording, generate_blueprint(view.spec, layout=layout))
             if time.monotonic() - flushed > FLUSH_SECONDS:
-                recording.rec.flush()
+                flush_file(recording.rec, output.tmp)  # a full disk: in slices, never for ever (whole.py)
                 flushed = time.monotonic()
             if source.graph.wait(POLL_SECONDS):
                 time.sleep(GATHER_SECONDS)
@@ -156,10 +156,10 @@ def run_on(
         _say_received(source, time.monotonic() - started)
         detach_tools(recording, tools)
         output.close()
-    except BaseException:
+    except BaseException as exc:
         if output.recording is not None:
             detach_tools(output.recording, tools)
-        output.abort()
+        output.abort(exc)
         raise
     finally:
         lateness.close()
@@ -254,18 +254,20 @@ class _Output:
             self.bag.close()
             self.bag = None
 
-    def abort(self) -> None:
-        """Nothing half-written: the partial recording and bag removed."""
+    def abort(self, exc: BaseException | None = None) -> None:
+        """Nothing half-written: the partial files removed; a file sink stuck on a full disk (``exc``) says why."""
         try:
-            if self.recording is not None:
+            if self.recording is not None and not isinstance(exc, WriterStuckError):  # stuck: a flush would hang
                 close_recording(self.recording)
-        except R2d2VizError:
+        except (R2d2VizError, WriterStuckError):
             pass  # the error being handled says more
         finally:
             if self.bag is not None:
                 self.bag.abort()
-            if self.tmp is not None:
+            if self.tmp is not None and not isinstance(exc, WriterStuckError):
                 self.tmp.unlink(missing_ok=True)
+        if isinstance(exc, WriterStuckError) and self.tmp is not None and self.rrd is not None:
+            raise not_saved(self.rrd, self.tmp, stuck=True) from None  # the partial removed, the cause named
 
 
 class _Scene:

@@ -184,10 +184,13 @@ def paced(
     progress: Progress | None = None,
     wall: WallClock | None = None,
     stop: threading.Event | None = None,
+    flush: Callable[[], None] | None = None,
 ) -> tuple[int, bool]:
     """Send each robot sample and every feed item of each window when due on ``wall``, until done or signalled
     (``stop``: set by a signal that came before); returns the samples sent (or, without a robot, the items) and
-    whether a signal stopped it. ``progress`` hears where the replay is each time it waits, and where it stopped."""
+    whether a signal stopped it. ``progress`` hears where the replay is each time it waits, and where it stopped.
+    ``flush`` waits for the sinks once a window (a saved file's: in slices that end a run whose file cannot grow,
+    :func:`r2d2_viz.viewer.files.whole.flush_file`; by default the stream's flush)."""
     stop = stop if stop is not None else threading.Event()
     sent = 0
     log_path = os.environ.get(PACING_LOG_ENV)
@@ -224,7 +227,7 @@ def paced(
             if streamer is not None:
                 # Backpressure, once a window: wait until the sinks have taken what was sent, so a sink slower
                 # than the sample rate makes samples late instead of piling them up in memory.
-                streamer.rec.flush()
+                (flush or streamer.rec.flush)()
         if not stop.is_set() and clock is not None:
             _feed_until(clock, feeds, math.inf, stop, log)
             feeds.until(None)  # nothing left but the run's end

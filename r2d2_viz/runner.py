@@ -209,11 +209,11 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
     view = dataclasses.replace(view, layout=layout)
     blueprint = generate_blueprint(view.spec, layout=view.layout)
     stop = threading.Event()  # live: a signal that comes before the pacing (the viewer told where to look) stops too
-    with saved_rrd(tmp, save), signals_set(stop) if config.live else nullcontext():  # renamed when whole, or removed
+    with saved_rrd(tmp, save), signals_set(stop) if config.live else nullcontext(), ExitStack() as ends:
         recording = open_recording(config.sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         tools = attach_view_tools(recording, view, dict(config.tool_topics), source=plan.source)
         try:
-            rec = recording.rec
+            rec, flush = recording.rec, lambda: flush_file(recording.rec, tmp)  # a full disk ends the run
             gather = config.realtime and not config.sink.live  # saved only: no viewer waits for each sample
             streamers = _robot_streams(recording, plan, view, clock, gather) if tree is not None else []
             streamer = streamers[0] if streamers else None
@@ -247,19 +247,19 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             feeds = Feeds(
                 TfFeed(recorded, plan), displays, [*map(RobotFeed, streamers[1:])], fields.feed(rec) if fields else None
             )
-            watching = config.watch and watch_robot(recording, plan.source, streamer, config, _packages(config))
+            watching = config.watch and watch_robot(recording, plan.source, streamer, config, _packages(config), ends)
             for robot in streamers:
                 (watching or robot).log_static(view.spec.robot)
             with progress_bar(plan, config) as shown:
                 windows = _windows(plan, config, displays, fields)
                 if config.live:
                     samples, interrupted = paced(
-                        streamer, windows, feeds, speed=config.speed, progress=shown, stop=stop
+                        streamer, windows, feeds, speed=config.speed, progress=shown, stop=stop, flush=flush
                     )
                 else:
                     with sigterm_raises():
-                        samples = _batch(streamer, windows, feeds, lambda: flush_file(rec, tmp), shown)
-            keep_serving(config.sink.serve and config.bag is not None and not interrupted, rec.flush)
+                        samples = _batch(streamer, windows, feeds, flush, shown)
+            keep_serving(config.sink.serve and config.bag is not None and not interrupted, flush)
             if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
                 notices.report(f"{config.bag}: {line}")
             if feeds.fields is not None:

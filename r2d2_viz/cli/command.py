@@ -237,6 +237,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     )
     if args.watch and (args.bag is not None or args.ros or not config.live):
         why = "a bag's joints" if args.bag is not None else "--ros" if args.ros else "a batch --save (add --realtime)"
+        if args.headless and args.bag is None and not args.ros:  # no --save was typed: advice about one is wrong
+            why = "--headless, which shows nothing (use --serve, --spawn or --save FILE.rrd --realtime)"
         raise UsageError(f"--watch reloads a generated motion's robot in a live run, not with {why}")
 
     def on_ready(message: str) -> None:

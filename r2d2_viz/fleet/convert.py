@@ -215,7 +215,7 @@ def _ignore_sigint() -> None:
     """A pool worker ignores Ctrl-C (a terminal sends it to every process of the run): the main process stops the
     workers itself, with SIGTERM, so that none starts another conversion. A worker whose app ended without
     stopping it (SIGKILL, a crash) gets SIGTERM: no worker lives on."""
-    from r2d2_viz.viewer.sinks import die_with_parent
+    from r2d2_viz.robot.children import die_with_parent
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with_parent()

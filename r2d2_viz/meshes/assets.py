@@ -31,6 +31,7 @@ from r2d2_viz.meshes.disk_cache import DiskCache, sha256
 from r2d2_viz.meshes.gltf_write import colour_parts, paint_bare_primitives
 from r2d2_viz.robot.model import Box, Cylinder, MeshFile, Shape, Sphere
 from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.regular_file import NotRegularFileError, read_regular
 
 CYLINDER_SECTIONS = 48
 SPHERE_SUBDIVISIONS = 3
@@ -101,13 +102,14 @@ class MeshCache:
     def read(self, path: Path) -> bytes:
         self.reads[path] += 1
         try:
-            if not path.is_file():  # /dev/zero, a FIFO, a folder: never read
-                raise ValueError("is not a regular file")
-            if path.stat().st_size > MAX_MESH_BYTES:
-                raise ValueError(f"is larger than {MAX_MESH_BYTES >> 20} MiB")
-            return path.read_bytes()
+            data = read_regular(path, MAX_MESH_BYTES)  # /dev/zero, a FIFO, a folder: never read
+        except (NotRegularFileError, IsADirectoryError):
+            raise ValueError("is not a regular file") from None
         except OSError as exc:
             raise ValueError(f"cannot be read: {exc.strerror or exc}") from None
+        if len(data) > MAX_MESH_BYTES:
+            raise ValueError(f"is larger than {MAX_MESH_BYTES >> 20} MiB")
+        return data
 
     def _load(self, path: Path, suffix: str) -> Asset:
         if suffix not in AS_IS and suffix not in CONVERTED:
@@ -188,9 +190,13 @@ def _read_beside(resolver: Any, name: str) -> bytes:
         except ValueError:
             continue
         if path.exists():
-            if not path.is_file() or path.stat().st_size > MAX_DEPENDENCY_BYTES:
+            try:
+                data: bytes | None = read_regular(path, MAX_DEPENDENCY_BYTES)
+            except (NotRegularFileError, IsADirectoryError):
+                data = None
+            if data is None or len(data) > MAX_DEPENDENCY_BYTES:
                 raise FileNotFoundError(f"{name} is not a regular file of at most {MAX_DEPENDENCY_BYTES} bytes")
-            return path.read_bytes()
+            return data
     raise FileNotFoundError(name)
 
 

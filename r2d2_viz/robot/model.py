@@ -16,7 +16,7 @@ import gc
 from collections import deque
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
@@ -27,7 +27,7 @@ from lxml import etree
 
 from r2d2_viz.errors import listed
 from r2d2_viz.robot.inertial import Inertial, read_inertial
-from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.packages import PackageIndex, missing_files
 from r2d2_viz.robot.urdf_check import JOINT_TYPES, check_robot, parse_urdf_xml, read_urdf_xml
 
 JointType = str
@@ -153,8 +153,7 @@ class Robot:
     """A validated robot: one root link, every other link the child of exactly one joint.
 
     ``joints`` are in topological order (a joint's parent link is the root or the child of an
-    earlier joint); ``links`` start with the root and follow the same order.
-    """
+    earlier joint); ``links`` start with the root and follow the same order."""
 
     name: str
     source: str
@@ -163,6 +162,7 @@ class Robot:
     links: tuple[Link, ...]
     joints: tuple[Joint, ...]
     warnings: tuple[str, ...] = ()
+    missing_meshes: tuple[Path, ...] = ()  # where the mesh files not found would be (--watch watches them)
 
     def joint(self, name: str) -> Joint:
         try:
@@ -218,7 +218,8 @@ def _validated(root: etree._Element, *, source: str, base_dir: Path, packages: P
     packages = packages or PackageIndex.from_environ()
     notes = check_robot(root, source=source, base_dir=base_dir, packages=packages)
     robot = build_robot(root, source=source, base_dir=base_dir, packages=packages)
-    return Robot(robot.name, robot.source, robot.root, robot.links, robot.joints, tuple(notes))
+    meshes = (str(m.get("filename")) for m in root.iter("mesh"))
+    return replace(robot, warnings=tuple(notes), missing_meshes=missing_files(packages, meshes, base_dir=base_dir))
 
 
 @contextmanager

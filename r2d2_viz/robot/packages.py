@@ -20,13 +20,14 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
 from lxml import etree
 
 from r2d2_viz.errors import SHOWN, PackageError, UsageError, listed
+from r2d2_viz.robot.regular_file import read_regular
 
 SCAN_DEPTH = 3
 """How deep a folder of packages is searched for ``package.xml`` files."""
@@ -44,8 +45,7 @@ _PARSER = etree.XMLParser(
 def package_xml_name(folder: Path) -> str | None:
     """The ``<name>`` declared by ``folder/package.xml``, or None (no file, unreadable, malformed)."""
     try:
-        with (folder / "package.xml").open("rb") as fh:
-            data = fh.read(MAX_PACKAGE_XML_BYTES + 1)
+        data = read_regular(folder / "package.xml", MAX_PACKAGE_XML_BYTES)
         if len(data) > MAX_PACKAGE_XML_BYTES or b"<!ENTITY" in data:
             return None
         root = etree.fromstring(data, _PARSER)
@@ -325,3 +325,26 @@ def uri_package(uri: str) -> str | None:
         return None
     package = unquote(parts.netloc) or unquote(parts.path).lstrip("/").partition("/")[0]
     return package or None
+
+
+def expected_path(packages: PackageIndex, uri: str, *, base_dir: Path) -> Path | None:
+    """Where :meth:`PackageIndex.resolve_uri` would find ``uri``'s file, whether or not it is there (``--watch``
+    watches a missing mesh); None when no place can be named (a package not found, another scheme)."""
+    parts = urlsplit(uri)
+    scheme = parts.scheme.lower() if len(parts.scheme) > 1 else ""
+    if scheme == "package":
+        package, rest = unquote(parts.netloc), unquote(parts.path).lstrip("/")
+        if not package:
+            package, _, rest = rest.partition("/")
+        folder = packages.lookup(package, near=base_dir)
+        return folder / rest if folder is not None else None
+    if scheme and scheme != "file":
+        return None
+    local = Path(unquote(parts.netloc + parts.path)) if scheme else Path(uri)
+    return local if local.is_absolute() else base_dir / local
+
+
+def missing_files(packages: PackageIndex, uris: Iterable[str], *, base_dir: Path) -> tuple[Path, ...]:
+    """Where the files of ``uris`` that are not there would be (:func:`expected_path`), each once."""
+    wanted = (expected_path(packages, uri, base_dir=base_dir) for uri in uris)
+    return tuple(dict.fromkeys(p for p in wanted if p is not None and not _is_file(p)))

@@ -15,6 +15,7 @@ from typing import NoReturn
 from lxml import etree
 
 from r2d2_viz.errors import UrdfError
+from r2d2_viz.robot.regular_file import NotRegularFileError, read_regular
 
 MAX_FILE_BYTES = 64 * 1024 * 1024
 # XML 1.0 forbids these characters; refusing them up front also stops UTF-16 look-alikes.
@@ -62,8 +63,9 @@ def read_urdf_xml(path: Path) -> etree._Element:
     if st.st_size > MAX_FILE_BYTES:
         _fail(name, f"file is too large ({st.st_size} bytes; the limit is {MAX_FILE_BYTES} bytes)")
     try:
-        with path.open("rb") as fh:
-            data = fh.read(MAX_FILE_BYTES + 1)
+        data = read_regular(path, MAX_FILE_BYTES)  # never a FIFO put there since the stat: its open would block
+    except NotRegularFileError:
+        _fail(name, "is not a regular file")
     except OSError as exc:
         _fail(name, f"cannot read file: {exc.strerror or exc}")
     if len(data) > MAX_FILE_BYTES:

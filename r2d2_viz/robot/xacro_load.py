@@ -13,10 +13,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import re
 import stat
 import subprocess
 import sys
+import threading
+import time
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
@@ -24,7 +27,9 @@ from typing import TYPE_CHECKING, NamedTuple
 from lxml import etree
 
 from r2d2_viz.errors import UrdfError, UsageError, XacroError
+from r2d2_viz.robot.children import dies_with
 from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.regular_file import NotRegularFileError, read_regular
 from r2d2_viz.robot.urdf_xml import MAX_FILE_BYTES
 from r2d2_viz.robot.xacro_sandbox import MEMORY_BYTES
 
@@ -33,6 +38,8 @@ if TYPE_CHECKING:
 
 TIMEOUT_S = 60.0
 """Wall-clock and CPU time a xacro expansion may take."""
+CANCEL_POLL_S = 0.05
+"""How often an expansion that can be cancelled looks whether it was."""
 _XACRO_NS = re.compile(
     rb"""xmlns:[A-Za-z_][\w.-]*\s*=\s*["']https?://(?:www\.|wiki\.)?ros\.org/(?:wiki/)?xacro/?["']"""
 )
@@ -59,17 +66,19 @@ def load_description(
     mappings: Mapping[str, str] | None = None,
     packages: PackageIndex | None = None,
     read: list[Path] | None = None,
+    cancel: threading.Event | None = None,
 ) -> Description:
     """Read ``path``; expand it if it is xacro (``NAME:=VALUE`` arguments in ``mappings``; ``$(find)``
     through ``packages``). Raises :class:`UrdfError` (:class:`XacroError` for xacro problems). ``read`` gets
-    the files xacro read, even when it fails (``--watch``)."""
+    the files xacro read, even when it fails (``--watch``); setting ``cancel`` stops xacro at once
+    (:class:`XacroCancelledError`)."""
     path = Path(path)
     data = read_bounded(path)
     if not is_xacro(path, data):
         return Description(data, path.name, path.parent)
     packages = packages or PackageIndex.from_environ(description=path)
     files: list[Path] = [] if read is None else read
-    text, notes = _expand(path, mappings or {}, packages, files)
+    text, notes = _expand(path, mappings or {}, packages, files, cancel)
     return Description(text.encode("utf-8"), path.name, path.parent, notes, tuple(files))
 
 
@@ -79,10 +88,11 @@ def load_robot(
     mappings: Mapping[str, str] | None = None,
     packages: PackageIndex | None = None,
     read: list[Path] | None = None,
+    cancel: threading.Event | None = None,
 ) -> Robot:
     """A :class:`~r2d2_viz.robot.model.Robot` from a URDF or xacro file (xacro's warnings first in its warnings).
     ``NAME:=VALUE`` ``mappings`` are for xacro files only (:class:`UsageError` otherwise). ``read`` gets the
-    files xacro read (includes, YAML), even when it fails."""
+    files xacro read (includes, YAML), even when it fails; ``cancel``: as for :func:`load_description`."""
     from r2d2_viz.robot.model import load_urdf, parse_urdf
 
     path = Path(path)
@@ -92,7 +102,7 @@ def load_robot(
             raise UsageError(f"{', '.join(f'{k}:={v}' for k, v in mappings.items())}: arguments for a xacro file, "
                              f"but {path.name} is not one")  # fmt: skip
         return load_urdf(path, packages=packages)  # its own one-line errors for unreadable files
-    description = load_description(path, mappings=mappings, packages=packages, read=read)
+    description = load_description(path, mappings=mappings, packages=packages, read=read, cancel=cancel)
     try:
         robot = parse_urdf(
             description.text, source=description.source, base_dir=description.base_dir, packages=packages
@@ -107,8 +117,7 @@ def load_robot(
 def _peek(path: Path) -> bytes:
     """The file's bytes up to the size limit; nothing if it cannot be read (:func:`load_urdf` then says why)."""
     try:
-        with path.open("rb") as fh:
-            return fh.read(MAX_FILE_BYTES + 1) if path.is_file() else b""
+        return read_regular(path, MAX_FILE_BYTES)
     except OSError:
         return b""
 
@@ -164,8 +173,9 @@ def read_bounded(path: Path) -> bytes:
     if not stat.S_ISREG(st.st_mode):
         raise UrdfError(f"{name}: is not a regular file")
     try:
-        with path.open("rb") as fh:
-            data = fh.read(MAX_FILE_BYTES + 1)
+        data = read_regular(path, MAX_FILE_BYTES)  # never a FIFO put there since the stat: its open would block
+    except NotRegularFileError:
+        raise UrdfError(f"{name}: is not a regular file") from None
     except OSError as exc:
         raise UrdfError(f"{name}: cannot read file: {exc.strerror or exc}") from None
     if len(data) > MAX_FILE_BYTES:
@@ -177,7 +187,11 @@ def read_bounded(path: Path) -> bytes:
 
 
 def _expand(
-    path: Path, mappings: Mapping[str, str], packages: PackageIndex, read: list[Path] | None = None
+    path: Path,
+    mappings: Mapping[str, str],
+    packages: PackageIndex,
+    read: list[Path] | None = None,
+    cancel: threading.Event | None = None,
 ) -> tuple[str, tuple[str, ...]]:
     job = {
         "path": str(path.absolute()),
@@ -189,16 +203,7 @@ def _expand(
         "ament_prefix_path": [str(p) for p in packages.ament_prefix_path],
         "cpu_seconds": TIMEOUT_S + 5,  # the CPU limit only backs up the wall clock, which names the problem
     }
-    try:
-        done = subprocess.run(
-            [sys.executable, "-m", "r2d2_viz.robot.xacro_sandbox"],
-            input=json.dumps(job),
-            capture_output=True,
-            text=True,
-            timeout=TIMEOUT_S,
-        )
-    except subprocess.TimeoutExpired:
-        raise XacroError(f"{path.name}: xacro expansion took more than {TIMEOUT_S:g} s; stopped") from None
+    done = _sandboxed(json.dumps(job), path, cancel)
     try:
         answer = json.loads(done.stdout)
     except ValueError:
@@ -211,6 +216,41 @@ def _expand(
     if "error" in answer:
         raise XacroError(str(answer["error"]))
     return str(answer["urdf"]), tuple(str(w) for w in answer.get("warnings", ()))
+
+
+def _sandboxed(job: str, path: Path, cancel: threading.Event | None) -> subprocess.CompletedProcess[str]:
+    """The sandbox run on ``job``: it gets SIGTERM if the app ends first (however it ends), and SIGKILL once
+    ``cancel`` is set (a ``--watch`` reload the run no longer waits for), after :data:`TIMEOUT_S`, or on Ctrl-C."""
+    parent = os.getpid()
+    child = subprocess.Popen(
+        [sys.executable, "-m", "r2d2_viz.robot.xacro_sandbox"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: dies_with(parent),
+    )
+    end = time.monotonic() + TIMEOUT_S
+    sent: str | None = job  # given once: a retried communicate() goes on writing what is left
+    try:
+        while True:
+            try:
+                out, err = child.communicate(sent, timeout=CANCEL_POLL_S if cancel is not None else TIMEOUT_S)
+                return subprocess.CompletedProcess(child.args, child.returncode, out, err)
+            except subprocess.TimeoutExpired:
+                sent = None
+                if cancel is not None and cancel.is_set():
+                    raise XacroCancelledError(f"{path.name}: xacro expansion cancelled") from None
+                if time.monotonic() >= end:
+                    raise XacroError(f"{path.name}: xacro expansion took more than {TIMEOUT_S:g} s; stopped") from None
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.communicate()  # reaped, its pipes closed
+
+
+class XacroCancelledError(XacroError):
+    """An expansion stopped because its ``cancel`` event was set (nobody waits for it any more)."""
 
 
 def _last_line(text: str) -> str:

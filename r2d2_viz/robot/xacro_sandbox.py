@@ -22,7 +22,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import stat
 import sys
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager, redirect_stderr, redirect_stdout
@@ -31,6 +30,7 @@ from typing import Any
 
 from r2d2_viz.errors import PackageError, UrdfError, XacroError
 from r2d2_viz.robot.packages import PackageIndex
+from r2d2_viz.robot.regular_file import NotRegularFileError, read_regular
 from r2d2_viz.robot.urdf_xml import MAX_FILE_BYTES
 from r2d2_viz.robot.xacro_guard import RefusedExpressionError, check_expression
 
@@ -231,11 +231,10 @@ def _hardened(packages: PackageIndex) -> Iterator[None]:
 
 
 def _read_xacro_file(path: Path) -> str:
-    st = path.stat()
-    if not stat.S_ISREG(st.st_mode):
-        raise XacroError("is not a regular file; refused")
-    with path.open("rb") as fh:
-        data = fh.read(MAX_FILE_BYTES + 1)
+    try:
+        data = read_regular(path, MAX_FILE_BYTES)
+    except NotRegularFileError:
+        raise XacroError("is not a regular file; refused") from None
     if len(data) > MAX_FILE_BYTES:
         raise XacroError(f"file is too large (more than {MAX_FILE_BYTES} bytes)")
     if b"<!DOCTYPE" in data and b"<!ENTITY" in data:

@@ -6,7 +6,6 @@ Part of the stream layer (with :mod:`r2d2_viz.viewer.stream`, the only modules t
 from __future__ import annotations
 
 import copy
-import ctypes
 import importlib.util
 import os
 import shutil
@@ -24,6 +23,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from r2d2_viz.errors import DEBUG_ENV, ListenError, SinkError, UsageError, one_line
+from r2d2_viz.robot.children import die_with_parent
 from r2d2_viz.viewer.entities import APP_ID
 from r2d2_viz.viewer.files.whole import flush_file
 from r2d2_viz.viewer.web.assets import viewer_static
@@ -104,17 +104,6 @@ def ends_with_us() -> None:
     (Linux; SIGKILL included), and SIGINT back at its default (a parent that ignores SIGINT, ``nohup … &``)."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     die_with_parent()
-
-
-def die_with_parent() -> None:
-    """SIGTERM to this process when the one that started it ends (Linux's parent-death signal; elsewhere nothing)."""
-    if _PRCTL is not None:
-        _PRCTL(PR_SET_PDEATHSIG, signal.SIGTERM)
-
-
-PR_SET_PDEATHSIG = 1
-_PRCTL = ctypes.CDLL(None).prctl if sys.platform.startswith("linux") else None
-"""Looked up before any fork: a ``preexec_fn`` should do as little as it can."""
 
 
 def _check_port_free(bind: str, port: int, what: str) -> None:

@@ -14,7 +14,7 @@ a URDF colour, RViz-like light grey. Collision shapes are all one translucent or
 
 from __future__ import annotations
 
-import functools
+import weakref
 from collections.abc import Callable
 
 import numpy as np
@@ -83,13 +83,20 @@ def shape_archetypes(link: str, shape: Shape, *, visual: bool, cache: MeshCache)
     ]
 
 
-@functools.lru_cache(maxsize=256)
+_BLOBS: weakref.WeakKeyDictionary[Asset, rr.components.BlobBatch] = weakref.WeakKeyDictionary()
+"""Each asset's blob while the asset lives (its run's :class:`MeshCache`): an ``lru_cache`` kept the last 256 assets'
+bytes, so every ``--watch`` reload kept the previous reload's meshes (+64 MB an edit of a 64 MB mesh)."""
+
+
 def _blob(asset: Asset) -> rr.components.BlobBatch:
     """The asset's bytes as one Arrow blob, built once per file and without copying them (Rerun's own conversion
     copies every byte through numpy, every time a shape logs the file)."""
+    if (found := _BLOBS.get(asset)) is not None:
+        return found
     values = pa.Array.from_buffers(pa.uint8(), len(asset.data), [None, pa.py_buffer(asset.data)])
     offsets = pa.array([0, len(asset.data)], type=pa.int32())
-    return rr.components.BlobBatch(pa.ListArray.from_arrays(offsets, values, type=BLOB_TYPE))
+    blob = _BLOBS[asset] = rr.components.BlobBatch(pa.ListArray.from_arrays(offsets, values, type=BLOB_TYPE))
+    return blob
 
 
 def log_shape(

@@ -8,7 +8,14 @@ import pytest
 from conftest import REPO
 
 from r2d2_viz.errors import PackageError, UrdfError, UsageError
-from r2d2_viz.robot.packages import PackageIndex, package_xml_name, scan_packages, uri_package
+from r2d2_viz.robot.packages import (
+    PackageIndex,
+    expected_path,
+    missing_files,
+    package_xml_name,
+    scan_packages,
+    uri_package,
+)
 
 XACRO = REPO / "tests" / "data" / "xacro"
 
@@ -185,3 +192,19 @@ def test_a_big_workspace_is_counted_not_spelled_out(tmp_path: Path) -> None:
     message = str(info.value)
     assert "AMENT_PREFIX_PATH (300 entries: /ws/install/pkg_000, " in message and "pkg_004 and 295 more)" in message
     assert len(message) < 600, message
+
+
+def test_where_a_missing_mesh_would_be_is_named_for_watch(tmp_path: Path) -> None:
+    """Issue 44, item 13: ``--watch`` watches a mesh that is missing where it would be found (by hand: the pinned
+    package's folder, the URDF's folder for a relative path; no place for an unknown package or an http URI)."""
+    (tmp_path / "pkg" / "meshes").mkdir(parents=True)
+    (tmp_path / "pkg" / "meshes" / "here.stl").write_text("solid")
+    index = PackageIndex(pins={"pkg": tmp_path / "pkg"})
+    base = tmp_path / "urdf"
+    assert expected_path(index, "package://pkg/meshes/gone.stl", base_dir=base) == tmp_path / "pkg/meshes/gone.stl"
+    assert expected_path(index, "meshes/a.stl", base_dir=base) == base / "meshes/a.stl"
+    assert expected_path(index, "file:///abs/b.stl", base_dir=base) == Path("/abs/b.stl")
+    assert expected_path(index, "package://nowhere/c.stl", base_dir=base) is None
+    assert expected_path(index, "http://example.com/d.stl", base_dir=base) is None
+    uris = ["package://pkg/meshes/here.stl", "package://pkg/meshes/gone.stl", "package://pkg/meshes/gone.stl"]
+    assert missing_files(index, uris, base_dir=base) == (tmp_path / "pkg/meshes/gone.stl",)

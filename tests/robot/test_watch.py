@@ -140,3 +140,23 @@ def test_a_broken_include_is_among_the_files_read(tmp_path: Path) -> None:
     with pytest.raises(XacroError, match=r"arm\.xacro"):
         load_robot(path, read=read)
     assert tmp_path / "parts" / "arm.xacro" in {p.resolve() for p in read}
+
+
+def test_an_edit_made_while_the_robot_loads_is_seen_after_the_files_are_watched_again(tmp_path: Path) -> None:
+    """Issue 44, item 13: a live run loads an edit in a thread; the files watched again afterwards keep what they were
+    when the change was reported, so an edit made during the load is seen (not taken as the new reference)."""
+    path = tmp_path / "r.urdf"
+    path.write_text("a")
+    now = [0.0]
+    watcher = FileWatcher([path], clock=lambda: now[0], period=0.25, settle=0.2)
+    path.write_text("bb")
+    for t in (0.3, 0.6):
+        now[0] = t
+        reported = watcher.changed()
+    assert reported  # the first edit, settled
+    path.write_text("ccc")  # edited again while the robot loads
+    watcher.watch([path, tmp_path / "missing.stl"])  # the load is done: its files watched from now on
+    for t in (0.9, 1.2):
+        now[0] = t
+        reported = watcher.changed()
+    assert reported

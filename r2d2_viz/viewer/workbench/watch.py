@@ -10,19 +10,22 @@ and on ``/warnings`` at the run's time; the last good robot stays.
 
 from __future__ import annotations
 
+import sys
+import threading
 from collections.abc import Callable, Iterable, Mapping
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any, Protocol, cast
 
 import numpy as np
 import rerun as rr
 
-from r2d2_viz.errors import R2d2VizError, UsageError
-from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.errors import R2d2VizError, UsageError, shown
+from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
-from r2d2_viz.robot.watch import FileWatcher, robot_files
-from r2d2_viz.robot.xacro_load import load_robot
+from r2d2_viz.robot.watch import FileWatcher, Loading, robot_files
+from r2d2_viz.robot.xacro_load import XacroCancelledError, load_robot
 from r2d2_viz.rviz.spec import RobotModel
 from r2d2_viz.sources.base import Source
 from r2d2_viz.sources.motion import GeneratedMotion, SlidersMotion
@@ -61,35 +64,63 @@ class _Timed:
         return getattr(self.rec, name)
 
 
+Load = Callable[[list[Path], threading.Event | None], Robot]
+"""Loads the description (the files xacro read go into the list; the event, when set, stops xacro at once)."""
+
+
 class Watching:
-    """One watched robot: the run's stream and motion, re-made on each good edit."""
+    """One watched robot: the run's stream and motion, re-made on each good edit.
+
+    In a live run (``background``) the edited robot is loaded in a thread (:class:`Loading`): the run goes on with
+    the robot it has, and the new one is shown at the first sample after it loaded. :meth:`close` stops a load in
+    flight (its xacro child killed at once)."""
 
     def __init__(
         self,
         stream: RobotStream,
         motion: GeneratedMotion,
         description: Path,
-        load: Callable[[list[Path]], Robot],
+        load: Load,
         poller: PollerFactory,
         page_config: dict[str, Any] | None = None,
+        *,
+        background: bool = False,
     ) -> None:
         self.stream, self.motion, self.description, self.load = stream, motion, description, load
         self.page_config = page_config
         """``--serve``'s page configuration: its sliders are the new robot's once the page is reloaded."""
+        self.background = background
         self.timed = _Timed(stream.rec, stream.timeline, stream.clock)
         self.display: RobotModel | None = None
-        self.files = robot_files(description, stream.tree.robot, self._xacro_files())
+        self.loading: Loading[tuple[Robot, KinematicTree]] | None = None
+        """A reload's load in flight (live runs)."""
+        self.first: Loading[tuple[Robot, KinematicTree]] | None = None
+        """A live run's first load, only to learn which files xacro reads (in a thread too: it may be slow)."""
+        read: list[Path] = []
+        if background:
+            self.first = self.loading = Loading(self._load_tree)
+        else:
+            self._xacro_files(read)
+        self.files = robot_files(description, stream.tree.robot, read)
         self.poller = poller(self.files)
         self.reloads = 0
         motion.before_chunk = self.before_chunk
 
-    def _xacro_files(self) -> list[Path]:
-        read: list[Path] = []
+    def _xacro_files(self, read: list[Path]) -> None:
         try:
-            self.load(read)
+            self.load(read, None)
         except R2d2VizError:
             pass
-        return read
+
+    def _load_tree(self, read: list[Path], cancel: threading.Event) -> tuple[Robot, KinematicTree]:
+        robot = self.load(read, cancel)
+        return robot, compile_tree(robot)
+
+    def close(self) -> None:
+        """The run ends: a load in flight is stopped (its xacro child killed), not waited for."""
+        loading, self.loading = self.loading, None
+        if loading is not None:
+            loading.stop()
 
     def log_static(self, display: RobotModel | None = None) -> None:
         """The scene, on the time line at the first sample (what :meth:`RobotStream.log_static` logs static)."""
@@ -108,16 +139,29 @@ class Watching:
         return self.timed.logged
 
     def before_chunk(self, k: int) -> None:
-        if self.poller.changed():
-            self.reload(k)
+        if self.loading is None and self.poller.changed():
+            self.loading = Loading(self._load_tree)
+        if self.loading is not None and (self.loading.done or not self.background):  # batch: waited for
+            loading, self.loading = self.loading, None
+            if loading is self.first:  # what xacro read: watched from now on (an edit meanwhile is seen next)
+                self.files = tuple(sorted({*self.files, *robot_files(self.description, None, loading.read)}))
+                self.poller.watch(self.files)
+            else:
+                self._shown(k, loading)
 
     def reload(self, k: int) -> bool:
-        """Load the robot again for sample ``k``; True if it loaded (else one line, and the robot stays)."""
+        """Load the robot again for sample ``k`` (waiting for it); True if it loaded (else one line, and the robot
+        stays)."""
+        return self._shown(k, Loading(self._load_tree))
+
+    def _shown(self, k: int, loading: Loading[tuple[Robot, KinematicTree]]) -> bool:
+        """The load's robot shown from sample ``k`` on (waiting for it); or its error, one line."""
         at_ns = int(np.rint(k * (1e9 / self.motion.rate)))
-        read: list[Path] = []
+        read = loading.read
         try:
-            robot = self.load(read)
-            tree = compile_tree(robot)
+            robot, tree = loading.outcome()
+        except XacroCancelledError:
+            return False
         except R2d2VizError as exc:
             self.poller.watch(sorted({*self.files, *robot_files(self.description, None, read)}))
             message = f"{exc} (--watch: the last good robot stays)"
@@ -133,6 +177,8 @@ class Watching:
         self.files = robot_files(self.description, robot, read)
         self.poller.watch(self.files)
         self.reloads += 1
+        links = f"{len(robot.links)} link{'s' if len(robot.links) != 1 else ''}"
+        print(shown(f"r2d2-viz: reloaded {self.description.name}: {links}"), file=sys.stderr, flush=True)
         return True
 
     def _remake(self, robot: Robot, tree: Any) -> None:
@@ -172,6 +218,8 @@ class Described(Protocol):
     def urdf(self) -> Path | None: ...
     @property
     def mappings(self) -> Mapping[str, str]: ...
+    @property
+    def live(self) -> bool: ...
 
 
 def watch_robot(
@@ -180,19 +228,24 @@ def watch_robot(
     stream: RobotStream | None,
     config: Described,
     packages: PackageIndex,
+    ends: ExitStack | None = None,
     poller: PollerFactory | None = None,
 ) -> Watching:
     """Watch the run's description (``config.urdf``, the tutorial's by default) and what it reads, for the run's
-    ``stream`` driven by the generated motion ``source``; ``poller`` (tests) says when files changed."""
+    ``stream`` driven by the generated motion ``source``, until ``ends`` closes (a reload in flight is then stopped);
+    ``poller`` (tests) says when files changed."""
     if stream is None or not isinstance(source, GeneratedMotion):
         raise UsageError("--watch: only a generated motion can be reloaded (not a bag's or the graph's joints)")
     description, mappings = config.urdf or default_urdf_path(), config.mappings
 
-    def load(read: list[Path]) -> Robot:
-        return load_robot(description, mappings=mappings, packages=packages, read=read)
+    def load(read: list[Path], cancel: threading.Event | None) -> Robot:
+        return load_robot(description, mappings=mappings, packages=packages, read=read, cancel=cancel)
 
     page = recording.page.config if recording.page is not None else None
-    return Watching(stream, source, description, load, poller or POLLER, page)
+    watching = Watching(stream, source, description, load, poller or POLLER, page, background=config.live)
+    if ends is not None:
+        ends.callback(watching.close)
+    return watching
 
 
 def _file_watcher(files: tuple[Path, ...]) -> Poller:

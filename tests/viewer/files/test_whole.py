@@ -178,3 +178,40 @@ def test_write_cause_asks_the_file_system(tmp_path: Path, small_disk: Path) -> N
     with pytest.raises(OSError):
         full.write_bytes(bytes(2 << 20))  # fills the 1 MB disk
     assert write_cause(small_disk / "probe") == "no space left on device"
+
+
+def _live_save_on_a_full_disk(disk: Path, *live: str) -> tuple[int | None, str]:
+    """``r2d2-viz --save disk/out.rrd LIVE…`` (a run without end) on ``disk`` with 100 kB free: the exit status (None
+    when it was still running 60 s later, and then not even SIGTERM ended it within 10 s) and stderr."""
+    _resize(disk, 100)
+    exe = Path(sys.executable).parent / "r2d2-viz"
+    with subprocess.Popen([str(exe), "--save", str(disk / "out.rrd"), *live], stderr=subprocess.PIPE, text=True) as run:
+        try:
+            _, err = run.communicate(timeout=60)
+            return run.returncode, err
+        except subprocess.TimeoutExpired:
+            run.terminate()
+        try:
+            _, err = run.communicate(timeout=10)
+            return None, err
+        except subprocess.TimeoutExpired:
+            run.kill()
+            return None, run.communicate()[1]
+
+
+@pytest.mark.parametrize(
+    ("live", "runs"), [(("--watch", "--realtime"), 3), (("--serve", "--web-port", "0"), 1)], ids=["watch", "serve"]
+)
+def test_a_live_save_on_a_full_disk_ends_with_one_line_and_leaves_nothing(
+    small_disk: Path, live: tuple[str, ...], runs: int
+) -> None:
+    """Issue 44, item 14: a live ``--save`` flushed once a window without a bound: on a full disk Rerun's file sink
+    deadlocked and the run ignored Ctrl-C and SIGTERM, its hidden partial left on the disk. Now the batch save's
+    flush in slices: one line naming the file and the cause, exit 2, the partial removed. The deadlock comes in
+    about two runs of three (seen with the old code: 2 of 3 ``--watch --realtime`` runs), so ``--watch`` runs thrice."""
+    for _ in range(runs):
+        code, err = _live_save_on_a_full_disk(small_disk, *live)
+        assert code == 2, err
+        line = _only_line("\n".join(x for x in err.splitlines() if not x.startswith("serving:")))
+        assert line == f"error: {small_disk / 'out.rrd'}: not saved: no space left on device", err
+        assert list(small_disk.iterdir()) == []  # no partial file left
