@@ -22,6 +22,7 @@ from typing import Protocol
 
 from r2d2_viz.errors import R2d2VizError, listed, shown
 from r2d2_viz.kinematics.tree import compile_tree
+from r2d2_viz.live_output import LiveOutput
 from r2d2_viz.meshes.assets import uri_loader
 from r2d2_viz.msgs.images import EncoderName
 from r2d2_viz.msgs.typestore import typestore
@@ -45,11 +46,11 @@ from r2d2_viz.sources.start import live_start_ns
 from r2d2_viz.sources.tf_check import urdf_edges
 from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import LiveFields
-from r2d2_viz.viewer.files.whole import WriterStuckError, flush_file, not_saved, saved_rrd
+from r2d2_viz.viewer.files.whole import flush_file
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
-from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording, update_blueprint
+from r2d2_viz.viewer.sinks import Recording, SinkConfig, update_blueprint
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.system.node_graph import NodeGraphLog
 from r2d2_viz.viewer.system.tf_graph import TfGraph
@@ -124,7 +125,7 @@ def run_on(
     # the graph's log, diagnostics, fixes and sensors when the view is planned: their views (later ones: below)
     layout = dataclasses.replace(view.layout, tf_graph=config.tf_tree, node_graph=config.tf_tree)
     view = dataclasses.replace(view, layout=with_telemetry(layout, source.display_topics))
-    output = _Output(config.sink)
+    output = LiveOutput(config.sink)
     lateness = LatenessLog.from_env()
     tools = None
     try:
@@ -225,49 +226,6 @@ def _plan(config: LiveConfig, robot: Robot | None, batches: list[LiveBatch]) -> 
     if names := robot_namespaces(batches):  # several robots: a plot each, shapes under /robots/<namespace>
         view = dataclasses.replace(view, layout=dataclasses.replace(view.layout, robots=names))
     return plan, view
-
-
-class _Output:
-    """Where a live run is written: the sinks, ``--save out.rrd`` (renamed when done) or ``out.mcap`` (as received)."""
-
-    def __init__(self, sink: SinkConfig) -> None:
-        save = sink.save
-        self.bag_path = save if save is not None and save.suffix == ".mcap" else None
-        self.rrd = save if self.bag_path is None else None
-        self.sink = dataclasses.replace(sink, save=None, headless=not sink.live) if self.bag_path else sink
-        self.tmp = self.rrd.with_name(f".{self.rrd.name}.{os.getpid()}.partial") if self.rrd is not None else None
-        self.recording: Recording | None = None
-        self.bag: LiveBagRecorder | None = None
-
-    def open(self, view: ViewPlan, on_ready: Callable[[str], None] | None) -> Recording:
-        self.bag = LiveBagRecorder(self.bag_path) if self.bag_path is not None else None
-        blueprint = generate_blueprint(view.spec, layout=view.layout)
-        self.recording = open_recording(self.sink, save_to=self.tmp, on_ready=on_ready, blueprint=blueprint)
-        return self.recording
-
-    def close(self) -> None:
-        with saved_rrd(self.tmp, self.rrd):  # renamed over ``--save`` only when whole; removed otherwise
-            if self.recording is not None:
-                recording, self.recording = self.recording, None
-                close_recording(recording)
-        if self.bag is not None:
-            self.bag.close()
-            self.bag = None
-
-    def abort(self, exc: BaseException | None = None) -> None:
-        """Nothing half-written: the partial files removed; a file sink stuck on a full disk (``exc``) says why."""
-        try:
-            if self.recording is not None and not isinstance(exc, WriterStuckError):  # stuck: a flush would hang
-                close_recording(self.recording)
-        except (R2d2VizError, WriterStuckError):
-            pass  # the error being handled says more
-        finally:
-            if self.bag is not None:
-                self.bag.abort()
-            if self.tmp is not None and not isinstance(exc, WriterStuckError):
-                self.tmp.unlink(missing_ok=True)
-        if isinstance(exc, WriterStuckError) and self.tmp is not None and self.rrd is not None:
-            raise not_saved(self.rrd, self.tmp, stuck=True) from None  # the partial removed, the cause named
 
 
 class _Scene:

@@ -27,6 +27,7 @@ TOP = (
     "signals",
     "pacing",
     "progress",
+    "live_output",
     "live_run",
     "runner",
     "api",
