@@ -84,8 +84,8 @@ def shape_archetypes(link: str, shape: Shape, *, visual: bool, cache: MeshCache)
 
 
 _BLOBS: weakref.WeakKeyDictionary[Asset, rr.components.BlobBatch] = weakref.WeakKeyDictionary()
-"""Each asset's blob while the asset lives (its run's :class:`MeshCache`): an ``lru_cache`` kept the last 256 assets'
-bytes, so every ``--watch`` reload kept the previous reload's meshes (+64 MB an edit of a 64 MB mesh)."""
+"""Each asset's blob while the asset lives (its run's :class:`MeshCache`): an ``lru_cache`` of 256 would keep a
+``--watch`` reload's assets, and their bytes, after the robot that drew them is gone."""
 
 
 def _blob(asset: Asset) -> rr.components.BlobBatch:
