@@ -59,8 +59,13 @@ class FileWatcher:
         clock: Callable[[], float] = time.monotonic,
         period: float = PERIOD_S,
         settle: float = SETTLE_S,
+        since_ns: int | None = None,
     ) -> None:
         self.stat, self.clock, self.period, self.settle = stat, clock, period, settle
+        self.since_ns = since_ns
+        """When the robot was read (wall clock, ns): a file first watched with a later mtime was changed after the
+        load and before the watch began (an edit, or a FIFO put in its place, as the run opened its recording), and
+        is reported as a change at once."""
         self.files: tuple[Path, ...] = ()
         self._seen: dict[Path, Signature] = {}
         self._pending: dict[Path, Signature] | None = None
@@ -73,8 +78,14 @@ class FileWatcher:
         self.files = tuple(files)
         # a file already watched keeps what it was when the change was reported (what the load read): an edit made
         # while the robot was loading is then seen at the next poll
-        self._seen = {f: self._seen[f] if f in self._seen else self.stat(f) for f in self.files}
+        self._seen = {f: self._seen[f] if f in self._seen else self._first_look(f) for f in self.files}
         self._pending = None
+
+    def _first_look(self, path: Path) -> Signature:
+        sig = self.stat(path)
+        if sig is not None and self.since_ns is not None and sig[0] > self.since_ns:
+            return (-1, -1)  # changed since the robot was read: not what the run shows
+        return sig
 
     def _look(self) -> dict[Path, Signature]:
         return {f: self.stat(f) for f in self.files}

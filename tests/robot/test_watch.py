@@ -48,6 +48,17 @@ def test_a_change_is_reported_once_after_it_settles() -> None:
     assert _polls(watcher, disk, 4) == [False, True, False, False]
 
 
+def test_a_file_changed_after_the_robot_was_read_but_before_the_watch_began_is_a_change() -> None:
+    """Issue 44, item 13: a live run's watch begins after its recording opens; a description replaced by a FIFO in
+    between was the watch's reference, so nothing was ever said (by hand: mtimes either side of ``since_ns``)."""
+    disk, edited, kept = Disk(), Path("/edited.urdf"), Path("/kept.stl")
+    disk.sig[edited], disk.sig[kept] = (2_000, 0), (500, 10)
+    watcher = FileWatcher([edited, kept], stat=disk.stat, clock=disk.clock, period=0.25, settle=0.2, since_ns=1_000)
+    assert _polls(watcher, disk, 4) == [False, True, False, False]  # seen, settled, reported once
+    quiet = FileWatcher([kept], stat=disk.stat, clock=disk.clock, period=0.25, settle=0.2, since_ns=1_000)
+    assert _polls(quiet, disk, 4) == [False] * 4
+
+
 def test_a_half_written_file_is_not_loaded_until_it_stops_changing() -> None:
     disk, a = Disk(), Path("/a.urdf")
     disk.sig[a] = (1, 10)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterable, Mapping
 from contextlib import ExitStack
 from pathlib import Path
@@ -248,8 +249,13 @@ def watch_robot(
     return watching
 
 
+STARTED_NS = time.time_ns()
+"""Before any robot of this process was read (this module is imported first): files whose mtime is later when the
+watch begins changed after the run read them."""
+
+
 def _file_watcher(files: tuple[Path, ...]) -> Poller:
-    return FileWatcher(files)
+    return FileWatcher(files, since_ns=STARTED_NS)
 
 
 POLLER: PollerFactory = _file_watcher
