@@ -22,6 +22,7 @@ from r2d2_viz.cli.parser import (
     EXIT_UNEXPECTED,
     SAVE_SUFFIXES,
     build_parser,
+    xacro_mappings,
 )
 from r2d2_viz.errors import DEBUG_ENV, ListenError, R2d2VizError, UsageError, shown, shown_in_line, stderr_line
 
@@ -201,12 +202,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         web_port=args.web_port,
         page=sliders,
     )
-    mappings: dict[str, str] = {}
-    for item in args.xacro_args:
-        name, sep, value = item.partition(":=")
-        if not sep or not name.isidentifier():
-            raise UsageError(f"{item!r}: expected a xacro argument NAME:=VALUE")
-        mappings[name] = value
+    mappings = xacro_mappings(args)
     if args.tree:
         return _print_tree(args, mappings)
     config = RunConfig(

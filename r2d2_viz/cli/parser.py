@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from r2d2_viz.errors import UsageError
 from r2d2_viz.sources.motion import MOTIONS
 
 EXIT_OK, EXIT_UNEXPECTED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -221,3 +222,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="--serve's toolbar: publish a tool (goal, pose_estimate, point, teleop) on TOPIC instead",
     )
     return parser
+
+
+def xacro_mappings(args: argparse.Namespace) -> dict[str, str]:
+    """``--xacro-arg NAME:=VALUE`` … as xacro's mappings (a malformed one: :class:`UsageError`)."""
+    mappings: dict[str, str] = {}
+    for item in args.xacro_args:
+        name, sep, value = item.partition(":=")
+        if not sep or not name.isidentifier():
+            raise UsageError(f"{item!r}: expected a xacro argument NAME:=VALUE")
+        mappings[name] = value
+    return mappings

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from r2d2_viz.cli.parser import EXIT_OK
+from r2d2_viz.cli.parser import EXIT_OK, xacro_mappings
 from r2d2_viz.errors import BagError, UrdfError, UsageError, shown_in_line, stderr_line
 
 if TYPE_CHECKING:
@@ -68,12 +68,7 @@ def _loader(args: argparse.Namespace) -> tuple[Callable[[], Robot], PackageIndex
     from r2d2_viz.robot.packages import PackageIndex
     from r2d2_viz.robot.xacro_load import load_robot
 
-    mappings: dict[str, str] = {}
-    for item in args.xacro_args:
-        name, sep, value = item.partition(":=")
-        if not sep or not name.isidentifier():
-            raise UsageError(f"{item!r}: expected a xacro argument NAME:=VALUE")
-        mappings[name] = value
+    mappings = xacro_mappings(args)
     path = args.urdf or (None if args.bag is not None else default_urdf_path())
     packages = PackageIndex.from_args(tuple(args.package_path), description=path, environ=os.environ)
     return lambda: load_robot(args.urdf or default_urdf_path(), mappings=mappings, packages=packages), packages
