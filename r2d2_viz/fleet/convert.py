@@ -263,6 +263,9 @@ def _pool(jobs: list[Job], workers: int, on_done: Progress) -> list[Job]:
         for future in pending:  # finished as the interrupt came: they count
             if future.done() and not future.cancelled() and future.exception() is None:
                 on_done(future.result())
+        # the pool's manager thread ended before the app's exit: CPython 3.11's exit handler wakes it through a pipe
+        # that thread may be closing at that moment (a traceback, "Bad file descriptor", after the app's last line)
+        pool.shutdown(wait=True)
         raise
     pool.shutdown(wait=True)
     return broken
