@@ -101,8 +101,23 @@ def _start_guard(stack: ExitStack, catalog: str, *, bind: str, web_port: int) ->
     stack.callback(guard.close)
     public = "rerun+" + guard.url().removesuffix(f"/{guard.token}/")  # the catalog, as the browser reaches it
     command = ["--serve-web", "--bind", LOOPBACK, "--web-viewer-port", str(viewer_port), public]
-    stack.callback(_stop, _start_viewer("serve", "", command=command))
+    process = _start_viewer("serve", "", command=command)
+    stack.callback(_stop, process)
+    _wait_listening(process, viewer_port)  # the address is printed once it answers, not before
     return guard
+
+
+def _wait_listening(process: subprocess.Popen[bytes] | None, port: int, timeout_s: float = 60.0) -> None:
+    """Until Rerun's web viewer (``process``) accepts connections on the loopback ``port``; one that ended or never
+    listens is a :class:`SinkError`."""
+    deadline = time.monotonic() + timeout_s
+    while process is not None and process.poll() is None and time.monotonic() < deadline:
+        try:
+            socket.create_connection((LOOPBACK, port), timeout=1.0).close()
+            return
+        except OSError:
+            time.sleep(0.1)
+    raise SinkError(f"Rerun's web viewer did not listen on {LOOPBACK}:{port} within {timeout_s:g} s")
 
 
 def _free_loopback_port() -> int:

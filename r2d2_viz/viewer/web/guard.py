@@ -128,10 +128,14 @@ class _Handler(BaseHTTPRequestHandler):
         head += [f"{k}: {v}" for k, v in self.headers.items() if k.lower() not in HOP_HEADERS and v.isprintable()]
         guard = self.server.guard
         try:
-            with socket.create_connection(upstream, timeout=UPSTREAM_TIMEOUT_S) as up:
-                with guard.relaying(up):
-                    up.sendall(("\r\n".join(head) + "\r\n\r\n").encode("latin-1") + body)
-                    self._pipe(up)
+            up = socket.create_connection(upstream, timeout=UPSTREAM_TIMEOUT_S)
+        except OSError:  # the server behind is not there (stopped, or not yet listening): say so
+            self._answer(HTTPStatus.BAD_GATEWAY, "the server behind this door does not answer")
+            return
+        try:
+            with up, guard.relaying(up):
+                up.sendall(("\r\n".join(head) + "\r\n\r\n").encode("latin-1") + body)
+                self._pipe(up)
         except OSError:  # the server behind, or the client, went: the connection ends
             return
 

@@ -129,3 +129,17 @@ def test_a_stream_whose_client_left_ends(guard: tuple[DatasetGuard, ThreadingHTT
     while door._relays and time.monotonic() < deadline:
         time.sleep(0.05)
     assert not door._relays  # the relay ended, the catalog's connection closed, though the stream said nothing
+
+
+def test_a_server_behind_that_does_not_listen_is_a_502() -> None:
+    """The CI run of issue 44 saw the door drop a request unanswered while Rerun's web viewer was not yet listening
+    (``RemoteDisconnected``): a server behind that refuses the connection is now an answer, 502."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        gone = ("127.0.0.1", int(s.getsockname()[1]))  # bound, not listening: connections refused
+        door = DatasetGuard(gone, gone, "127.0.0.1", 0, token="t0ken")
+        try:
+            status, _, body = _ask(door.port, "GET", "/", {"Cookie": "r2d2_viz_dataset=t0ken"})
+        finally:
+            door.close()
+    assert status == 502 and b"does not answer" in body
