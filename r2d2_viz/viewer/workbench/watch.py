@@ -21,7 +21,7 @@ from typing import Any, Protocol, cast
 import numpy as np
 import rerun as rr
 
-from r2d2_viz.errors import R2d2VizError, UsageError, shown
+from r2d2_viz.errors import R2d2VizError, UsageError, shown_in_line
 from r2d2_viz.kinematics.tree import KinematicTree, compile_tree
 from r2d2_viz.robot.model import Robot, default_urdf_path
 from r2d2_viz.robot.packages import PackageIndex
@@ -179,7 +179,7 @@ class Watching:
         self.poller.watch(self.files)
         self.reloads += 1
         links = f"{len(robot.links)} link{'s' if len(robot.links) != 1 else ''}"
-        print(shown(f"r2d2-viz: reloaded {self.description.name}: {links}"), file=sys.stderr, flush=True)
+        print(shown_in_line(f"r2d2-viz: reloaded {self.description.name}: {links}"), file=sys.stderr, flush=True)
         return True
 
     def _remake(self, robot: Robot, tree: Any) -> None:
