@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from sources.live.test_source import JS, FakeGraph, _js
+from sources.live.test_source import JS, FakeGraph, LateGraph, _js
 
 import r2d2_viz.live_run as live_run
 from r2d2_viz.msgs.typestore import typestore
@@ -113,16 +113,6 @@ def test_robots_described_after_the_settle_are_several_robots(
     still a run of several robots, each named when no transform places it (seen in a loaded run: one robot's
     line was missing, the settle having seen none of them)."""
     monkeypatch.setattr(live_run, "SETTLE_SECONDS", 0.1)
-
-    class LateGraph(FakeGraph):
-        waited = False
-
-        def poll(self) -> list[Sample]:
-            return super().poll() if self.waited else []  # nothing during the settle (it never waits)
-
-        def wait(self, timeout: float) -> bool:
-            self.waited = True
-            return super().wait(timeout)
 
     graph = LateGraph()
     string = "std_msgs/msg/String"

@@ -19,7 +19,7 @@ from bagmaker import T0, BagSpec, joint_state, tf_message, write_bag
 from conftest import REPO, cli
 from rosbags.highlevel import AnyReader
 from rrd import Rows, blueprint_components, read_recording
-from sources.live.test_source import JS, FakeGraph, _js
+from sources.live.test_source import JS, FakeGraph, LateGraph, _js
 from test_live_run_stand_in import Config
 
 import r2d2_viz.live_run as live_run
@@ -137,16 +137,6 @@ def test_a_live_graphs_later_note_at_the_time_it_came(tmp_path: Path, monkeypatc
     """A /robot_description that does not parse, sent a minute after the run started (a node started later): its
     line is a row at the source timestamp of the message that brought it, not at the run's start."""
     monkeypatch.setattr(live_run, "SETTLE_SECONDS", 0.1)
-
-    class LateGraph(FakeGraph):
-        waited = False
-
-        def poll(self) -> list[Sample]:
-            return super().poll() if self.waited else []  # nothing during the settle (it never waits)
-
-        def wait(self, timeout: float) -> bool:
-            self.waited = True
-            return super().wait(timeout)
 
     graph = LateGraph()
     store = typestore("jazzy")

@@ -38,6 +38,20 @@ class FakeGraph:
         return bool(self.queue)
 
 
+class LateGraph(FakeGraph):
+    """A graph whose samples come only after the run's settle (a busy machine, nodes started later): nothing is
+    polled until the run first waits (the settle never waits)."""
+
+    waited = False
+
+    def poll(self) -> list[Sample]:
+        return super().poll() if self.waited else []
+
+    def wait(self, timeout: float) -> bool:
+        self.waited = True
+        return super().wait(timeout)
+
+
 def _js(names: list[str], position: list[float], sec: int = 5) -> bytes:
     t = typestore("jazzy").types
     msg = t[JS](
