@@ -19,7 +19,7 @@ NO_BEHAVIOUR = ("__init__.py", "__main__.py", "arrays.py", "blueprint.py")
 (tests/test_api.py checks them), the ``python -m`` entries, type aliases."""
 PRIVATE_APIS = re.compile(r"rerun_bindings|to_native\(|_parse_robot|\._inner\b")
 
-STAGES = ("robot", "meshes", "kinematics", "msgs", "sources", "rviz", "viewer", "ros_out")
+STAGES = ("robot", "meshes", "kinematics", "msgs", "sources", "rviz", "viewer", "ros_out", "export")
 """The pipeline's stages, in order: each may import only the ones before it (and the base modules)."""
 BASE = ("errors", "arrays")
 """Modules every stage may import."""
@@ -36,10 +36,11 @@ TOP = (
     "__init__",
     "__main__",
     "fleet",
+    "run",
 )
 """The top: it may import every stage. ``fleet/`` (issue 25) is a subpackage that lives here, not a stage: it
 calls the runner once per bag, so it sits above everything (and the CLI calls it)."""
-TOP_PACKAGES = ("fleet", "cli")
+TOP_PACKAGES = ("fleet", "cli", "run")
 """Subpackages at the top (beside runner and api), not stages of the pipeline: the fleet, and the command line."""
 RERUN_STAGES = ("viewer",)
 
