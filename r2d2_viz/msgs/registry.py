@@ -8,7 +8,7 @@ from collections.abc import Callable
 import numpy as np
 
 from r2d2_viz.errors import one_line
-from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
+from r2d2_viz.msgs import detections, images, markers, nav, particles, pointcloud, poses, scan, telemetry, voxels
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 
@@ -45,6 +45,11 @@ DECODERS: dict[str, Decoder] = {
     "sensor_msgs/msg/BatteryState": telemetry.decode_battery,
     **telemetry.SCALAR_DECODERS,
     **telemetry.NUMBER_DECODERS,
+    # the navigation and perception stacks' displays (issue 46)
+    "nav2_msgs/msg/ParticleCloud": particles.decode_particle_cloud,
+    "nav2_msgs/msg/VoxelGrid": voxels.decode_voxel_grid,
+    "vision_msgs/msg/Detection2DArray": detections.decode_detection2d_array,
+    "vision_msgs/msg/Detection3DArray": detections.decode_detection3d_array,
 }
 
 VIEWS: dict[str, str] = {
@@ -137,6 +142,23 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     "sensor_msgs/msg/BatteryState": ("(rqt_plot)", "voltage, current, charge, percentage, temperature `Scalars`"),
     **dict.fromkeys(telemetry.SCALAR_SENSORS, ("(rqt_plot)", "`Scalars` of its value (not its variance)")),
     **dict.fromkeys(telemetry.NUMBERS, ("(rqt_plot)", "`Scalars` of its data (a Bool as 0/1)")),
+    "nav2_msgs/msg/ParticleCloud": (
+        "ParticleCloud (nav2_rviz_plugins)",
+        "an arrow a particle along its pose's x, length by weight (Min/Max Arrow Length 0.02-0.3 m): flat "
+        "`LineStrips3D` (shaft and head lines), or `Arrows3D` with Shape Arrow (3D)",
+    ),
+    "nav2_msgs/msg/VoxelGrid": (
+        "(nav2_costmap_2d's voxel markers)",
+        "`Boxes3D`, one per MARKED voxel (both of its bits set), red, at origin + (index + 0.5) x resolutions",
+    ),
+    "vision_msgs/msg/Detection2DArray": (
+        "(vision_msgs)",
+        "`LineStrips2D` closed boxes (turned by theta) labelled `<class> <score>` on the image of the same camera",
+    ),
+    "vision_msgs/msg/Detection3DArray": (
+        "Detection3DArray (vision_msgs_rviz_plugins)",
+        "oriented `Boxes3D` coloured by their best class, labelled `<class> <score>`; Only Edge as wireframes",
+    ),
 }
 """What each decoded type becomes: the RViz display that draws it, and the Rerun archetypes r2d2-viz logs."""
 
