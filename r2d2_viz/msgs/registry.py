@@ -8,8 +8,9 @@ from collections.abc import Callable
 import numpy as np
 
 from r2d2_viz.errors import one_line
-from r2d2_viz.msgs import detections, images, markers, nav, particles, pointcloud, poses, scan, telemetry, voxels
+from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
+from r2d2_viz.msgs.stacks import detections, particles, voxels
 from r2d2_viz.msgs.typestore import MsgError
 
 Decoder = Callable[[bytes | memoryview, DecodeOptions], Decoded | list[MarkerOp]]

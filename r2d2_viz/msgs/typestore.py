@@ -7,7 +7,7 @@ import functools
 from typing import TYPE_CHECKING, Any
 
 from r2d2_viz.errors import one_line
-from r2d2_viz.msgs.stack_types import STACK_TYPES
+from r2d2_viz.msgs.stacks.definitions import STACK_TYPES
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
@@ -31,7 +31,7 @@ EXTRA_TYPES = {
 }
 """Types the app shows that rosbags' stores lack (nav2's costmap updates; ROS 1's log, as ROS 1 bags hold it once
 converted to CDR: its header without ``seq``; Foxglove's compressed video; nav2's and vision_msgs' displays:
-:data:`r2d2_viz.msgs.stack_types.STACK_TYPES`), added to every store."""
+:data:`r2d2_viz.msgs.stacks.definitions.STACK_TYPES`), added to every store."""
 
 
 @functools.cache
