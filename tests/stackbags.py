@@ -165,3 +165,62 @@ def write_stack_bag(path: Path) -> Path:
         for topic, when, data in messages:
             writer.write(connections[topic], when, data)
     return path
+
+
+RVIZ = """\
+Visualization Manager:
+  Global Options:
+    Fixed Frame: map
+  Displays:
+    - Class: nav2_rviz_plugins/ParticleCloud
+      Name: Amcl Particle Swarm
+      Topic:
+        Value: /particlecloud
+      Shape: Arrow (3D)
+      Color: 0; 180; 0
+      Alpha: 1
+      Min Arrow Length: 0.1
+      Max Arrow Length: 0.5
+      Enabled: true
+    - Class: vision_msgs_rviz_plugins/Detection3DArray
+      Name: Detections
+      Topic:
+        Value: /detections_3d
+      Only Edge: true
+      Line Width: 0.08
+      Alpha: 0.5
+      Enabled: true
+    - Class: rviz_default_plugins/Image
+      Name: Camera image
+      Topic:
+        Value: /cam/image_raw
+      Enabled: true
+"""
+"""An RViz 2 config with nav2's and vision_msgs' display classes (their properties as RViz writes them)."""
+
+
+def stack_recordings(tmp_path_factory) -> dict[str, Path]:
+    """The stack bag through the real CLI, once per test run: ``plain`` (``--bag B --save``) and ``rviz`` (with
+    :data:`RVIZ`); paths of the bag, the config and the two recordings."""
+    import subprocess
+    import sys
+
+    from conftest import made_once
+
+    def make(root: Path) -> None:
+        bag = write_stack_bag(root / "bag")
+        (root / "stack.rviz").write_text(RVIZ)
+        exe = Path(sys.executable).parent / "r2d2-viz"
+        for name, extra in (("plain", []), ("rviz", ["--rviz", str(root / "stack.rviz")])):
+            run = subprocess.run([str(exe), "--bag", str(bag), *extra, "--save", str(root / f"{name}.rrd")],
+                                 capture_output=True, text=True, timeout=120)  # fmt: skip
+            (root / f"{name}.stderr").write_text(run.stderr)
+            assert run.returncode == 0, run.stderr
+
+    root = made_once(tmp_path_factory, "stack_recordings", make)
+    return {
+        "bag": root / "bag",
+        "rviz_file": root / "stack.rviz",
+        "plain": root / "plain.rrd",
+        "rviz": root / "rviz.rrd",
+    }
