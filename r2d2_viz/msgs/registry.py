@@ -143,22 +143,17 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     "sensor_msgs/msg/BatteryState": ("(rqt_plot)", "voltage, current, charge, percentage, temperature `Scalars`"),
     **dict.fromkeys(telemetry.SCALAR_SENSORS, ("(rqt_plot)", "`Scalars` of its value (not its variance)")),
     **dict.fromkeys(telemetry.NUMBERS, ("(rqt_plot)", "`Scalars` of its data (a Bool as 0/1)")),
-    "nav2_msgs/msg/ParticleCloud": (
-        "ParticleCloud (nav2_rviz_plugins)",
-        "an arrow a particle along its pose's x, length by weight (Min/Max Arrow Length 0.02-0.3 m): flat "
-        "`LineStrips3D` (shaft and head lines), or `Arrows3D` with Shape Arrow (3D)",
-    ),
-    "nav2_msgs/msg/VoxelGrid": (
-        "(nav2_costmap_2d's voxel markers)",
-        "`Boxes3D`, one per MARKED voxel (both of its bits set), red, at origin + (index + 0.5) x resolutions",
-    ),
-    "vision_msgs/msg/Detection2DArray": (
-        "(vision_msgs)",
-        "`LineStrips2D` closed boxes (turned by theta) labelled `<class> <score>` on the image of the same camera",
-    ),
-    "vision_msgs/msg/Detection3DArray": (
-        "Detection3DArray (vision_msgs_rviz_plugins)",
-        "oriented `Boxes3D` coloured by their best class, labelled `<class> <score>`; Only Edge as wireframes",
+    **dict.fromkeys(
+        [
+            "nav2_msgs/msg/ParticleCloud",
+            "nav2_msgs/msg/VoxelGrid",
+            *(f"vision_msgs/msg/Detection{d}DArray" for d in "23"),
+        ],
+        (
+            "ParticleCloud, Detection3DArray (nav2's, vision_msgs' plugins)",
+            "an arrow a particle, its length by weight; a VoxelGrid's occupied voxels and 3D detections as `Boxes3D`; "
+            "2D detections outlined on their camera's image ([docs/bags.md](docs/bags.md#display-topics))",
+        ),
     ),
 }
 """What each decoded type becomes: the RViz display that draws it, and the Rerun archetypes r2d2-viz logs."""
