@@ -21,11 +21,12 @@ MAX_Z = 16
 
 def marked(data: np.ndarray, size_x: int, size_y: int, size_z: int) -> np.ndarray:
     """The ``(N, 3)`` indices (x, y, z) of the MARKED voxels, ordered as nav2's viewer visits them (y, x, z)."""
-    columns = np.asarray(data, dtype=np.uint32).reshape(size_y, size_x)
-    z = np.arange(size_z, dtype=np.uint32)
-    low = (columns[:, :, None] >> z) & 1
-    high = (columns[:, :, None] >> (z + 16)) & 1
-    y, x, k = np.nonzero(low & high)
+    columns = np.asarray(data, dtype=np.uint32)
+    both = columns & (columns >> 16) & np.uint32((1 << size_z) - 1)  # bit z set: voxel z MARKED
+    index = np.flatnonzero(both)  # only the columns with a marked voxel are looked into
+    bits = (both[index, None] >> np.arange(size_z, dtype=np.uint32)) & 1
+    row, k = np.nonzero(bits)
+    y, x = np.divmod(index[row], size_x)
     return np.stack([x, y, k], axis=1)
 
 
