@@ -30,22 +30,22 @@ RECORD = 8  # float64 a particle: position x, y, z, orientation x, y, z, w, weig
 def particles(data: bytes | memoryview) -> tuple[str, int, F64]:
     """``(frame_id, stamp_ns, (N, 8))`` of a ParticleCloud's CDR bytes: position, orientation ``xyzw``, weight."""
     if len(data) < 16 or data[0] != 0 or data[1] not in (0, 1):
-        raise MsgError("nav2_msgs/msg/ParticleCloud: not CDR")
+        raise MsgError("not CDR")
     order = "<" if data[1] == 1 else ">"
     sec, nanosec = struct.unpack_from(order + "iI", data, 4)
     (length,) = struct.unpack_from(order + "I", data, 12)
     offset = 16 + length
     if length == 0 or offset > len(data) or data[offset - 1] != 0:
-        raise MsgError("nav2_msgs/msg/ParticleCloud: bad frame_id")
+        raise MsgError("bad frame_id")
     frame = bytes(data[16 : offset - 1]).decode("utf-8", errors="replace")
     offset += -(offset - 4) % 4
     if offset + 4 > len(data):
-        raise MsgError("nav2_msgs/msg/ParticleCloud: message ends early")
+        raise MsgError("message ends early")
     (count,) = struct.unpack_from(order + "I", data, offset)
     offset += 4
     offset += -(offset - 4) % 8 if count else 0
     if offset + 8 * RECORD * count > len(data):  # before anything of the claimed size is made
-        raise MsgError(f"nav2_msgs/msg/ParticleCloud: {count} particles in {len(data)} bytes")
+        raise MsgError(f"{count} particles in {len(data)} bytes")
     rows = np.frombuffer(data, dtype=order + "f8", count=RECORD * count, offset=offset).reshape(count, RECORD)
     return frame_of(frame), int(sec) * 1_000_000_000 + int(nanosec), rows.astype(np.float64)
 
@@ -62,7 +62,7 @@ def decode_particle_cloud(data: bytes | memoryview, options: DecodeOptions) -> D
     """Arrows of the particles, in the header frame."""
     frame, stamp, rows = particles(data)
     if not np.all(np.isfinite(rows)):
-        raise MsgError("nav2_msgs/msg/ParticleCloud: invalid floating point values (nans or infs)")
+        raise MsgError("invalid floating point values (nans or infs)")
     q = rows[:, 3:7]
     norm = np.linalg.norm(q, axis=1, keepdims=True)
     q = np.where(norm > 1e-12, q / np.where(norm > 1e-12, norm, 1.0), [0.0, 0.0, 0.0, 1.0])  # 0 reads as identity
