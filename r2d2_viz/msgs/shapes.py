@@ -295,7 +295,7 @@ class DecodeOptions:
     odometry_covariance: bool = False  # an Odometry's covariance ellipsoid (off unless a config asks for it)
     # nav2's ParticleCloud and vision_msgs' Detection3DArray displays (their properties, their defaults)
     display_color: Rgba8 | None = None  # a config's Color and Alpha (None: the display's own colour)
-    particle_shape: Literal["Arrow (Flat)", "Arrow (3D)"] = "Arrow (Flat)"
+    particle_shape: Literal["Arrow (Flat)", "Arrow (3D)", "Axes"] = "Arrow (Flat)"
     arrow_lengths: tuple[float, float] = (0.02, 0.3)  # Min / Max Arrow Length (m): weight 0 → min, 1 → max
     only_edge: bool = False  # Detection3DArray: edges of the boxes only, Line Width wide
     line_width: float = 0.05

@@ -94,7 +94,7 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "Topic, Enabled, Shape, Color, Alpha, Min Arrow Length, Max Arrow Length",
         "nav2_rviz_plugins' display: an arrow a particle, its length the weight between Min and Max Arrow Length "
         "(clamped); Arrow (Flat) as `LineStrips3D` (shaft and head lines), Arrow (3D) as `Arrows3D` (shaft radius "
-        "of the mean length); Axes is drawn as Arrow (Flat)",
+        "of the mean length), Axes as three `Arrows3D` (x, y, z: red, green, blue) on `<topic>/0…2`",
     ),
     (
         "Detection3DArray",

@@ -3,7 +3,8 @@
 weight scaled between Min and Max Arrow Length, ``clamp(weight · (max − min) + min, min, max)`` (0.02 and 0.3 m by
 default); colour (255, 25, 0), alpha 1. Shape "Arrow (Flat)" (the default): three lines a particle — the shaft to
 the tip, and two head lines from the tip back to ``(0.75 L, ±0.2 L, 0)`` in the particle's frame; "Arrow (3D)":
-``Arrows3D`` of the shaft plus RViz's head (``1.3043 L``), shaft radius ``0.0435 L / 2``. A message with a NaN or
+``Arrows3D`` of the shaft plus RViz's head (``1.3043 L``), shaft radius ``0.0435 L / 2`` (of the mean ``L``: one
+radius a message); "Axes": the particle's x, y, z axes, ``L`` long, red, green, blue. A message with a NaN or
 an infinite value is refused whole, as the plugin refuses it.
 
 The particles are read straight from the CDR bytes (a fixed 64-byte record each) into one numpy array.
@@ -16,7 +17,7 @@ import struct
 import numpy as np
 
 from r2d2_viz.arrays import F64
-from r2d2_viz.msgs.geometry import frame_of
+from r2d2_viz.msgs.geometry import frame_of, one_color
 from r2d2_viz.msgs.shapes import Arrows, Decoded, DecodeOptions, LineStrips, Rgba8
 from r2d2_viz.msgs.typestore import MsgError
 
@@ -24,6 +25,7 @@ COLOR: Rgba8 = (255, 25, 0, 255)
 HEAD_LENGTH = 0.3043  # RViz Arrow (3D): head length and shaft radius per unit of shaft length
 SHAFT_DIAMETER = 0.0435
 FLAT_HEAD = np.array([[0.75, 0.2, 0.0], [0.75, -0.2, 0.0]])  # head lines' ends per unit of length
+AXIS_COLORS: tuple[Rgba8, Rgba8, Rgba8] = ((255, 0, 0, 255), (0, 255, 0, 255), (0, 0, 255, 255))
 RECORD = 8  # float64 a particle: position x, y, z, orientation x, y, z, w, weight
 
 
@@ -71,6 +73,22 @@ def decode_particle_cloud(data: bytes | memoryview, options: DecodeOptions) -> D
     origin = rows[:, :3]
     x_axis = rotate(q, np.tile([1.0, 0.0, 0.0], (len(rows), 1)))
     color = np.array([options.display_color or COLOR], dtype=np.uint8)
+    if options.particle_shape == "Axes":  # RViz's axes: x red, y green, z blue, each L long
+        radius = float(np.mean(length)) * SHAFT_DIAMETER / 2 if len(rows) else 0.0
+        axes = [(np.eye(3)[k], AXIS_COLORS[k]) for k in range(3)]
+        return Decoded(
+            frame,
+            stamp,
+            tuple(
+                Arrows(
+                    origin.astype(np.float32),
+                    (rotate(q, np.tile(v, (len(rows), 1))) * length).astype(np.float32),
+                    one_color(c),
+                    radius,
+                )
+                for v, c in axes
+            ),
+        )
     if options.particle_shape == "Arrow (3D)":
         vectors = (x_axis * length * (1.0 + HEAD_LENGTH)).astype(np.float32)
         radius = float(np.mean(length)) * SHAFT_DIAMETER / 2 if len(rows) else 0.0

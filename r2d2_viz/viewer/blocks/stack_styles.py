@@ -8,7 +8,7 @@ from typing import Any
 from r2d2_viz.msgs.shapes import DecodeOptions
 from r2d2_viz.rviz.spec import DisplayStyleSpec
 
-SHAPES = ("Arrow (Flat)", "Arrow (3D)")
+SHAPES = ("Arrow (Flat)", "Arrow (3D)", "Axes")
 
 
 def stack_options(s: DisplayStyleSpec) -> dict[str, Any]:

@@ -61,6 +61,14 @@ def test_arrow_3d_and_the_lengths() -> None:
     np.testing.assert_allclose(item.origins[:2], [[1, 2, 0], [0, 0, 0.5]])
 
 
+def test_axes() -> None:
+    items = decode_particle_cloud(particle_cloud(T0), DecodeOptions(particle_shape="Axes")).items
+    assert [tuple(a.colors[0]) for a in items] == [(255, 0, 0, 255), (0, 255, 0, 255), (0, 0, 255, 255)]
+    assert all(isinstance(a, Arrows) for a in items)
+    # particle 1: w 1 → L 0.3, yaw 90°: its x along +y, its y along −x, its z up
+    np.testing.assert_allclose([a.vectors[1] for a in items], [[0, 0.3, 0], [-0.3, 0, 0], [0, 0, 0.3]], atol=1e-6)
+
+
 def test_records_read_straight_from_the_bytes_match_rosbags() -> None:
     from stackbags import STORE
 

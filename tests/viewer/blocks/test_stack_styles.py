@@ -25,9 +25,10 @@ def test_the_config_is_read_without_a_note(tmp_path) -> None:
 
 def test_options() -> None:
     assert stack_options(DisplayStyleSpec()) == {}  # nothing set: the displays' defaults
-    out = stack_options(DisplayStyleSpec(alpha=0.05, shape="Axes", arrow_lengths=(0.4, 0.1), size=0.5))
+    out = stack_options(DisplayStyleSpec(alpha=0.05, shape="Arrow (2D)", arrow_lengths=(0.4, 0.1), size=0.5))
     assert out["alpha"] == 0.1 and out["display_color"] == (255, 25, 0, 13)  # Detection3DArray's alpha ≥ 0.1
-    assert "particle_shape" not in out  # a shape r2d2-viz does not draw keeps the default
+    assert "particle_shape" not in out  # a shape the plugin does not have keeps the default
+    assert stack_options(DisplayStyleSpec(shape="Axes")) == {"particle_shape": "Axes"}
     assert out["arrow_lengths"] == (0.4, 0.4) and out["line_width"] == 0.1  # max ≥ min; width ≤ 0.1 m
     DecodeOptions(**out)  # every key is an option
 
