@@ -215,6 +215,13 @@ def samples() -> dict[str, bytes]:
     msgs += _telemetry_samples()
     out = {m.__msgtype__: cdr(m) for m in msgs}
     out["rosgraph_msgs/msg/Log"] = _ros1_log()
+    from stackbags import T0, detections_2d, detections_3d, particle_cloud, voxel_grid  # the upstream .msg files'
+
+    out["nav2_msgs/msg/ParticleCloud"], out["nav2_msgs/msg/VoxelGrid"] = particle_cloud(T0), voxel_grid(T0)
+    out["vision_msgs/msg/Detection2DArray"], out["vision_msgs/msg/Detection3DArray"] = (
+        detections_2d(T0),
+        detections_3d(T0),
+    )
     return out
 
 

@@ -19,7 +19,7 @@ def _local(item: shapes.Shape) -> F64 | None:
     if isinstance(item, shapes.Points):
         return np.asarray(item.positions, dtype=np.float64)
     if isinstance(item, shapes.LineStrips):
-        return np.concatenate(item.strips).astype(np.float64) if item.strips else None
+        return np.concatenate(list(item.strips)).astype(np.float64) if len(item.strips) else None
     if isinstance(item, shapes.Arrows):
         origins = np.asarray(item.origins, dtype=np.float64)
         return np.concatenate([origins, origins + np.asarray(item.vectors, dtype=np.float64)])

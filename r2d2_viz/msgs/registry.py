@@ -10,6 +10,7 @@ import numpy as np
 from r2d2_viz.errors import one_line
 from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
+from r2d2_viz.msgs.stacks import detections, particles, voxels
 from r2d2_viz.msgs.typestore import MsgError
 
 Decoder = Callable[[bytes | memoryview, DecodeOptions], Decoded | list[MarkerOp]]
@@ -45,6 +46,11 @@ DECODERS: dict[str, Decoder] = {
     "sensor_msgs/msg/BatteryState": telemetry.decode_battery,
     **telemetry.SCALAR_DECODERS,
     **telemetry.NUMBER_DECODERS,
+    # the navigation and perception stacks' displays (issue 46)
+    "nav2_msgs/msg/ParticleCloud": particles.decode_particle_cloud,
+    "nav2_msgs/msg/VoxelGrid": voxels.decode_voxel_grid,
+    "vision_msgs/msg/Detection2DArray": detections.decode_detection2d_array,
+    "vision_msgs/msg/Detection3DArray": detections.decode_detection3d_array,
 }
 
 VIEWS: dict[str, str] = {
@@ -137,6 +143,18 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     "sensor_msgs/msg/BatteryState": ("(rqt_plot)", "voltage, current, charge, percentage, temperature `Scalars`"),
     **dict.fromkeys(telemetry.SCALAR_SENSORS, ("(rqt_plot)", "`Scalars` of its value (not its variance)")),
     **dict.fromkeys(telemetry.NUMBERS, ("(rqt_plot)", "`Scalars` of its data (a Bool as 0/1)")),
+    **dict.fromkeys(
+        [
+            "nav2_msgs/msg/ParticleCloud",
+            "nav2_msgs/msg/VoxelGrid",
+            *(f"vision_msgs/msg/Detection{d}DArray" for d in "23"),
+        ],
+        (
+            "ParticleCloud, Detection3DArray (nav2's, vision_msgs' plugins)",
+            "an arrow a particle, its length by weight; a VoxelGrid's occupied voxels and 3D detections as `Boxes3D`; "
+            "2D detections outlined on their camera's image ([docs/bags.md](docs/bags.md#display-topics))",
+        ),
+    ),
 }
 """What each decoded type becomes: the RViz display that draws it, and the Rerun archetypes r2d2-viz logs."""
 

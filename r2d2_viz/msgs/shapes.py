@@ -41,9 +41,10 @@ class Points:
 
 @dataclass(frozen=True, eq=False)
 class LineStrips:
-    """Polylines, each ``(M_i, 3)``; ``colors`` per strip; ``radius`` of the line (m), 0 for a thin line."""
+    """Polylines, each ``(M_i, 3)`` (or all of one length: ``(N, M, 3)``); ``colors`` per strip; ``radius`` of the
+    line (m), 0 for a thin line."""
 
-    strips: tuple[F32, ...]
+    strips: tuple[F32, ...] | F32
     colors: U8
     radius: float
     T_frame_item: Pose = IDENTITY
@@ -62,13 +63,26 @@ class Arrows:
 
 @dataclass(frozen=True, eq=False)
 class Boxes:
-    """Boxes: ``centers``, ``half_sizes`` and ``xyzw`` rotations, each one row per box."""
+    """Boxes: ``centers``, ``half_sizes`` and ``xyzw`` rotations, each one row per box; optional ``labels`` (one
+    per box) and ``edges`` (m: only their edges, that wide; 0: solid)."""
 
     centers: F32
     half_sizes: F32
     xyzw: F32
     colors: U8
     T_frame_item: Pose = IDENTITY
+    labels: tuple[str, ...] = ()
+    edges: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Outlines2D:
+    """Closed outlines on an image, in pixels: ``corners (N, 4, 2)`` (each box's four corners in order), one
+    colour and label each (vision_msgs' 2D detections); drawn where the image of the same camera is."""
+
+    corners: F32
+    colors: U8
+    labels: tuple[str, ...]
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,6 +246,7 @@ Shape = (
     | TriangleMesh
     | Text
     | MeshResource
+    | Outlines2D
     | Image
     | CompressedImage
     | VideoSample
@@ -278,3 +293,10 @@ class DecodeOptions:
     covariance_scale: float = 1.0  # half sizes = scale x sqrt(eigenvalue): 1 sigma, RViz's default
     color_transformer: Literal["auto", "FlatColor"] = "auto"  # auto: RGB8, else Intensity, else flat (RViz's)
     odometry_covariance: bool = False  # an Odometry's covariance ellipsoid (off unless a config asks for it)
+    # nav2's ParticleCloud and vision_msgs' Detection3DArray displays (their properties, their defaults)
+    display_color: Rgba8 | None = None  # a config's Color and Alpha (None: the display's own colour)
+    particle_shape: Literal["Arrow (Flat)", "Arrow (3D)", "Axes"] = "Arrow (Flat)"
+    arrow_lengths: tuple[float, float] = (0.02, 0.3)  # Min / Max Arrow Length (m): weight 0 → min, 1 → max
+    only_edge: bool = False  # Detection3DArray: edges of the boxes only, Line Width wide
+    line_width: float = 0.05
+    alpha: float = 1.0

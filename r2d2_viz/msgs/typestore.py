@@ -7,6 +7,7 @@ import functools
 from typing import TYPE_CHECKING, Any
 
 from r2d2_viz.errors import one_line
+from r2d2_viz.msgs.stacks.definitions import STACK_TYPES
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
@@ -26,9 +27,11 @@ EXTRA_TYPES = {
     "string function\nuint32 line\nstring[] topics\n",
     "foxglove_msgs/msg/CompressedVideo": "builtin_interfaces/Time timestamp\nstring frame_id\nuint8[] data\n"
     "string format\n",
+    **STACK_TYPES,
 }
 """Types the app shows that rosbags' stores lack (nav2's costmap updates; ROS 1's log, as ROS 1 bags hold it once
-converted to CDR: its header without ``seq``; Foxglove's compressed video), added to every store."""
+converted to CDR: its header without ``seq``; Foxglove's compressed video; nav2's and vision_msgs' displays:
+:data:`r2d2_viz.msgs.stacks.definitions.STACK_TYPES`), added to every store."""
 
 
 @functools.cache

@@ -90,6 +90,19 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
     ),
     ("Image, Camera", "Topic / Image Topic, Enabled", "a 2D view of that topic's entity beside the plots"),
     (
+        "ParticleCloud",
+        "Topic, Enabled, Shape, Color, Alpha, Min Arrow Length, Max Arrow Length",
+        "nav2_rviz_plugins' display: an arrow a particle, its length the weight between Min and Max Arrow Length "
+        "(clamped); Arrow (Flat) as `LineStrips3D` (shaft and head lines), Arrow (3D) as `Arrows3D` (shaft radius "
+        "of the mean length), Axes as three `Arrows3D` (x, y, z: red, green, blue) on `<topic>/0…2`",
+    ),
+    (
+        "Detection3DArray",
+        "Topic, Enabled, Only Edge, Line Width, Alpha",
+        "vision_msgs_rviz_plugins' display: `Boxes3D` (solid, or wireframe Line Width wide) coloured by class, "
+        "labelled `<class> <score>` always (Show Score and ConfigPath's colour file are not read)",
+    ),
+    (
         "moveit_rviz_plugin/MotionPlanning, PlanningScene",
         "Scene Robot: Show Robot Visual, Show Robot Collision, Robot Alpha, Links",
         "as RobotModel when the config has none (the planning UI, scene and trajectories are noted)",

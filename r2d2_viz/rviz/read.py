@@ -247,6 +247,9 @@ def display_style(self: Reader, display: Mapping[str, Any], where: str) -> Displ
         covariance=self.flag(covariance, "Value", False, where) if isinstance(covariance, dict) else None,
         position_tolerance=number("Position Tolerance"),
         angle_tolerance=number("Angle Tolerance"),
+        shape=str(display["Shape"]) if display.get("Shape") is not None else None,
+        arrow_lengths=(number("Min Arrow Length"), number("Max Arrow Length")),
+        only_edge=self.flag(display, "Only Edge", False, where) if display.get("Only Edge") is not None else None,
     )
 
 

@@ -55,6 +55,9 @@ TOPIC_DISPLAYS = (
     "GridCells",
     "Wrench",
     "Twist",
+    # the navigation and perception stacks' (nav2_rviz_plugins/ParticleCloud, vision_msgs_rviz_plugins/…)
+    "ParticleCloud",
+    "Detection3DArray",
 )
 
 SCENE_ROBOT_DISPLAYS = ("MotionPlanning", "PlanningScene")
@@ -137,6 +140,10 @@ class DisplayStyleSpec:
     position_tolerance: float | None = None
     """Odometry's Position Tolerance (m) and Angle Tolerance (rad)."""
     angle_tolerance: float | None = None
+    # nav2's ParticleCloud: Shape, Min / Max Arrow Length; vision_msgs' Detection3DArray: Only Edge
+    shape: str | None = None
+    arrow_lengths: tuple[float | None, float | None] = (None, None)
+    only_edge: bool | None = None
 
 
 @dataclass(frozen=True)

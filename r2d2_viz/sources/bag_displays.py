@@ -66,6 +66,31 @@ def camera_images(topics: Mapping[str, str]) -> dict[str, tuple[str, ...]]:
     return out
 
 
+DETECTIONS_2D = "vision_msgs/msg/Detection2DArray"
+
+
+def detection_images(topics: Mapping[str, str]) -> dict[str, str]:
+    """Each Detection2DArray topic's image: the first image topic under its namespace (``/cam/detections`` →
+    ``/cam/image_raw``; a namespace up when there is none: ``/cam/yolo/detections`` → ``/cam/image_raw``), one
+    with a CameraInfo (:func:`camera_images`) first, then the shallowest. Its boxes are drawn on that image."""
+    with_camera = {t for images in camera_images(topics).values() for t in images}
+    out = {}
+    for topic, msgtype in topics.items():
+        namespace = topic.rsplit("/", 1)[0]
+        while msgtype == DETECTIONS_2D and topic not in out:
+            found = sorted(
+                (t not in with_camera, t.count("/"), t)
+                for t, m in topics.items()
+                if m in IMAGES and t.startswith(namespace + "/")
+            )
+            if found:
+                out[topic] = found[0][2]
+            elif not namespace:
+                break
+            namespace = namespace.rsplit("/", 1)[0]
+    return out
+
+
 def frames_of(messages: Iterable[TopicMessage]) -> set[str]:
     """The frames these display messages are drawn in (empty ids and undecodable messages left out)."""
     frames: set[str] = set()

@@ -28,6 +28,7 @@ from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_images
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
+from r2d2_viz.viewer.blocks.image_overlays import on_image, overlay_frames
 from r2d2_viz.viewer.blocks.odometry_keep import OdometryKeep, Tolerance
 from r2d2_viz.viewer.decay import FixedFramePlacer
 from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, PlainBook, expire_markers, log_decoded, prepare, set_time
@@ -164,6 +165,7 @@ class DisplayFeed:
         self.load_mesh, self.source_name, self.timeline = load_mesh, source_name, timeline
         self.topics: dict[str, _TopicState] = {}
         self.cameras = camera_images(topics or {})
+        self.overlays = overlay_frames(topics or {}, fixed_frame)  # 2D detections: on their camera's image
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
         self._topic_types = dict(topics or {})
@@ -333,7 +335,8 @@ def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[_TopicState, str]:
         feed.rec.flush()
         feed._unflushed = 0
     keep = _keep(feed.styles, message.topic, message.msgtype)  # a history: <topic>/<k>, k = the message's slot
-    return state, f"{message.topic}/{(state.messages - 1) % keep}" if keep > 1 else message.topic
+    on_image = feed.overlays.get(message.topic, (message.topic, ""))[0]  # a 2D detection: below its image's entity
+    return state, f"{message.topic}/{(state.messages - 1) % keep}" if keep > 1 else on_image
 
 
 def _keep(styles: Mapping[str, DisplayStyle], topic: str, msgtype: str) -> int:
@@ -380,7 +383,8 @@ def _first_stamp(ops: list[MarkerOp]) -> int:
 
 
 def _placed(feed: DisplayFeed, topic: str, decoded: Decoded | list[MarkerOp]) -> Decoded | list[MarkerOp]:
-    """An empty frame id → the fixed frame (said once per topic)."""
+    """An empty frame id → the fixed frame (said once per topic); a 2D detection → its image's frame."""
+    decoded = on_image(decoded, feed.overlays.get(topic, ("", None))[1])
 
     def fix(d: Decoded) -> Decoded:
         if d.frame_id or all(is_plain(item) for item in d.items):  # a log, a plot: in no frame

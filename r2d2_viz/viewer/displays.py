@@ -114,10 +114,23 @@ def archetypes(item: shapes.Shape, load: MeshLoader | None = None) -> list[rr.As
         return [points, instance_pose(item.T_frame_item)]
     if isinstance(item, shapes.LineStrips):
         radii = item.radius if item.radius > 0 else None
-        return [rr.LineStrips3D(list(item.strips), colors=item.colors, radii=radii), instance_pose(item.T_frame_item)]
+        strips = item.strips if isinstance(item.strips, np.ndarray) else list(item.strips)  # (N, M, 3): one array
+        return [rr.LineStrips3D(strips, colors=item.colors, radii=radii), instance_pose(item.T_frame_item)]
     if isinstance(item, shapes.Arrows):
         arrows = rr.Arrows3D(origins=item.origins, vectors=item.vectors, colors=item.colors, radii=item.radius)
         return [arrows, instance_pose(item.T_frame_item)]
+    if isinstance(item, shapes.Boxes) and (item.labels or item.edges):  # detections: labelled, maybe edges only
+        boxes = rr.Boxes3D(
+            centers=item.centers,
+            half_sizes=item.half_sizes,
+            quaternions=item.xyzw,
+            colors=item.colors,
+            labels=list(item.labels) or None,
+            show_labels=bool(item.labels),
+            radii=item.edges / 2 if item.edges else None,
+            fill_mode="majorwireframe" if item.edges else "solid",
+        )
+        return [boxes, instance_pose(item.T_frame_item)]
     if isinstance(item, (shapes.Boxes, shapes.Ellipsoids)):
         cls = rr.Boxes3D if isinstance(item, shapes.Boxes) else rr.Ellipsoids3D
         solid = cls(
@@ -128,6 +141,9 @@ def archetypes(item: shapes.Shape, load: MeshLoader | None = None) -> list[rr.As
             fill_mode="solid",
         )
         return [solid, instance_pose(item.T_frame_item)]
+    if isinstance(item, shapes.Outlines2D):  # closed: the first corner again
+        closed = np.concatenate([item.corners, item.corners[:, :1]], axis=1)
+        return [rr.LineStrips2D(closed, colors=item.colors, labels=list(item.labels), show_labels=True)]
     if isinstance(item, shapes.Cylinders):
         cylinders = rr.Cylinders3D(
             lengths=item.lengths,

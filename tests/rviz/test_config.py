@@ -132,12 +132,15 @@ def test_turtlebot3_navigation_ros1_top_down(tmp_path: Path) -> None:
     assert {"/tf_axes", "/tf_arrows", "/tf", "/raspicam_node/image", "/robot/collision"} <= hidden
 
 
-def test_nav2_default_view_names_plugins_it_cannot_show() -> None:
+def test_nav2_default_view_maps_its_particles_and_names_plugins_it_cannot_show() -> None:
     spec = load_rviz(DATA / "nav2_default_view.rviz")
     assert spec.fixed_frame == "map"
     height = (800 / 54 / 2) / math.tan(math.radians(22.5))
     assert spec.camera is not None and spec.camera.eye == pytest.approx((-5.409999847412109, 0, height))
-    assert any("display nav2_rviz_plugins/ParticleCloud: no counterpart" in n for n in spec.notes)
+    assert not any("ParticleCloud" in n for n in spec.notes)  # issue 46: AMCL's particles are drawn
+    (particles,) = [t for t in spec.topics if t.kind == "ParticleCloud"]
+    assert particles.topic == "particle_cloud" and particles.style.color == (0, 180, 0)  # the file's Color
+    assert particles.style.shape == "Arrow (Flat)" and particles.style.arrow_lengths == pytest.approx((0.02, 0.3))
     line = _tools_and_panels(spec)  # 7 tools and 7 panels: the lengths of the lists PyYAML reads from the file,
     # less Measure, SetInitialPose and PublishPoint (on --serve's page); Nav2's own GoalTool stays named
     assert "4 tools (" in line and "nav2_rviz_plugins/GoalTool" in line

@@ -26,6 +26,7 @@ from r2d2_viz.sources.motion import GeneratedMotion, TutorialMotion
 from r2d2_viz.sources.plan import RunPlan
 from r2d2_viz.sources.tf_lookup import frame_pose, frame_positions
 from r2d2_viz.viewer.blocks.odometry_keep import ANGLE_TOLERANCE, POSITION_TOLERANCE, Tolerance
+from r2d2_viz.viewer.blocks.stack_styles import stack_options
 from r2d2_viz.viewer.display_feed import DisplayStyle
 from r2d2_viz.viewer.layout.blueprint import Layout, robot_display
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
@@ -205,6 +206,7 @@ def _styles(spec: ViewSpec) -> dict[str, DisplayStyle]:
             changes["map_scheme"] = s.color_scheme
         if s.covariance is not None:
             changes["odometry_covariance"] = s.covariance
+        changes.update(stack_options(s))
         keep = s.keep if s.keep and s.keep > 0 else None
         decay = s.decay_time is not None and s.decay_time > 0 and display.enabled
         options = dataclasses.replace(DecodeOptions(), **changes)
