@@ -55,7 +55,14 @@ def main() -> None:
         runs: dict[str, list[float]] = {"save": [], "export": []}
         for _ in range(rounds):
             runs["save"].append(timed(["--bag", str(bag), "--save", str(rrd)], rrd))
-            export = ["--bag", str(bag), "--export-lerobot", str(dataset), "--action", "/arm_controller/joint_trajectory"]
+            export = [
+                "--bag",
+                str(bag),
+                "--export-lerobot",
+                str(dataset),
+                "--action",
+                "/arm_controller/joint_trajectory",
+            ]
             runs["export"].append(timed(export, dataset))
     save, export = (statistics.median(runs[k]) for k in ("save", "export"))
     print(f"| {seconds:g} s bag, median of {rounds} | wall |")

@@ -40,9 +40,7 @@ Vector3 = TS.types["geometry_msgs/msg/Vector3"]
 
 
 def trajectory(t: int, positions: list[float]) -> bytes:
-    point = JointTrajectoryPoint(
-        np.asarray(positions), np.zeros(0), np.zeros(0), np.zeros(0), Duration(0, 100_000_000)
-    )
+    point = JointTrajectoryPoint(np.asarray(positions), np.zeros(0), np.zeros(0), np.zeros(0), Duration(0, 100_000_000))
     later = JointTrajectoryPoint(np.asarray(positions) + 5, np.zeros(0), np.zeros(0), np.zeros(0), Duration(1, 0))
     msg = JointTrajectory(Header(stamp(t), ""), list(JOINTS_URDF_ORDER), [point, later])
     return bytes(TS.serialize_cdr(msg, "trajectory_msgs/msg/JointTrajectory"))
@@ -80,7 +78,7 @@ def write_arm_bag(
             else:
                 c = _command(seed, t)
                 spec.add("/cmd_vel", t, twist(c[0], c[1]))
-        if camera and i % 10 == 2 or camera and i % 10 == 5 and i > 0:  # 15 Hz-ish, irregular
+        if (camera and i % 10 == 2) or (camera and i % 10 == 5 and i > 0):  # 15 Hz-ish, irregular
             spec.add("/camera/image_raw", t, image(t, frames(seed * 100 + i)))  # frames fall on some messages
     write_bag(path, spec)
     return ArmBag(path, seed, seconds, command)

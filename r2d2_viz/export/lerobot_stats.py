@@ -102,4 +102,6 @@ def from_json(data: dict[str, dict[str, Any]]) -> dict[str, Stats]:
 
 def flattened(stats: dict[str, Stats]) -> dict[str, list[Any]]:
     """An episode's stats as its row's ``stats/<feature>/<stat>`` columns (LeRobot's ``flatten_dict``)."""
-    return {f"stats/{key}/{name}": as_json({key: {name: v}})[key][name] for key, s in stats.items() for name, v in s.items()}
+    return {
+        f"stats/{key}/{name}": as_json({key: {name: v}})[key][name] for key, s in stats.items() for name, v in s.items()
+    }

@@ -36,7 +36,7 @@ def rgb8(image: Image) -> np.ndarray:
     """An ``(H, W, 3)`` uint8 frame of a raw image (16-bit scaled to 8 bits; float images refused)."""
     pixels = image.pixels
     if pixels.dtype == np.uint16:
-        pixels = (pixels >> 8).astype(np.uint8)
+        pixels = (pixels.astype(np.uint16) >> 8).astype(np.uint8)
     elif pixels.dtype != np.uint8:
         raise CameraError(f"{image.encoding} images are not colour or grey levels; not a camera for a dataset")
     if pixels.ndim == 2:
@@ -117,7 +117,7 @@ class Mp4Writer:
             self._stream.width, self._stream.height, self._stream.pix_fmt = width, height, "yuv420p"
             self._stream.time_base = Fraction(1, self.fps)
             self.size = (height, width)
-        elif self.size != (height, width):
+        elif self.size is not None and self.size != (height, width):
             raise CameraError(f"the image size changed from {self.size[1]}x{self.size[0]} to {width}x{height}")
         video = av.VideoFrame.from_ndarray(frame, format="rgb24")
         video.pts = self.frames

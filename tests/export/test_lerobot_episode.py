@@ -28,7 +28,9 @@ def test_state_action_and_camera_of_a_twist_bag(tmp_path: Path) -> None:
 def test_without_action_or_camera(tmp_path: Path) -> None:
     bag = write_arm_bag(tmp_path / "bag", camera=False, seconds=0.5)
     part = export_episode(EpisodeSpec(bag.path, tmp_path, fps=10))
-    assert part.action is None and part.cameras == {} and part.frames == 6  # joint states 0 .. 0.5 s: frames at 0, 0.1 .. 0.5 s
+    assert (
+        part.action is None and part.cameras == {} and part.frames == 6
+    )  # joint states 0 .. 0.5 s: frames at 0, 0.1 .. 0.5 s
 
 
 def test_bad_bags_are_one_line_naming_bag_and_topic(tmp_path: Path) -> None:
@@ -38,7 +40,7 @@ def test_bad_bags_are_one_line_naming_bag_and_topic(tmp_path: Path) -> None:
     arm = write_arm_bag(tmp_path / "arm", seconds=0.5)
     with pytest.raises(BagError, match=r"arm: no topic /cmd_vel \(--action\)"):
         export_episode(EpisodeSpec(arm.path, tmp_path, action="/cmd_vel"))
-    with pytest.raises(BagError, match="--action /joint_states is sensor_msgs/msg/JointState|not a command"):
+    with pytest.raises(BagError, match=r"--action /robot_description is std_msgs/msg/String, not a command"):
         export_episode(EpisodeSpec(arm.path, tmp_path, action="/robot_description"))
 
 

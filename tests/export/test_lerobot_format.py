@@ -21,8 +21,10 @@ def test_paths_are_lerobots() -> None:
 
 def test_info_json_has_lerobots_keys() -> None:
     info = fmt.info_json(dict(fmt.DEFAULT_FEATURES), fps=30, episodes=2, frames=9, tasks=1, robot_type=None)
-    keys = {"codebase_version", "fps", "features", "total_episodes", "total_frames", "total_tasks", "chunks_size",
-            "data_files_size_in_mb", "video_files_size_in_mb", "data_path", "video_path", "robot_type", "splits"}  # fmt: skip
+    keys = {
+        *("codebase_version", "fps", "features", "total_episodes", "total_frames", "total_tasks", "chunks_size"),
+        *("data_files_size_in_mb", "video_files_size_in_mb", "data_path", "video_path", "robot_type", "splits"),
+    }
     assert set(info) == keys and info["splits"] == {"train": "0:2"} and info["video_path"] is None
     camera = fmt.video_feature(240, 320, 30, "av1")
     assert camera["info"]["video.g"] == 2 and camera["info"]["video.crf"] == 30 and camera["shape"] == [240, 320, 3]

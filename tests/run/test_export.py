@@ -17,7 +17,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from lerobotbags import JOINTS_URDF_ORDER, ArmBag, expected, write_arm_bag
+from lerobotbags import JOINTS_URDF_ORDER, expected, write_arm_bag
 
 FPS = 30
 ACTION = "/arm_controller/joint_trajectory"
@@ -45,7 +45,9 @@ def exported(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     first = cli("--bag", *(b.path for b in bags[:3]), "--export-lerobot", root, "--action", ACTION,
                 "--task", "wave the arm", "--jobs", "2")  # fmt: skip
     before = digests(root)
-    again = cli("--bag", *(b.path for b in bags), "--export-lerobot", root, "--action", ACTION, "--task", "wave the arm")
+    again = cli(
+        "--bag", *(b.path for b in bags), "--export-lerobot", root, "--action", ACTION, "--task", "wave the arm"
+    )
     return {"root": root, "bags": bags, "first": first, "again": again, "before": before, "after": digests(root)}
 
 
