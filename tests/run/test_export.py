@@ -210,3 +210,21 @@ def test_lerobot_loads_it(exported: dict[str, Any], tmp_path: Path) -> None:
         worst = min(psnr_luma(f, w) for f, w in zip(frames, want["images"], strict=True))
         assert worst >= 35.0, worst
     assert set(got["task"].tolist()) == {"wave the arm"}
+
+
+def test_ctrl_c_appends_nothing_and_leaves_no_work_folder(tmp_path: Path) -> None:
+    import signal
+    import time
+
+    bag = write_arm_bag(tmp_path / "long", seconds=6.0)  # stopped as soon as its work begins
+    root = tmp_path / "ds"
+    command = [sys.executable, "-c", "from r2d2_viz.cli import main; raise SystemExit(main())"]
+    proc = subprocess.Popen([*command, "--bag", str(bag.path), "--export-lerobot", str(root)], stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while not list(root.glob(".r2d2-viz-export-*")) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err.decode()
+    assert "interrupted; nothing appended" in err.decode() and b"Traceback" not in err
+    assert not (root / "meta").exists() and not list(root.glob(".*"))
