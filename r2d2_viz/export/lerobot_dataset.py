@@ -116,8 +116,16 @@ class NewEpisode:
     """The folder holding the part's ``<camera key>.mp4``."""
 
 
-def append(state: DatasetState, episodes: Sequence[NewEpisode], *, task: str, codec: str) -> list[Path]:
-    """Write ``episodes`` (their features already checked) after the dataset's; the new files' paths."""
+def append(
+    state: DatasetState,
+    episodes: Sequence[NewEpisode],
+    *,
+    task: str,
+    codec: str,
+    data_file_bytes: int = fmt.DATA_FILE_SIZE_IN_MB * 1_000_000,
+) -> list[Path]:
+    """Write ``episodes`` (their features already checked) after the dataset's; the new files' paths. A data file
+    takes episodes until their rows (in memory, more than on disk) would pass ``data_file_bytes``, LeRobot's 100 MB."""
     root, fps = state.root, state.fps
     if not state.features:
         state.features = features_of(episodes[0].part, fps, codec)
@@ -127,16 +135,22 @@ def append(state: DatasetState, episodes: Sequence[NewEpisode], *, task: str, co
     task_index = state.tasks.index(task)
     written: list[Path] = []
     try:
-        rows, metas, stats = [], [], []
+        rows: list[dict[str, np.ndarray]] = []
+        metas, stats = [], []
         video_keys = [k for k, f in state.features.items() if f["dtype"] == "video"]
-        data_chunk, data_file = fmt.chunk_file(_next_number(root, "data", ".parquet"))
+        data_number = _next_number(root, "data", ".parquet")
         meta_chunk, meta_file = fmt.chunk_file(_next_number(root, "meta/episodes", ".parquet"))
         video_numbers = {k: _next_number(root, f"videos/{k}", ".mp4") for k in video_keys}
         index = state.frames
         for n, episode in enumerate(episodes):
             part, episode_index = episode.part, state.episodes + n
             columns = _columns(part, episode_index, index, task_index, fps)
+            size = sum(v.nbytes for v in columns.values())
+            if rows and sum(v.nbytes for r in rows for v in r.values()) + size > data_file_bytes:
+                written.append(_write_data(root, data_number, rows, state.features))
+                data_number, rows = data_number + 1, []
             rows.append(columns)
+            data_chunk, data_file = fmt.chunk_file(data_number)
             ep_stats = {k: lerobot_stats.feature_stats(v) for k, v in columns.items()}
             ep_stats |= part.camera_stats
             stats.append(ep_stats)
@@ -166,9 +180,7 @@ def append(state: DatasetState, episodes: Sequence[NewEpisode], *, task: str, co
             meta |= {"meta/episodes/chunk_index": meta_chunk, "meta/episodes/file_index": meta_file}
             metas.append(meta)
             index += part.frames
-        data_path = root / fmt.DATA_PATH.format(chunk_index=data_chunk, file_index=data_file)
-        written.append(data_path)
-        fmt.write_parquet(data_path, _data_table(rows, state.features))
+        written.append(_write_data(root, data_number, rows, state.features))
         meta_path = root / fmt.EPISODES_PATH.format(chunk_index=meta_chunk, file_index=meta_file)
         written.append(meta_path)
         fmt.write_parquet(meta_path, _episodes_table(metas))
@@ -204,6 +216,13 @@ def _columns(part: EpisodePart, episode_index: int, start: int, task_index: int,
         "task_index": np.full(n, task_index, dtype=np.int64),
     }
     return columns
+
+
+def _write_data(root: Path, number: int, rows: list[dict[str, np.ndarray]], features: dict[str, Any]) -> Path:
+    chunk, file = fmt.chunk_file(number)
+    path = root / fmt.DATA_PATH.format(chunk_index=chunk, file_index=file)
+    fmt.write_parquet(path, _data_table(rows, features))
+    return path
 
 
 def _data_table(rows: list[dict[str, np.ndarray]], features: dict[str, dict[str, Any]]) -> pa.Table:

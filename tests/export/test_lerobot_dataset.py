@@ -49,3 +49,14 @@ def test_features_must_match() -> None:
     have = features_of(part(2, ["a", "b"]), 30, "av1")
     assert mismatch(have, features_of(part(2, ["a", "b"]), 30, "av1")) is None
     assert "observation.state" in str(mismatch(have, features_of(part(2, ["b", "a"]), 30, "av1")))
+
+
+def test_a_data_file_takes_episodes_up_to_its_size(tmp_path: Path) -> None:
+    root = tmp_path / "ds"
+    new = [NewEpisode(k, k, part(10, ["j"]), root) for k in "abc"]  # 10 rows: 2 x 40 + 4 x 80 = 400 bytes each
+    append(open_dataset(root, 10), new, task="t", codec="av1", data_file_bytes=900)
+    files = sorted(p.name for p in (root / "data/chunk-000").iterdir())
+    assert files == ["file-000.parquet", "file-001.parquet"]  # a and b (800 bytes), then c
+    episodes = pq.read_table(root / "meta/episodes/chunk-000/file-000.parquet").to_pydict()
+    assert episodes["data/file_index"] == [0, 0, 1] and episodes["dataset_from_index"] == [0, 10, 20]
+    assert pq.read_table(root / "data/chunk-000/file-001.parquet").column("index").to_pylist() == list(range(20, 30))
