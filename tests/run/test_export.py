@@ -228,3 +228,12 @@ def test_ctrl_c_appends_nothing_and_leaves_no_work_folder(tmp_path: Path) -> Non
     assert proc.returncode == 130, err.decode()
     assert "interrupted; nothing appended" in err.decode() and b"Traceback" not in err
     assert not (root / "meta").exists() and not list(root.glob(".*"))
+
+
+def test_a_terminal_shows_a_bar_of_bags(exported: dict[str, Any], tmp_path: Path) -> None:
+    from terminal import on_a_terminal
+
+    code, shown = on_a_terminal("--bag", str(exported["bags"][0].path), "--export-lerobot", str(tmp_path / "ds"))
+    assert code == 0, shown
+    assert "exporting" in shown and "0/1 bags" in shown  # the bar (rich, on stderr), drawn at the start
+    assert "1 episode (" in shown
