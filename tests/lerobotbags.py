@@ -60,10 +60,11 @@ class ArmBag:
 
 def write_arm_bag(
     path: Path, *, seed: int = 0, seconds: float = 2.0, command: str = "trajectory", camera: bool = True,
-    joints: bool = True,
+    joints: bool = True, camera_lag_ns: int = 0,
 ) -> ArmBag:  # fmt: skip
     """The bag (camera from 0.04 s, joint states from 0, commands from 0.02 s: the episode starts at 0.04 s; its
-    frames every 1/30 s fall on a joint state every 0.1 s and on some images: "at or before" is tested)."""
+    frames every 1/30 s fall on a joint state every 0.1 s and on some images: "at or before" is tested).
+    ``camera_lag_ns``: the images' header stamps that much before their receive times."""
     spec = BagSpec(types=dict(TYPES))
     spec.add("/robot_description", T0 - 1, string(URDF))
     frames = Frames(WIDTH, HEIGHT)
@@ -79,7 +80,9 @@ def write_arm_bag(
                 c = _command(seed, t)
                 spec.add("/cmd_vel", t, twist(c[0], c[1]))
         if (camera and i % 10 == 2) or (camera and i % 10 == 5 and i > 0):  # 15 Hz-ish, irregular
-            spec.add("/camera/image_raw", t, image(t, frames(seed * 100 + i)))  # frames fall on some messages
+            spec.add(
+                "/camera/image_raw", t, image(t - camera_lag_ns, frames(seed * 100 + i))
+            )  # frames fall on some messages
     write_bag(path, spec)
     return ArmBag(path, seed, seconds, command)
 

@@ -79,3 +79,17 @@ def test_a_camera_only_bag_with_raw_and_h264_video_topics(tmp_path: Path) -> Non
             w = np.array([0.299, 0.587, 0.114])
             mse = np.mean((frame.astype(float) @ w - want.astype(float) @ w) ** 2)
             assert 10 * np.log10(255**2 / mse) >= 30.0, (key, k)
+
+
+def test_time_header_takes_the_stamps(tmp_path: Path) -> None:
+    """Images stamped 25 ms before they were received: on receive times the episode starts with the first image
+    (40 ms), on header stamps with the first command (20 ms; the first image is stamped 15 ms)."""
+    from bagmaker import T0
+
+    bag = write_arm_bag(tmp_path / "bag", seconds=0.5, camera_lag_ns=25_000_000)
+    receive = export_episode(EpisodeSpec(bag.path, tmp_path, fps=10, action="/arm_controller/joint_trajectory"))
+    header = export_episode(
+        EpisodeSpec(bag.path, tmp_path, fps=10, action="/arm_controller/joint_trajectory", header_time=True)
+    )
+    assert receive.start_ns == T0 + 40_000_000 and header.start_ns == T0 + 20_000_000
+    assert (receive.frames, header.frames) == (4, 5)  # to the last command, 0.42 s: 0.04 .. 0.34 s; 0.02 .. 0.42 s
