@@ -171,7 +171,7 @@ def _run(jobs: list[ExportJob], *, workers: int, ray: str | None) -> list[Export
         return []
     with _progress(len(jobs)) as advance:
         if ray is not None:
-            return _run_ray(jobs, ray, advance)
+            return _run_ray(jobs, ray, advance, num_cpus=workers if not ray else None)
         if workers == 1 or len(jobs) == 1:
             outcomes = []
             for job in jobs:
@@ -213,13 +213,16 @@ def _run_pool(jobs: list[ExportJob], workers: int, advance: Callable[[], None]) 
     return outcomes
 
 
-def _run_ray(jobs: list[ExportJob], address: str, advance: Callable[[], None]) -> list[ExportOutcome]:
+def _run_ray(
+    jobs: list[ExportJob], address: str, advance: Callable[[], None], *, num_cpus: int | None
+) -> list[ExportOutcome]:
+    """As Ray tasks (``--ray``: a local Ray of ``num_cpus``; ``--ray ADDRESS``: a cluster that sees the paths)."""
     from r2d2_viz.fleet.ray_run import import_ray
 
     ray = import_ray()
     started = not ray.is_initialized()
     if started:
-        local = {} if address else {"include_dashboard": False}
+        local = {} if address else {"include_dashboard": False, "num_cpus": num_cpus}
         ray.init(address=address or "local", logging_level="ERROR", log_to_driver=False, **local)
     task = ray.remote(max_retries=0)(export_one)
     refs = {task.remote(job): job for job in jobs}

@@ -237,3 +237,15 @@ def test_a_terminal_shows_a_bar_of_bags(exported: dict[str, Any], tmp_path: Path
     assert code == 0, shown
     assert "exporting" in shown and "0/1 bags" in shown  # the bar (rich, on stderr), drawn at the start
     assert "1 episode (" in shown
+
+
+def test_ray_tasks_give_the_same_episodes(exported: dict[str, Any], tmp_path: Path) -> None:
+    bags = exported["bags"][1:3]
+    done = cli("--bag", *(b.path for b in bags), "--export-lerobot", tmp_path / "ds", "--action", ACTION,
+               "--task", "wave the arm", "--ray", "--jobs", "2")  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    ray, local = _data(tmp_path / "ds"), _data(exported["root"])
+    for k in (0, 1):
+        mine, theirs = ray["episode_index"] == k, local["episode_index"] == k + 1
+        assert np.array_equal(ray["observation.state"][mine], local["observation.state"][theirs])
+        assert np.array_equal(ray["action"][mine], local["action"][theirs])
