@@ -85,7 +85,7 @@ def export_main(args: argparse.Namespace) -> int:
     require_av()
     start = time.perf_counter()
     fps, root = int(args.fps), Path(args.export_lerobot)
-    state = open_dataset(root, fps)
+    state, created = open_dataset(root, fps), not root.exists()
     robot_order = _urdf_order(args.urdf) if args.urdf is not None else None
     work = root / f".r2d2-viz-export-{os.getpid()}.partial"
     jobs, failed, skipped = [], 0, 0
@@ -127,6 +127,8 @@ def export_main(args: argparse.Namespace) -> int:
         return EXIT_INTERRUPTED
     finally:
         shutil.rmtree(work, ignore_errors=True)
+        if created and root.is_dir() and not any(root.iterdir()):
+            root.rmdir()  # nothing went in: no empty dataset folder left behind
     frames = sum(e.part.frames for e in episodes)
     parts = [f"{len(episodes)} episode{'s' if len(episodes) != 1 else ''} ({frames} frames) exported"]
     if skipped:
