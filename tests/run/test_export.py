@@ -17,7 +17,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
-from lerobotbags import JOINTS_URDF_ORDER, expected, write_arm_bag
+from conftest import made_once
+from lerobotbags import JOINTS_URDF_ORDER, ArmBag, expected, write_arm_bag
 
 FPS = 30
 ACTION = "/arm_controller/joint_trajectory"
@@ -39,16 +40,25 @@ def digests(root: Path) -> dict[str, str]:
 
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    tmp = tmp_path_factory.mktemp("lerobot")
-    bags = [write_arm_bag(tmp / f"arm{k}", seed=k, seconds=1.5 + 0.5 * k) for k in range(4)]
-    root = tmp / "dataset"
-    first = cli("--bag", *(b.path for b in bags[:3]), "--export-lerobot", root, "--action", ACTION,
-                "--task", "wave the arm", "--jobs", "2")  # fmt: skip
-    before = digests(root)
-    again = cli(
-        "--bag", *(b.path for b in bags), "--export-lerobot", root, "--action", ACTION, "--task", "wave the arm"
-    )
-    return {"root": root, "bags": bags, "first": first, "again": again, "before": before, "after": digests(root)}
+    """Made once per test run for every xdist worker (``made_once``): four bags, the first three exported, then all
+    four (the fourth appended); each run's exit code and stderr, the dataset's files' digests between the runs."""
+
+    def make(tmp: Path) -> None:
+        bags = [write_arm_bag(tmp / f"arm{k}", seed=k, seconds=1.5 + 0.5 * k) for k in range(4)]
+        root = tmp / "dataset"
+        first = cli("--bag", *(b.path for b in bags[:3]), "--export-lerobot", root, "--action", ACTION,
+                    "--task", "wave the arm", "--jobs", "2")  # fmt: skip
+        before = digests(root)
+        again = cli("--bag", *(b.path for b in bags), "--export-lerobot", root, "--action", ACTION,
+                    "--task", "wave the arm")  # fmt: skip
+        runs = {"first": [first.returncode, first.stderr], "again": [again.returncode, again.stderr]}
+        (tmp / "runs.json").write_text(json.dumps({**runs, "before": before, "after": digests(root)}))
+
+    tmp = made_once(tmp_path_factory, "lerobot-export", make)
+    runs = json.loads((tmp / "runs.json").read_text())
+    bags = [ArmBag(tmp / f"arm{k}", k, 1.5 + 0.5 * k, "trajectory") for k in range(4)]
+    done = {k: subprocess.CompletedProcess([], runs[k][0], "", runs[k][1]) for k in ("first", "again")}
+    return {"root": tmp / "dataset", "bags": bags, **done, "before": runs["before"], "after": runs["after"]}
 
 
 def psnr_luma(a: np.ndarray, b: np.ndarray) -> float:
