@@ -195,6 +195,35 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("av1", "h264"),
         help="a bag's or live graph's 8-bit camera images as video (default av1; needs r2d2-viz[video])",
     )
+    # --export-lerobot (issue 45): bags -> a LeRobot v3.0 dataset, one episode per bag
+    export = parser.add_argument_group("exporting bags as a LeRobot v3.0 dataset (one episode per bag)")
+    export.add_argument(
+        "--export-lerobot",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="write every --bag as an episode of the LeRobot dataset DIR (appended; bags already in it skipped)",
+    )
+    export.add_argument(
+        "--fps",
+        type=_number,
+        default=30.0,
+        metavar="N",
+        help="frames per second of --export-lerobot and --render (default 30)",
+    )
+    export.add_argument(
+        "--action",
+        default=None,
+        metavar="TOPIC",
+        help="the dataset's action: a command topic (JointState, JointTrajectory, Twist, Float64MultiArray)",
+    )
+    export.add_argument("--task", default=None, metavar="TEXT", help="the episodes' task, in words")
+    export.add_argument(
+        "--lerobot-codec",
+        choices=("av1", "h264"),
+        default="av1",
+        help="the dataset's camera videos (default av1, as LeRobot's; needs r2d2-viz[video])",
+    )
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
     sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
     sinks.add_argument(
