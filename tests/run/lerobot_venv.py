@@ -5,6 +5,9 @@ own (it needs torch, which the project's venv must not get), as ``tests/sources/
 and validated by a marker holding the requirements plus an import check. Building it downloads PyPI's torch with its
 CUDA libraries (about 5 GB installed, several minutes on a fresh machine: see docs/export.md); without Python 3.12
 or PyPI the tests skip — or fail under CI (``CI`` set). The loader then runs offline (``HF_HUB_OFFLINE=1``).
+
+``python3 tests/run/lerobot_venv.py`` builds it alone: ``.ci/run`` starts that in the background before the tests, so
+the test waits on the file lock for a build already under way instead of starting one (the build is about 10 min).
 """
 
 from __future__ import annotations
@@ -16,8 +19,6 @@ import shutil
 import subprocess
 from pathlib import Path
 
-import pytest
-
 REQUIREMENTS = ("lerobot[dataset]==0.6.1",)
 PYTHONS = ("/root/.pyenv/versions/3.12.1/bin/python", "python3.12")
 CHECK = "import torch, lerobot.datasets.lerobot_dataset"
@@ -26,6 +27,8 @@ LOADER = Path(__file__).resolve().parent / "lerobot_load.py"
 
 def unavailable(reason: str) -> None:
     """Skip with ``reason`` — or fail, when running under CI (``CI`` set and non-empty)."""
+    import pytest  # here, not at the top: CI runs this file as a script, before the project's venv exists
+
     if os.environ.get("CI"):
         pytest.fail(f"LeRobot loader prerequisite missing under CI: {reason}", pytrace=False)
     pytest.skip(reason)
@@ -93,3 +96,7 @@ def load(python: Path, root: Path, out: Path) -> subprocess.CompletedProcess[str
     return subprocess.run(
         [str(python), str(LOADER), str(root), str(out)], capture_output=True, text=True, timeout=900, env=env
     )
+
+
+if __name__ == "__main__":
+    print(ensure_venv())
