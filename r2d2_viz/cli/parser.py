@@ -195,6 +195,32 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("av1", "h264"),
         help="a bag's or live graph's 8-bit camera images as video (default av1; needs r2d2-viz[video])",
     )
+    # --render (issue 45): a view of the run as a video, drawn by Rerun's renderer headless (r2d2_viz/run/render.py)
+    video_out = parser.add_argument_group("a view as a video (--render); --fps is shared with --export-lerobot")
+    video_out.add_argument(
+        "--render",
+        type=Path,
+        default=None,
+        metavar="OUT",
+        help="render a view of the run, frame by frame, into OUT.mp4 (H.264) or OUT.gif; with --save-dir, "
+        "OUT's extension (mp4 or gif) and one video per bag, DIR/<bag name>.mp4",
+    )
+    video_out.add_argument(
+        "--view",
+        default=None,
+        metavar="NAME",
+        help="--render this view of the layout, by its name or a part of it (default: the 3D view)",
+    )
+    video_out.add_argument(
+        "--size", default="1280x720", metavar="WxH", help="--render's frame size in pixels (default 1280x720)"
+    )
+    video_out.add_argument(
+        "--fps",
+        type=_number,
+        default=30.0,
+        metavar="N",
+        help="frames per second of --export-lerobot and --render (default 30)",
+    )
     sinks = parser.add_argument_group("where the robot goes (--save combines with one live sink)")
     sinks.add_argument("--spawn", action="store_true", help="start the native Rerun viewer and stream live")
     sinks.add_argument(
