@@ -70,7 +70,19 @@ def check_out(out: Path) -> None:
         raise UsageError(f"--render {out}: directory {str(parent)!r} is not writable")
 
 
-def render(
+def _offset_start(config: RunConfig) -> int:
+    """With ``--start-offset``, the bag's first receive time plus the offset: the recording also holds the 5 s of
+    messages before it that set the scene up (the preroll), which the video skips (0: no offset, or header times,
+    whose clock the bag's index does not give)."""
+    if config.bag is None or not config.start_offset or config.time != "receive":
+        return 0
+    from r2d2_viz.sources.bags.bag import open_bag
+
+    with open_bag(config.bag) as bag:
+        span = bag.span
+    return 0 if span is None else span[0] + round(config.start_offset * S)
+
+
     config: RunConfig,
     video: RenderConfig,
     *,
@@ -92,7 +104,7 @@ def render(
             if renderer.software and not said[0]:
                 said[0] = True
                 say(SOFTWARE_NOTE)
-            times = frame_times(renderer.span.start, renderer.span.end, video.fps)
+            times = frame_times(max(renderer.span.start, _offset_start(config)), renderer.span.end, video.fps)
             partial = video.out.with_name(f".{video.out.name}.{os.getpid()}.partial")
             writer = VideoFile(partial, video.size, video.fps, gif=video_suffix(video.out) == ".gif")
             try:

@@ -13,6 +13,9 @@ import av
 import numpy as np
 import pytest
 
+from bagmaker import T0
+from fleetbags import still_bag
+
 import r2d2_viz.run.render as render_module
 from r2d2_viz.errors import UsageError
 from r2d2_viz.run.render import RenderConfig, check_out, frame_times, render
@@ -49,23 +52,30 @@ def test_the_output_is_checked_before_anything_runs(tmp_path: Path) -> None:
 class _StandIn:
     """A renderer whose frame k is a flat grey of level 10·k, that raises KeyboardInterrupt at ``stop_at``."""
 
-    def __init__(self, stop_at: int | None) -> None:
-        self.view, self.span, self.software, self.stop_at, self.drawn = ChosenView("v", "3D", "3D"), None, True, stop_at, 0
-        self.span = Span("time", "duration", 0, 2 * S)
+    def __init__(self, stop_at: int | None, span: tuple[int, int]) -> None:
+        self.view, self.software, self.stop_at, self.drawn = ChosenView("v", "3D", "3D"), True, stop_at, 0
+        self.span = Span("time", "timestamp", *span)
+        self.times: list[int] = []
 
     def frame(self, t_ns: int) -> np.ndarray:
         if self.drawn == self.stop_at:
             raise KeyboardInterrupt
         self.drawn += 1
+        self.times.append(t_ns)
         return np.full((48, 64, 3), 10 * (self.drawn - 1), np.uint8)
 
 
-def _stand_in(monkeypatch: pytest.MonkeyPatch, stop_at: int | None) -> list[RunConfig]:
+def _stand_in(
+    monkeypatch: pytest.MonkeyPatch, stop_at: int | None, span: tuple[int, int] = (0, 2 * S), drawn: list | None = None
+) -> list[RunConfig]:
     runs: list[RunConfig] = []
 
     @contextlib.contextmanager
     def rendering(rrd: Path, size: tuple[int, int], wanted: str | None) -> Iterator[_StandIn]:
-        yield _StandIn(stop_at)
+        renderer = _StandIn(stop_at, span)
+        yield renderer
+        if drawn is not None:
+            drawn.append(renderer.times)
 
     monkeypatch.setattr(render_module, "run", runs.append)
     monkeypatch.setattr(render_module, "rendering", rendering)
@@ -94,3 +104,15 @@ def test_an_interrupted_render_leaves_no_file_and_keeps_the_old_one(monkeypatch:
     with pytest.raises(KeyboardInterrupt):
         render(RunConfig(), RenderConfig(out, (64, 48), 5.0))
     assert [p.name for p in tmp_path.iterdir()] == ["a.mp4"] and out.read_bytes() == b"an older video"
+
+
+def test_with_a_start_offset_the_video_starts_at_the_offset_not_at_the_preroll(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    bag = still_bag(tmp_path / "still", samples=9)  # receive times T0 … T0 + 0.8 s (tests/fleetbags.py)
+    drawn: list[list[int]] = []
+    _stand_in(monkeypatch, None, span=(T0, T0 + 800_000_000), drawn=drawn)  # the preroll: from the bag's start
+    render(RunConfig(bag=bag, start_offset=0.5), RenderConfig(tmp_path / "a.mp4", (64, 48), 10.0))
+    assert drawn == [[T0 + 500_000_000, T0 + 600_000_000, T0 + 700_000_000]]  # 0.5, 0.6, 0.7 s: before 0.8 s
+    render(RunConfig(bag=bag), RenderConfig(tmp_path / "b.mp4", (64, 48), 10.0))
+    assert len(drawn[1]) == 8 and drawn[1][0] == T0
