@@ -83,6 +83,7 @@ def _offset_start(config: RunConfig) -> int:
     return 0 if span is None else span[0] + round(config.start_offset * S)
 
 
+def render(
     config: RunConfig,
     video: RenderConfig,
     *,
