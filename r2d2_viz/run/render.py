@@ -20,8 +20,8 @@ from pathlib import Path
 
 from r2d2_viz.errors import UsageError
 from r2d2_viz.progress import counting_bar
-from r2d2_viz.runner import RunConfig, run
 from r2d2_viz.run.video_file import VideoFile, video_suffix
+from r2d2_viz.runner import RunConfig, run
 from r2d2_viz.viewer.files.render import rendering
 from r2d2_viz.viewer.sinks import SinkConfig
 

@@ -79,5 +79,5 @@ class VideoFile:
         """Close without draining (the file is removed by the caller)."""
         try:
             self._container.close()
-        except Exception:  # noqa: BLE001 — the file is being thrown away
+        except Exception:
             pass

@@ -44,7 +44,9 @@ def test_bad_render_flags_are_one_line_and_exit_2(
 def test_the_real_cli_says_a_bad_suffix_in_one_line(tmp_path: Path) -> None:
     result = cli("--render", str(tmp_path / "out.avi"))
     assert result.returncode == 2 and result.stdout == ""
-    assert result.stderr == f"error: --render {tmp_path / 'out.avi'}: unknown extension '.avi'; write a .mp4 or a .gif\n"
+    assert (
+        result.stderr == f"error: --render {tmp_path / 'out.avi'}: unknown extension '.avi'; write a .mp4 or a .gif\n"
+    )
 
 
 def test_help_lists_the_flags() -> None:
@@ -54,7 +56,9 @@ def test_help_lists_the_flags() -> None:
     assert "frames per second of --export-lerobot and --render" in " ".join(text.split())
 
 
-def test_save_dir_renders_one_video_per_bag_named_as_its_recording(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+def test_save_dir_renders_one_video_per_bag_named_as_its_recording(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
     bags = [still_bag(tmp_path / "first"), still_bag(tmp_path / "second.mcap.d")]
     made: list[tuple[Path | None, Path]] = []
 

@@ -119,7 +119,9 @@ def test_a_frame_looks_like_the_native_viewers_screenshot(
     rrd = artifacts_dir / "moving.rrd"
     result = cli("--bag", str(rendered.bag), "--save", str(rrd))
     assert result.returncode == 0, result.stderr
-    shot = viewers.screenshot_native(rrd, artifacts_dir / "native.png", display=x_display.display, window_size=(640, 400))
+    shot = viewers.screenshot_native(
+        rrd, artifacts_dir / "native.png", display=x_display.display, window_size=(640, 400)
+    )
     native = viewers.load_png(shot.path)
     x0, y0, x1, y1 = _view_rect(native)
     view = native[y0:y1, x0:x1]

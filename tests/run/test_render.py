@@ -12,7 +12,6 @@ from pathlib import Path
 import av
 import numpy as np
 import pytest
-
 from bagmaker import T0
 from fleetbags import still_bag
 
@@ -82,7 +81,9 @@ def _stand_in(
     return runs
 
 
-def test_a_render_writes_each_frame_and_says_the_cpu_fallback_once(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+def test_a_render_writes_each_frame_and_says_the_cpu_fallback_once(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
     runs = _stand_in(monkeypatch, None)
     said: list[str] = []
     once = [False]
@@ -97,7 +98,9 @@ def test_a_render_writes_each_frame_and_says_the_cpu_fallback_once(monkeypatch: 
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "b.mp4"]
 
 
-def test_an_interrupted_render_leaves_no_file_and_keeps_the_old_one(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+def test_an_interrupted_render_leaves_no_file_and_keeps_the_old_one(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
     _stand_in(monkeypatch, 4)
     out = tmp_path / "a.mp4"
     out.write_bytes(b"an older video")

@@ -142,7 +142,9 @@ class Renderer:
         state = self.client.get_state()
         self.view = choose_view([(v.view_id, v.name, v.view_class) for v in state.views], wanted)
         recording = next(r for r in state.recordings if r.store_id == state.active_recording)
-        self.client.set_blueprint(maximised(self.client.get_blueprint().blueprint, self.view.view_id), store_id=recording.store_id)
+        self.client.set_blueprint(
+            maximised(self.client.get_blueprint().blueprint, self.view.view_id), store_id=recording.store_id
+        )
         line = next((t for t in recording.timelines if t.name == recording.current_timeline), None)
         line = line or next((t for t in recording.timelines if t.start is not None), None)
         if line is None or line.start is None or line.end is None:
@@ -181,7 +183,9 @@ class Renderer:
 
 
 @contextmanager
-def _viewer(window: tuple[int, int], state: Path, lavapipe: bool) -> Iterator[tuple[Any, Path, subprocess.Popen[bytes]]]:
+def _viewer(
+    window: tuple[int, int], state: Path, lavapipe: bool
+) -> Iterator[tuple[Any, Path, subprocess.Popen[bytes]]]:
     """A headless viewer of ``window`` points, its settings in ``state`` (a fresh machine's: no layout or camera
     from an earlier run), stopped on exit."""
     from rerun.experimental import ViewerClient
@@ -221,8 +225,10 @@ def _wait_listening(proc: subprocess.Popen[bytes], port: int, log: Path) -> None
     while True:
         if proc.poll() is not None:
             said = log.read_text(errors="replace")
-            why = "no graphics adapter (install Mesa's Vulkan drivers: mesa-vulkan-drivers)" if "adapter" in said else (
-                f"it exited with status {proc.returncode}"
+            why = (
+                "no graphics adapter (install Mesa's Vulkan drivers: mesa-vulkan-drivers)"
+                if "adapter" in said
+                else (f"it exited with status {proc.returncode}")
             )
             raise RenderError(f"the headless Rerun viewer did not start: {why}")
         with socket.socket() as s:
