@@ -12,6 +12,8 @@ from r2d2_viz.errors import R2d2VizError, UsageError, shown, stderr_line
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 NOT_WITH = ("save", "spawn", "serve", "connect", "headless", "ros", "dataset", "realtime", "watch", "list", "tree")
 """Flags that ask for another end of the run than a video."""
+FLEET_ONLY = ("jobs", "ray", "force", "summary")
+"""The fleet's flags that --render does not take: its bags are rendered one after the other."""
 
 
 def _say(message: str) -> None:
@@ -23,7 +25,8 @@ def render_main(args: argparse.Namespace) -> int:
     from r2d2_viz.msgs.images import require_av
     from r2d2_viz.run.video_file import parse_size, video_suffix
 
-    given = [f"--{name.replace('_', '-')}" for name in NOT_WITH if getattr(args, name, None) not in (None, False)]
+    flags = (*NOT_WITH, *FLEET_ONLY)
+    given = [f"--{name.replace('_', '-')}" for name in flags if getattr(args, name, None) not in (None, False)]
     if args.tf_tree is not None:
         given.append("--tf-tree")
     if given:
@@ -38,7 +41,7 @@ def render_main(args: argparse.Namespace) -> int:
     else:
         if not args.bag:
             raise UsageError("--save-dir DIR --render: give the bags to render with --bag BAG [BAG ...]")
-        suffix = args.render.suffix or f".{args.render.name}"  # --render mp4, --render .gif or --render x.mp4
+        suffix = args.render.suffix or "." + args.render.name.lstrip(".")  # --render mp4, .gif or x.mp4
         video_suffix(Path(f"video{suffix}"))
         require_av()
         jobs = _fleet_jobs(args.bag, args.save_dir, suffix.lower())

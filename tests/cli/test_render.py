@@ -28,6 +28,7 @@ from r2d2_viz.run.render import RenderResult
         (["--render", "{tmp}/out.mp4", "--save", "{tmp}/x.rrd"], "does not combine with --save"),
         (["--render", "{tmp}/out.mp4", "--serve"], "does not combine with --serve"),
         (["--view", "Warnings"], "--view chooses the view --render draws"),
+        (["--bag", "{tmp}/a", "--save-dir", "{tmp}/v", "--render", "mp4", "--jobs", "2"], "combine with --jobs"),
         (["--bag", "{tmp}/a", "{tmp}/b", "--render", "{tmp}/out.mp4"], "2 bags: give --save-dir DIR"),
         (["--bag", "{tmp}/nope", "--save-dir", "{tmp}/v", "--render", "avi"], "unknown extension"),
     ],
@@ -67,7 +68,7 @@ def test_save_dir_renders_one_video_per_bag_named_as_its_recording(
         return RenderResult(video.out, 3, 0.6, "3D", False)
 
     monkeypatch.setattr(render_module, "render", render)
-    args = build_parser().parse_args(["--bag", *map(str, bags), "--save-dir", str(tmp_path / "v"), "--render", "gif"])
+    args = build_parser().parse_args(["--bag", *map(str, bags), "--save-dir", str(tmp_path / "v"), "--render", ".gif"])
     assert isinstance(args, argparse.Namespace)
     assert render_main(args) == 0
     assert made == [(bags[0], tmp_path / "v" / "first.gif"), (bags[1], tmp_path / "v" / "second.mcap.d.gif")]

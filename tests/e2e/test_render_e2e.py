@@ -141,3 +141,24 @@ def test_an_unknown_view_is_one_line_naming_the_views(rendered: Rendered) -> Non
     last = result.stderr.splitlines()[-1]
     assert last.startswith("error: --view 'camera' is not a view of the layout; the views: ") and "'Warnings'" in last
     assert "Traceback" not in result.stderr and not out.exists()
+
+
+def test_without_an_adapter_of_its_own_lavapipe_is_offered_alone(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """A Vulkan loader pointed at a missing driver (as on a machine whose only ICD is broken or absent): the first
+    viewer finds no adapter and exits; the render goes on with Mesa's lavapipe alone, and says it draws on the CPU."""
+    from r2d2_viz.viewer.files.render import rendering
+
+    if viewers.lavapipe_icd() is None:
+        pytest.skip("Mesa's lavapipe (mesa-vulkan-drivers) is not installed")
+    rrd = tmp_path / "lap.rrd"
+    assert cli("--save", str(rrd), "--duration", "1").returncode == 0
+    monkeypatch.setenv("VK_ICD_FILENAMES", str(tmp_path / "no-such-driver.json"))
+    monkeypatch.setenv("WGPU_BACKEND", "vulkan")
+    with rendering(rrd, (160, 96), None) as renderer:
+        assert renderer.software
+        assert renderer.span is not None
+        frame = renderer.frame(renderer.span.end)
+    assert frame.shape == (96, 160, 3), frame.shape  # the window sized to leave the view 160x96
+    assert frame.std() > 5  # drawn: the grid and the robot, not a flat colour

@@ -51,6 +51,10 @@ class RenderError(R2d2VizError):
     """The view cannot be rendered: no such view, no graphics adapter, a viewer that stopped answering."""
 
 
+class ViewerDidNotStart(RenderError):
+    """The headless viewer exited or never listened (no graphics adapter, most often)."""
+
+
 @dataclass(frozen=True)
 class Span:
     """The recording's timeline the frames are taken on: its name, kind and first and last time (ns)."""
@@ -176,9 +180,9 @@ class Renderer:
         for attempt in range(SCREENSHOT_TRIES):
             try:
                 return png_pixels(self.client.take_screenshot(self.view.view_id, max_size=size))
-            except (TimeoutError, RuntimeError):
+            except (TimeoutError, RuntimeError) as exc:
                 if attempt == SCREENSHOT_TRIES - 1:
-                    raise
+                    raise RenderError(f"the headless Rerun viewer stopped answering: {exc}") from None
         raise AssertionError("unreachable")
 
 
@@ -230,12 +234,12 @@ def _wait_listening(proc: subprocess.Popen[bytes], port: int, log: Path) -> None
                 if "adapter" in said
                 else (f"it exited with status {proc.returncode}")
             )
-            raise RenderError(f"the headless Rerun viewer did not start: {why}")
+            raise ViewerDidNotStart(f"the headless Rerun viewer did not start: {why}")
         with socket.socket() as s:
             if s.connect_ex(("127.0.0.1", port)) == 0:
                 return
         if time.monotonic() > deadline:
-            raise RenderError(f"the headless Rerun viewer did not listen within {START_S:g} s")
+            raise ViewerDidNotStart(f"the headless Rerun viewer did not listen within {START_S:g} s")
         time.sleep(0.1)
 
 
@@ -248,7 +252,7 @@ def rendering(rrd: Path, size: tuple[int, int], wanted: str | None) -> Iterator[
         lavapipe = False
         try:
             seen = _probe(rrd, size, wanted, state, lavapipe)
-        except RenderError:
+        except ViewerDidNotStart:
             if _lavapipe() is None:
                 raise
             lavapipe = True  # no adapter of its own: offer wgpu lavapipe alone
