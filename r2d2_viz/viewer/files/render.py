@@ -51,7 +51,7 @@ class RenderError(R2d2VizError):
     """The view cannot be rendered: no such view, no graphics adapter, a viewer that stopped answering."""
 
 
-class ViewerDidNotStart(RenderError):
+class ViewerStartError(RenderError):
     """The headless viewer exited or never listened (no graphics adapter, most often)."""
 
 
@@ -234,12 +234,12 @@ def _wait_listening(proc: subprocess.Popen[bytes], port: int, log: Path) -> None
                 if "adapter" in said
                 else (f"it exited with status {proc.returncode}")
             )
-            raise ViewerDidNotStart(f"the headless Rerun viewer did not start: {why}")
+            raise ViewerStartError(f"the headless Rerun viewer did not start: {why}")
         with socket.socket() as s:
             if s.connect_ex(("127.0.0.1", port)) == 0:
                 return
         if time.monotonic() > deadline:
-            raise ViewerDidNotStart(f"the headless Rerun viewer did not listen within {START_S:g} s")
+            raise ViewerStartError(f"the headless Rerun viewer did not listen within {START_S:g} s")
         time.sleep(0.1)
 
 
@@ -252,7 +252,7 @@ def rendering(rrd: Path, size: tuple[int, int], wanted: str | None) -> Iterator[
         lavapipe = False
         try:
             seen = _probe(rrd, size, wanted, state, lavapipe)
-        except ViewerDidNotStart:
+        except ViewerStartError:
             if _lavapipe() is None:
                 raise
             lavapipe = True  # no adapter of its own: offer wgpu lavapipe alone
@@ -266,9 +266,18 @@ def rendering(rrd: Path, size: tuple[int, int], wanted: str | None) -> Iterator[
 
 
 def _probe(rrd: Path, size: tuple[int, int], wanted: str | None, state: Path, lavapipe: bool) -> tuple[int, int]:
-    with _viewer(size, state, lavapipe) as (client, log, _proc):
+    with _viewer(size, state, lavapipe) as (client, log, proc):
         renderer = Renderer(client, log, size)
-        renderer.show(rrd, wanted)
-        assert renderer.span is not None
-        height, width = renderer.frame(renderer.span.start).shape[:2]
+        try:
+            renderer.show(rrd, wanted)
+            assert renderer.span is not None
+            height, width = renderer.frame(renderer.span.start).shape[:2]
+        except (ConnectionError, RenderError) as exc:  # it listens first, then looks for an adapter
+            try:
+                proc.wait(timeout=2)
+            except subprocess.TimeoutExpired:
+                if isinstance(exc, RenderError):
+                    raise
+                raise RenderError(f"the headless Rerun viewer failed: {exc}") from None
+            _wait_listening(proc, 0, log)  # it exited: why, as a viewer that never listened
         return width, height
