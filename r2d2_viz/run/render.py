@@ -26,7 +26,7 @@ from r2d2_viz.viewer.files.render import rendering
 from r2d2_viz.viewer.sinks import SinkConfig
 
 S = 1_000_000_000
-SOFTWARE_NOTE = "no GPU: rendering with Mesa's lavapipe (software Vulkan) on the CPU, about 1-3 frames a second"
+SOFTWARE_NOTE = "no GPU: rendering with Mesa's lavapipe (software Vulkan) on the CPU, roughly 1-4 frames a second"
 
 
 @dataclass(frozen=True)
