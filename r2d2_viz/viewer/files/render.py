@@ -275,9 +275,9 @@ def _probe(rrd: Path, size: tuple[int, int], wanted: str | None, state: Path, la
         except (ConnectionError, RenderError) as exc:  # it listens first, then looks for an adapter
             try:
                 proc.wait(timeout=2)
-            except subprocess.TimeoutExpired:
+            except subprocess.TimeoutExpired:  # still running: the error is the view's or the recording's
                 if isinstance(exc, RenderError):
-                    raise
+                    raise exc from None
                 raise RenderError(f"the headless Rerun viewer failed: {exc}") from None
             _wait_listening(proc, 0, log)  # it exited: why, as a viewer that never listened
         return width, height
