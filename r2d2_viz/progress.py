@@ -83,3 +83,18 @@ def progress_bar(plan: RunPlan, config: _Config) -> Iterator[_Bar | None]:
     with Progress(*columns, console=console, transient=False) as bar:
         task = bar.add_task(name, total=length, position=f"0.0 / {length:.1f} s", mb=0.0, rate=0.0)
         yield _Bar(bar, task, start, length)
+
+
+@contextmanager
+def counting_bar(description: str, total: int, *, enabled: bool, unit: str = "frames") -> Iterator[Any]:
+    """A bar of ``total`` steps (``--render``'s frames): the callable it yields takes one step; None: no bar."""
+    if not enabled:
+        yield None
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TextColumn(unit))
+    with Progress(*columns, TimeRemainingColumn(), console=Console(file=sys.stderr), transient=False) as bar:
+        task = bar.add_task(description, total=total)
+        yield lambda: bar.advance(task)

@@ -195,6 +195,25 @@ def build_parser() -> argparse.ArgumentParser:
         choices=("av1", "h264"),
         help="a bag's or live graph's 8-bit camera images as video (default av1; needs r2d2-viz[video])",
     )
+    # --render (issue 45): a view of the run as a video, drawn by Rerun's renderer headless (r2d2_viz/run/render.py)
+    video_out = parser.add_argument_group("a view as a video (--render; its frame rate is --fps, below)")
+    video_out.add_argument(
+        "--render",
+        type=Path,
+        default=None,
+        metavar="OUT",
+        help="render a view of the run, frame by frame, into OUT.mp4 (H.264) or OUT.gif; with --save-dir, "
+        "OUT's extension (mp4 or gif) and one video per bag, DIR/<bag name>.mp4",
+    )
+    video_out.add_argument(
+        "--view",
+        default=None,
+        metavar="NAME",
+        help="--render this view of the layout, by its name or a part of it (default: the 3D view)",
+    )
+    video_out.add_argument(
+        "--size", default="1280x720", metavar="WxH", help="--render's frame size in pixels (default 1280x720)"
+    )
     # --export-lerobot (issue 45): bags -> a LeRobot v3.0 dataset, one episode per bag
     export = parser.add_argument_group("exporting bags as a LeRobot v3.0 dataset (one episode per bag)")
     export.add_argument(
