@@ -138,6 +138,10 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
         args.xacro_args = [*(str(b) for b in args.bag if ":=" in str(b)), *args.xacro_args]
         args.bag = [b for b in args.bag if ":=" not in str(b)] or None
+    if args.compare is not None:  # issue 47: several runs in one recording
+        from r2d2_viz.cli.compare import compare_main
+
+        return compare_main(args)
     fleet = (args.save_dir, args.dataset, args.jobs, args.ray, args.summary)
     if args.force or any(value is not None for value in fleet):
         from r2d2_viz.fleet.commands import fleet_main
