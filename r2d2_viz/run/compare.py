@@ -50,12 +50,21 @@ class CompareConfig:
 @dataclass
 class _Run:
     name: str
-    rrd: Path
+    path: Path
+    rrd: Path | None
+    """The run as a recording (a bag's: once replayed)."""
     start_ns: int
     end_ns: int
     topics: dict[str, tuple[int, float | None]]
     firsts: dict[str, int]
-    facts: RunFacts
+    facts: RunFacts = dataclasses.field(default_factory=RunFacts)
+
+    @property
+    def recorded(self) -> Path:
+        """The run's recording (once a bag's is made)."""
+        if self.rrd is None:
+            raise RuntimeError(f"{self.name}: not replayed yet")
+        return self.rrd
 
 
 @dataclass
@@ -72,26 +81,30 @@ def compare(config: CompareConfig, on_ready: Callable[[str], None] | None = None
         raise UsageError(f"--compare needs two runs or more, got {len(config.inputs)}")
     names = run_names(config.inputs)
     offsets = parse_offsets(config.offsets, names)
+    runs = [_inspect(path, name) for path, name in zip(config.inputs, names, strict=True)]
+    if config.align is not None and not any(config.align in r.firsts for r in runs):
+        raise UsageError(f"--align {shown_in_line(config.align)}: no run has that topic")
+    aligned = alignments(
+        names,
+        {r.name: r.start_ns for r in runs},
+        {r.name: r.firsts.get(config.align) for r in runs} if config.align is not None else None,
+        offsets,
+        config.align,
+    )
     with tempfile.TemporaryDirectory(prefix="r2d2-viz-compare-") as scratch:
-        runs = [_read(path, name, config, Path(scratch)) for path, name in zip(config.inputs, names, strict=True)]
-        if config.align is not None and not any(config.align in r.firsts for r in runs):
-            raise UsageError(f"--align {shown_in_line(config.align)}: no run has that topic")
-        aligned = alignments(
-            names,
-            {r.name: r.start_ns for r in runs},
-            {r.name: r.firsts.get(config.align) for r in runs} if config.align is not None else None,
-            offsets,
-            config.align,
-        )
+        for r in runs:
+            if r.rrd is None:
+                r.rrd = _convert(r, config, Path(scratch))
+                r.facts = _facts(r.rrd)
         lines = summary_lines([_summary(r, aligned[r.name]) for r in runs])
         if config.summary_only:
             return CompareResult(names, lines, None)
         return _record(config, runs, aligned, lines, on_ready)
 
 
-def _read(path: Path, name: str, config: CompareConfig, scratch: Path) -> _Run:
-    """A run: a bag replayed into ``scratch`` (its topics' counts and rates from the bag), or an ``.rrd`` as it is
-    (its entities' rows instead)."""
+def _inspect(path: Path, name: str) -> _Run:
+    """A run as its input says it: a bag's span and its topics' counts, rates and first times (nothing decoded), or
+    an ``.rrd`` read once (its entities and their rows instead)."""
     if path.suffix == ".rrd":
         if not path.is_file() or not rrd_complete(path):
             raise UsageError(f"--compare {shown_in_line(str(path))}: not a whole .rrd recording")
@@ -99,18 +112,22 @@ def _read(path: Path, name: str, config: CompareConfig, scratch: Path) -> _Run:
         if facts.first_ns is None or facts.last_ns is None:
             raise UsageError(f"--compare {shown_in_line(str(path))}: the recording has nothing on its timeline")
         topics = {e: (n, None) for e, n in facts.entities.items()}
-        return _Run(name, path, facts.first_ns, facts.last_ns, topics, dict(facts.firsts), facts)
+        return _Run(name, path, path, facts.first_ns, facts.last_ns, topics, dict(facts.firsts), facts)
     with open_bag(path) as bag:
         span = bag.span
         if span is None:
             raise UsageError(f"--compare {shown_in_line(str(path))}: the bag has no messages")
         rates = topic_rates(bag)
-    target = scratch / f"{name}.rrd"
-    sink = SinkConfig(save=target)
-    with sigterm_raises():
-        run(dataclasses.replace(config.base, bag=path, sink=sink, progress=False, realtime=False))
     topics = {t: (r.count, r.rate_hz) for t, r in rates.items()}
-    return _Run(name, target, span[0], span[1], topics, {t: r.first_ns for t, r in rates.items()}, _facts(target))
+    return _Run(name, path, None, span[0], span[1], topics, {t: r.first_ns for t, r in rates.items()})
+
+
+def _convert(r: _Run, config: CompareConfig, scratch: Path) -> Path:
+    """The bag replayed by the ordinary pipeline into ``scratch/<name>.rrd``."""
+    target = scratch / f"{r.name}.rrd"
+    with sigterm_raises():
+        run(dataclasses.replace(config.base, bag=r.path, sink=SinkConfig(save=target), progress=False, realtime=False))
+    return target
 
 
 def _facts(path: Path) -> RunFacts:
@@ -137,7 +154,7 @@ def _spacing(eye: dict[str, list[float]]) -> float:
 def _record(
     config: CompareConfig, runs: list[_Run], aligned: dict[str, Alignment], lines: list[str], on_ready: Callable[[str], None] | None
 ) -> CompareResult:
-    views = [blueprint_view(r.rrd) for r in runs]
+    views = [blueprint_view(r.recorded) for r in runs]
     blueprint = compare_blueprint([r.name for r in runs], config.base.plots, views[0][1])
     sink = config.base.sink
     save = sink.save
@@ -150,7 +167,7 @@ def _record(
                 style = RunStyle(r.name, aligned[r.name].shift_ns(), tint(k))
                 if fixed is not None:
                     anchor(recording.rec, style, fixed, (0.0, k * spacing, 0.0))
-                send_run(recording.rec, r.rrd, style)
+                send_run(recording.rec, r.recorded, style)
                 flush_file(recording.rec, tmp)
             log_summary(recording.rec, lines)
             keep_serving(sink.serve, lambda: flush_file(recording.rec, tmp))
