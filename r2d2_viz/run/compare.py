@@ -39,7 +39,7 @@ SIDE_BY_SIDE_MIN_M = 1.0
 @dataclass(frozen=True)
 class CompareConfig:
     inputs: tuple[Path, ...]
-    base: RunConfig = RunConfig()
+    base: RunConfig = dataclasses.field(default_factory=RunConfig)
     """Every run's flags (``--plot``, ``--rviz``, ``--urdf``…) and the comparison's sink."""
     align: str | None = None
     offsets: tuple[str, ...] = ()
@@ -111,15 +111,15 @@ def _inspect(path: Path, name: str) -> _Run:
         facts = _facts(path)
         if facts.first_ns is None or facts.last_ns is None:
             raise UsageError(f"--compare {shown_in_line(str(path))}: the recording has nothing on its timeline")
-        topics = {e: (n, None) for e, n in facts.entities.items()}
+        topics: dict[str, tuple[int, float | None]] = {e: (n, None) for e, n in facts.entities.items()}
         return _Run(name, path, path, facts.first_ns, facts.last_ns, topics, dict(facts.firsts), facts)
     with open_bag(path) as bag:
         span = bag.span
         if span is None:
             raise UsageError(f"--compare {shown_in_line(str(path))}: the bag has no messages")
         rates = topic_rates(bag)
-    topics = {t: (r.count, r.rate_hz) for t, r in rates.items()}
-    return _Run(name, path, None, span[0], span[1], topics, {t: r.first_ns for t, r in rates.items()})
+    counts: dict[str, tuple[int, float | None]] = {t: (r.count, r.rate_hz) for t, r in rates.items()}
+    return _Run(name, path, None, span[0], span[1], counts, {t: r.first_ns for t, r in rates.items()})
 
 
 def _convert(r: _Run, config: CompareConfig, scratch: Path) -> Path:
@@ -152,7 +152,11 @@ def _spacing(eye: dict[str, list[float]]) -> float:
 
 
 def _record(
-    config: CompareConfig, runs: list[_Run], aligned: dict[str, Alignment], lines: list[str], on_ready: Callable[[str], None] | None
+    config: CompareConfig,
+    runs: list[_Run],
+    aligned: dict[str, Alignment],
+    lines: list[str],
+    on_ready: Callable[[str], None] | None,
 ) -> CompareResult:
     views = [blueprint_view(r.recorded) for r in runs]
     blueprint = compare_blueprint([r.name for r in runs], config.base.plots, views[0][1])

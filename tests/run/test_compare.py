@@ -127,7 +127,9 @@ def test_align_lines_up_the_topics_first_messages(made: Path) -> None:
 def test_the_summary_names_the_extra_topic_the_counts_and_the_largest_difference(made: Path) -> None:
     lines = (made / "summary.out").read_text().splitlines()
     assert "topics only in b: /extra" in lines
-    counts = {m.group(1): m.group(2) for line in lines if (m := re.match(r"(/\S+): .*\(count difference: (.*)\)", line))}
+    counts = {
+        m.group(1): m.group(2) for line in lines if (m := re.match(r"(/\S+): .*\(count difference: (.*)\)", line))
+    }
     assert counts["/extra"] == "b +5" and counts["/joint_states"] == "b -10" and counts["/go"] == "b +0"
     (line,) = [line for line in lines if line.startswith(f"series {PLOT}:")]
     shown = float(re.search(r"largest difference from a: b (\S+) at", line).group(1))  # type: ignore[union-attr]

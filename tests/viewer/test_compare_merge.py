@@ -29,7 +29,9 @@ def test_a_chunk_moves_under_its_run_on_the_shared_timeline_with_its_frames_rena
     tf = Chunk.from_columns(
         "/tf",
         [rr.TimeColumn("time", timestamp=np.array([T0 + 5, T0 + 9], "datetime64[ns]"))],
-        rr.Transform3D.columns(parent_frame=["odom", "odom"], child_frame=["base", "tf#/x"], translation=[[1, 2, 3]] * 2),
+        rr.Transform3D.columns(
+            parent_frame=["odom", "odom"], child_frame=["base", "tf#/x"], translation=[[1, 2, 3]] * 2
+        ),
     )
     facts = RunFacts()
     recording = _sent(tmp_path, [rewrite(tf, RunStyle("b", -T0 - 5), facts)])
