@@ -26,6 +26,7 @@ ALONE = (
 
 
 def compare_main(args: argparse.Namespace) -> int:
+    from r2d2_viz.progress import wanted
     from r2d2_viz.run.compare import CompareConfig, compare
     from r2d2_viz.runner import RunConfig
     from r2d2_viz.viewer.sinks import SinkConfig, has_display
@@ -64,6 +65,7 @@ def compare_main(args: argparse.Namespace) -> int:
         duration=args.duration,
         topics=tuple(args.topics) if args.topics is not None else None,
         plots=tuple(tuple(p) for p in args.plot),
+        progress=wanted(),  # each run's replay shows its bar on a terminal
     )
     config = CompareConfig(
         tuple(args.compare),

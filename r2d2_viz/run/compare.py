@@ -126,7 +126,7 @@ def _convert(r: _Run, config: CompareConfig, scratch: Path) -> Path:
     """The bag replayed by the ordinary pipeline into ``scratch/<name>.rrd``."""
     target = scratch / f"{r.name}.rrd"
     with sigterm_raises():
-        run(dataclasses.replace(config.base, bag=r.path, sink=SinkConfig(save=target), progress=False, realtime=False))
+        run(dataclasses.replace(config.base, bag=r.path, sink=SinkConfig(save=target), realtime=False))
     return target
 
 

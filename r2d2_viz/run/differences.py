@@ -37,9 +37,7 @@ class SeriesDifference:
     """Run (but the first) → (largest |run − first|, at that aligned time in s); None: no overlap."""
 
 
-def largest_difference(
-    t_ref: np.ndarray, v_ref: F64, t_other: np.ndarray, v_other: F64
-) -> tuple[float, float] | None:
+def largest_difference(t_ref: np.ndarray, v_ref: F64, t_other: np.ndarray, v_other: F64) -> tuple[float, float] | None:
     """The largest ``|other − ref|`` at ``ref``'s times within ``other``'s span (``other`` linearly interpolated),
     and that time (s); None when the spans do not overlap."""
     if not len(t_ref) or not len(t_other):

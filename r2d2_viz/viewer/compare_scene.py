@@ -34,9 +34,7 @@ def anchor(rec: rr.RecordingStream, style: RunStyle, fixed_frame: str, offset_m:
     """The run's fixed frame placed in :data:`COMPARE_FRAME`, ``offset_m`` (x, y, z) away (``--side-by-side``)."""
     rec.log(
         f"{RUNS}/{style.name}/anchor",
-        rr.Transform3D(
-            translation=list(offset_m), parent_frame=COMPARE_FRAME, child_frame=style.frame(fixed_frame)
-        ),
+        rr.Transform3D(translation=list(offset_m), parent_frame=COMPARE_FRAME, child_frame=style.frame(fixed_frame)),
         static=True,
     )
 

@@ -48,7 +48,9 @@ def test_a_ghosts_colours_are_tinted_and_its_series_named_after_the_run(tmp_path
         [],
         rr.Mesh3D.columns(vertex_positions=[[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], albedo_factor=[0xFFFFFFFF]),
     )
-    series = Chunk.from_columns("/joints/limited", [], rr.SeriesLines.columns(names=[["tilt", "periscope"]]))
+    series = Chunk.from_columns(
+        "/joints/limited", [], rr.SeriesLines.columns(names=["tilt", "periscope"]).partition([2])
+    )
     recording = _sent(tmp_path, [rewrite(c, RunStyle("b", 0, (255, 140, 0, 100))) for c in (mesh, series)])
     # white blended 15 % white + 85 % tint: (255, 0.15·255 + 0.85·140 = 157.25, 0.15·255 = 38.25); alpha 255·100/255
     assert recording["/runs/b/robot/visual/body/0"].static["Mesh3D:albedo_factor"][-1] == [0xFF9D2664]
