@@ -3,7 +3,7 @@
 Each bag is first replayed by the ordinary pipeline (:func:`r2d2_viz.runner.run`, with the run's ``--plot``,
 ``--rviz`` and other flags) into a temporary ``.rrd``; then every run's chunks go to the one recording under
 ``/runs/<name>``, shifted onto the shared timeline (:mod:`r2d2_viz.run.alignment`), their frames renamed, the
-others' robots as ghosts (:mod:`r2d2_viz.viewer.compare_merge`); the differences
+others' robots as ghosts (:mod:`r2d2_viz.viewer.compare.merge`); the differences
 (:mod:`r2d2_viz.run.differences`) are printed (``--summary``) or shown in the layout."""
 
 from __future__ import annotations
@@ -26,10 +26,10 @@ from r2d2_viz.runner import RunConfig, run
 from r2d2_viz.signals import sigterm_raises
 from r2d2_viz.sources.bags.bag import open_bag
 from r2d2_viz.sources.system.topic_rates import topic_rates
-from r2d2_viz.viewer.compare_merge import RunFacts, RunStyle, blueprint_view, recording_chunks, send_run
-from r2d2_viz.viewer.compare_scene import anchor, log_summary, tint
+from r2d2_viz.viewer.compare.layout import compare_blueprint
+from r2d2_viz.viewer.compare.merge import RunFacts, RunStyle, blueprint_view, recording_chunks, send_run
+from r2d2_viz.viewer.compare.scene import anchor, log_summary, tint
 from r2d2_viz.viewer.files.whole import flush_file, rrd_complete, saved_rrd
-from r2d2_viz.viewer.layout.compare_layout import compare_blueprint
 from r2d2_viz.viewer.sinks import SinkConfig, close_recording, open_recording
 
 SIDE_BY_SIDE_MIN_M = 1.0

@@ -24,7 +24,7 @@ NAMES = ("swivel", "tilt", "periscope")
 LATE_NS = 700_000_000
 PLOT = "/joint_states.position[0]"
 PLOT_ENTITY = r"plot/0/\/joint_states.position\[0\]"
-GHOST_ALPHA = 100  # r2d2_viz.viewer.compare_scene.GHOST_ALPHA, as the docs say: 100 of 255
+GHOST_ALPHA = 100  # r2d2_viz.viewer.compare.scene.GHOST_ALPHA, as the docs say: 100 of 255
 
 
 def _values(t_s: float, late: bool) -> list[float]:

@@ -7,8 +7,8 @@ from pathlib import Path
 import rerun as rr
 from rrd import read_recording
 
-from r2d2_viz.viewer.compare_merge import RunStyle
-from r2d2_viz.viewer.compare_scene import COMPARE_FRAME, SUMMARY, anchor, log_summary, tint
+from r2d2_viz.viewer.compare.merge import RunStyle
+from r2d2_viz.viewer.compare.scene import COMPARE_FRAME, SUMMARY, anchor, log_summary, tint
 
 
 def test_the_first_run_is_drawn_as_it_is_the_others_tinted_and_translucent() -> None:

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 import rerun as rr
 
-from r2d2_viz.viewer.compare_merge import RUNS, RunStyle
+from r2d2_viz.viewer.compare.merge import RUNS, RunStyle
 
 COMPARE_FRAME = "compare"
 """The frame of the 3D view: every run's fixed frame hangs from it."""

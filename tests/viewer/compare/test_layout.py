@@ -6,7 +6,7 @@ from pathlib import Path
 
 from rrd import blueprint_components
 
-from r2d2_viz.viewer.layout.compare_layout import compare_blueprint
+from r2d2_viz.viewer.compare.layout import compare_blueprint
 
 
 def test_one_3d_view_in_the_compare_frame_and_each_plot_overlaid_across_runs(tmp_path: Path) -> None:

@@ -8,8 +8,8 @@ from collections.abc import Mapping, Sequence
 
 import rerun.blueprint as rrb
 
-from r2d2_viz.viewer.compare_merge import RUNS
-from r2d2_viz.viewer.compare_scene import COMPARE_FRAME, SUMMARY
+from r2d2_viz.viewer.compare.merge import RUNS
+from r2d2_viz.viewer.compare.scene import COMPARE_FRAME, SUMMARY
 from r2d2_viz.viewer.entities import TIMELINE, WARNINGS
 
 

@@ -10,7 +10,7 @@ import rerun as rr
 from rerun.chunk import Chunk
 from rrd import read_recording
 
-from r2d2_viz.viewer.compare_merge import RunFacts, RunStyle, rewrite
+from r2d2_viz.viewer.compare.merge import RunFacts, RunStyle, rewrite
 
 T0 = 1_700_000_000_000_000_000
 
