@@ -161,3 +161,12 @@ def test_bad_input_is_one_line_and_exit_2(made: Path, args: list[str], says: str
     assert result.returncode == 2
     assert result.stderr.splitlines() == [f"error: {says}"]
     assert result.stdout == ""
+
+
+def test_side_by_side_spaces_the_runs_by_the_first_runs_camera_distance() -> None:
+    from r2d2_viz.run.compare import _spacing
+
+    eye = {"position": [3.0, 4.0, 0.0], "look_target": [0.0, 0.0, 0.0], "eye_up": [0.0, 0.0, 1.0]}
+    assert _spacing(eye) == pytest.approx(0.6 * 5.0)  # |(3, 4, 0)| = 5 m, by hand
+    assert _spacing({"position": [0.1, 0.0, 0.0], "look_target": [0.0, 0.0, 0.0]}) == 1.0  # at least 1 m
+    assert _spacing({}) == 1.0
