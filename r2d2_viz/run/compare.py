@@ -159,18 +159,19 @@ def _record(
     on_ready: Callable[[str], None] | None,
 ) -> CompareResult:
     views = [blueprint_view(r.recorded) for r in runs]
-    blueprint = compare_blueprint([r.name for r in runs], config.base.plots, views[0][1])
+    hidden = {r.name: v.hidden for r, v in zip(runs, views, strict=True)}
+    blueprint = compare_blueprint([r.name for r in runs], config.base.plots, views[0].eye, hidden)
     sink = config.base.sink
     save = sink.save
     tmp = save.with_name(f".{save.name}.{os.getpid()}.partial") if save is not None else None
-    spacing = _spacing(views[0][1]) if config.side_by_side else 0.0
+    spacing = _spacing(views[0].eye) if config.side_by_side else 0.0
     with saved_rrd(tmp, save), sigterm_raises():
         recording = open_recording(sink, save_to=tmp, on_ready=on_ready, blueprint=blueprint)
         try:
-            for k, (r, (fixed, _)) in enumerate(zip(runs, views, strict=True)):
+            for k, (r, view) in enumerate(zip(runs, views, strict=True)):
                 style = RunStyle(r.name, aligned[r.name].shift_ns(), tint(k))
-                if fixed is not None:
-                    anchor(recording.rec, style, fixed, (0.0, k * spacing, 0.0))
+                if view.frame is not None:
+                    anchor(recording.rec, style, view.frame, (0.0, k * spacing, 0.0))
                 send_run(recording.rec, r.recorded, style)
                 flush_file(recording.rec, tmp)
             log_summary(recording.rec, lines)

@@ -14,12 +14,16 @@ from r2d2_viz.viewer.entities import TIMELINE, WARNINGS
 
 
 def compare_blueprint(
-    names: Sequence[str], plots: Sequence[Sequence[str]], eye: Mapping[str, Sequence[float]] | None = None
+    names: Sequence[str],
+    plots: Sequence[Sequence[str]],
+    eye: Mapping[str, Sequence[float]] | None = None,
+    hidden: Mapping[str, Sequence[str]] | None = None,
 ) -> rrb.Blueprint:
     """The layout for runs ``names`` (the first the reference), ``plots`` the ``--plot`` flags' paths; ``eye``: the
-    first run's 3D camera (``position``, ``look_target``, ``eye_up``), else Rerun's own."""
+    first run's 3D camera (``position``, ``look_target``, ``eye_up``), else Rerun's own; ``hidden``: run → the
+    entities its own layout hides (collision shapes, what its RViz config unticks), hidden in the 3D view too."""
     runs = [f"{RUNS}/{name}" for name in names]
-    hidden = [f"- {run}/{part}" for run in runs for part in ("joints/**", "plot/**", WARNINGS.strip("/"))]
+    left_out = [f"- {run}/{part}" for run in runs for part in ("joints/**", "plot/**", WARNINGS.strip("/"))]
     eye_controls = None
     if eye and all(k in eye and len(eye[k]) == 3 for k in ("position", "look_target", "eye_up")):
         eye_controls = rrb.EyeControls3D(
@@ -31,9 +35,14 @@ def compare_blueprint(
     scene = rrb.Spatial3DView(
         name=f"3D: {', '.join(names)} (the first as is, the others as ghosts)"[:120],
         origin="/",
-        contents=[f"+ {RUNS}/**", *hidden],
+        contents=[f"+ {RUNS}/**", *left_out],
         spatial_information=rrb.SpatialInformation(target_frame=COMPARE_FRAME, show_axes=False),
         eye_controls=eye_controls,
+        overrides={  # entity path → hidden
+            f"{RUNS}/{name}{entity}": rrb.EntityBehavior(visible=False)
+            for name, entities in (hidden or {}).items()
+            for entity in entities
+        },
     )
     side: list[rrb.View] = [
         rrb.TimeSeriesView(name="Joint states (all runs)", origin="/", contents=[f"+ {run}/joints/**" for run in runs])

@@ -217,23 +217,39 @@ def send_run(rec: rr.RecordingStream, path: Path, style: RunStyle) -> None:
     rr.send_chunks(rewritten(path, style, RunFacts()), recording=rec)
 
 
-def blueprint_view(path: Path) -> tuple[str | None, dict[str, list[float]]]:
-    """The fixed frame and the 3D view's eye (``position``, ``look_target``, ``eye_up``) of the blueprint an
-    ``.rrd`` holds (None and {}: it holds none)."""
+@dataclass
+class RunView:
+    """What a run's own blueprint says of its 3D view: the fixed frame (None: it has none), the eye
+    (``position``, ``look_target``, ``eye_up``) and the entities it hides (collision shapes, unticked displays)."""
+
+    frame: str | None = None
+    eye: dict[str, list[float]] = field(default_factory=dict)
+    hidden: list[str] = field(default_factory=list)
+
+
+OVERRIDES = "/ViewContents/overrides/"
+
+
+def blueprint_view(path: Path) -> RunView:
+    """The :class:`RunView` of the (first) blueprint an ``.rrd`` holds (an empty one: it holds none)."""
     reader = RrdReader(path)
     stores = reader.blueprints()
-    frame: str | None = None
-    eye: dict[str, list[float]] = {}
+    view = RunView()
     if not stores:
-        return None, {}
+        return view
     for chunk in reader.stream(store=stores[0]):
         batch = chunk.to_record_batch()
         for name in batch.schema.names:
-            if not name.startswith(("SpatialInformation:", "EyeControls3D:")):
+            if not name.startswith(("SpatialInformation:", "EyeControls3D:", "EntityBehavior:visible")):
                 continue
             values = batch.column(name).to_pylist()
-            if name == "SpatialInformation:target_frame" and values and values[-1]:
-                frame = str(values[-1][0])
-            elif name.startswith("EyeControls3D:") and values and values[-1]:
-                eye[name.partition(":")[2]] = list(values[-1][0]) if isinstance(values[-1][0], list) else []
-    return frame, eye
+            if not values or not values[-1]:
+                continue
+            if name == "SpatialInformation:target_frame":
+                view.frame = str(values[-1][0])
+            elif name.startswith("EyeControls3D:"):
+                view.eye[name.partition(":")[2]] = list(values[-1][0]) if isinstance(values[-1][0], list) else []
+            elif values[-1] == [False] and OVERRIDES in chunk.entity_path:  # Rerun's .../<entity>/visualizers
+                entity = chunk.entity_path.partition(OVERRIDES)[2].removesuffix("/visualizers")
+                view.hidden.append("/" + entity)
+    return view

@@ -60,3 +60,24 @@ def test_a_ghosts_colours_are_tinted_and_its_series_named_after_the_run(tmp_path
 def test_the_recordings_properties_stay_out() -> None:
     properties = Chunk.from_columns("/__properties", [], rr.AnyValues.columns(value=["x"]))
     assert rewrite(properties, RunStyle("b", 0)) is None
+
+
+def test_a_runs_own_layout_says_its_fixed_frame_eye_and_hidden_entities(tmp_path: Path) -> None:
+    import rerun.blueprint as rrb
+
+    from r2d2_viz.viewer.compare.merge import blueprint_view
+
+    out = tmp_path / "run.rrd"
+    view = rrb.Spatial3DView(
+        origin="/",
+        spatial_information=rrb.SpatialInformation(target_frame="odom"),
+        eye_controls=rrb.EyeControls3D(position=[1, 2, 3], look_target=[0, 0, 0], eye_up=[0, 0, 1]),
+        overrides={"/robot/collision": rrb.EntityBehavior(visible=False)},  # type: ignore[dict-item]
+    )
+    rec = rr.RecordingStream("test")
+    rec.save(out, default_blueprint=rrb.Blueprint(view))
+    rec.log("/x", rr.Points3D([[0, 0, 0]]))
+    rec.flush()
+    rec.disconnect()
+    run = blueprint_view(out)
+    assert (run.frame, run.eye["position"], run.hidden) == ("odom", [1.0, 2.0, 3.0], ["/robot/collision"])
