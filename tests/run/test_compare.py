@@ -170,3 +170,18 @@ def test_side_by_side_spaces_the_runs_by_the_first_runs_camera_distance() -> Non
     assert _spacing(eye) == pytest.approx(0.6 * 5.0)  # |(3, 4, 0)| = 5 m, by hand
     assert _spacing({"position": [0.1, 0.0, 0.0], "look_target": [0.0, 0.0, 0.0]}) == 1.0  # at least 1 m
     assert _spacing({}) == 1.0
+
+
+def test_a_recording_the_app_wrote_is_a_run_too(made: Path, tmp_path: Path) -> None:
+    """``a`` as the ``.rrd`` that ``--bag a --plot …`` wrote: the same plotted series, hence the same figures as
+    the bag itself gave (its "topics" are then its entities)."""
+    rrd = tmp_path / "a.rrd"
+    assert cli("--bag", str(made / "a"), "--plot", PLOT, "--save", str(rrd)).returncode == 0
+    result = cli("--compare", str(rrd), str(made / "b"), "--plot", PLOT, "--summary")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[1] == "duration: a 0.98 s · b 0.975 s"  # 49 × 20 ms; 39 × 25 ms
+    bag_lines = (made / "summary.out").read_text().splitlines()
+    for name in (PLOT, "swivel", "tilt"):
+        (mine,) = [line for line in lines if line.startswith(f"series {name}:")]
+        assert mine in bag_lines
