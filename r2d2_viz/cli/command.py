@@ -138,8 +138,17 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
         args.xacro_args = [*(str(b) for b in args.bag if ":=" in str(b)), *args.xacro_args]
         args.bag = [b for b in args.bag if ":=" not in str(b)] or None
-    if args.export_lerobot is not None and args.render is not None:
-        raise UsageError("choose --export-lerobot DIR or --render OUT, not both in one run")
+    ends = [
+        flag
+        for flag, on in (
+            ("--export-lerobot", args.export_lerobot),
+            ("--render", args.render),
+            ("--compare", args.compare),
+        )
+        if on is not None
+    ]
+    if len(ends) > 1:
+        raise UsageError(f"choose one of {' and '.join(ends)} in one run")
     if args.export_lerobot is not None:  # bags -> a LeRobot dataset (issue 45)
         from r2d2_viz.run.export import export_main
 
@@ -150,6 +159,10 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         return render_main(args)
     if args.view is not None:
         raise UsageError("--view chooses the view --render draws: use it with --render OUT.mp4")
+    if args.compare is not None:  # issue 47: several runs in one recording
+        from r2d2_viz.cli.compare import compare_main
+
+        return compare_main(args)
     fleet = (args.save_dir, args.dataset, args.jobs, args.ray, args.summary)
     if args.force or any(value is not None for value in fleet):
         from r2d2_viz.fleet.commands import fleet_main

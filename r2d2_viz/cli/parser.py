@@ -142,7 +142,32 @@ def build_parser() -> argparse.ArgumentParser:
         const="-",
         default=None,
         metavar="OUT",
-        help="with --dataset: print one row per recording, or write it to OUT (.csv, .parquet)",
+        help="with --dataset: print one row per recording, or write it to OUT (.csv, .parquet); with --compare: "
+        "print what differs between the runs and exit",
+    )
+    # --compare (issue 47): several runs in one recording, aligned, the others' robots as ghosts
+    runs = parser.add_argument_group("comparing runs: several bags (or .rrd recordings r2d2-viz wrote) on one timeline")
+    runs.add_argument(
+        "--compare",
+        type=Path,
+        nargs="+",
+        default=None,
+        metavar="RUN",
+        help="one recording of these runs under /runs/<name>: aligned at their starts, the first robot as it is, the "
+        "others as tinted ghosts, every --plot overlaid; with --summary, print what differs and exit",
+    )
+    runs.add_argument(
+        "--align", default=None, metavar="TOPIC", help="--compare: align the runs at their first message on TOPIC"
+    )
+    runs.add_argument(
+        "--offset",
+        action="append",
+        default=[],
+        metavar="NAME=SECONDS",
+        help="--compare: shift run NAME (its bag's name) this many seconds later on the timeline (repeatable)",
+    )
+    runs.add_argument(
+        "--side-by-side", action="store_true", help="--compare: the runs' robots beside each other, not overlaid"
     )
     ros = parser.add_argument_group("joining a running ROS 2 graph (Cyclone DDS; ROS_DOMAIN_ID and friends apply)")
     ros.add_argument(

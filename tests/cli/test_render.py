@@ -28,7 +28,7 @@ from r2d2_viz.run.render import RenderResult
         (["--render", "{tmp}/out.mp4", "--save", "{tmp}/x.rrd"], "does not combine with --save"),
         (["--render", "{tmp}/out.mp4", "--serve"], "does not combine with --serve"),
         (["--view", "Warnings"], "--view chooses the view --render draws"),
-        (["--render", "{tmp}/out.mp4", "--export-lerobot", "{tmp}/ds"], "choose --export-lerobot DIR or --render OUT"),
+        (["--render", "{tmp}/out.mp4", "--export-lerobot", "{tmp}/ds"], "choose one of --export-lerobot and --render"),
         (["--bag", "{tmp}/a", "--save-dir", "{tmp}/v", "--render", "mp4", "--jobs", "2"], "combine with --jobs"),
         (["--bag", "{tmp}/a", "{tmp}/b", "--render", "{tmp}/out.mp4"], "2 bags: give --save-dir DIR"),
         (["--bag", "{tmp}/nope", "--save-dir", "{tmp}/v", "--render", "avi"], "unknown extension"),
