@@ -50,6 +50,7 @@ from r2d2_viz.viewer.files.whole import flush_file
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
+from r2d2_viz.viewer.rviz_axes import start_view
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, update_blueprint
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.system.node_graph import NodeGraphLog
@@ -250,8 +251,7 @@ class _Scene:
         self.streamer: RobotStream | None = None
         self.samples = 0
         self.notices = Notices(rec, at_ns=live_start_ns(batches), clock="timestamp")  # load-time warnings: first
-        for note in view.notes:
-            self.notices.report(note)
+        start_view(self.notices, view.notes, view.spec, view.layout.fixed_frame or fixed_frame)  # and RViz's Axes
         self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
         self.recorded.graph = TfGraph(rec, clock="timestamp") if config.tf_tree else None
         self.nodes = NodeGraphLog(rec, clock="timestamp").watch(source if config.tf_tree else None)

@@ -7,7 +7,7 @@ Colours are RGBA8 arrays ``(N, 4)`` (one per instance) or ``(1, 4)`` (one for al
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -278,3 +278,7 @@ class DecodeOptions:
     covariance_scale: float = 1.0  # half sizes = scale x sqrt(eigenvalue): 1 sigma, RViz's default
     color_transformer: Literal["auto", "FlatColor"] = "auto"  # auto: RGB8, else Intensity, else flat (RViz's)
     odometry_covariance: bool = False  # an Odometry's covariance ellipsoid (off unless a config asks for it)
+    value_range: tuple[float, float] | None = None  # a scalar point display's Min/Max Intensity (None: RViz's)
+    depth_cloud: tuple[str, str] | None = None  # DepthCloud: (its CameraInfo topic, its Color Image Topic or "")
+    effort: tuple[Any, ...] = ()  # Effort: the robot's revolute joints (r2d2_viz.msgs.effort.EffortJoint)
+    effort_size: tuple[float, float] = (0.02, 1.0)  # Effort's Width (m) and Scale

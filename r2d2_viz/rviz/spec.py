@@ -55,7 +55,21 @@ TOPIC_DISPLAYS = (
     "GridCells",
     "Wrench",
     "Twist",
+    # issue 46: RViz 2's classes (rviz_default_plugins/plugins_description.xml) drawn since
+    "TwistStamped",
+    "AccelStamped",
+    "CameraInfo",
+    "Temperature",
+    "FluidPressure",
+    "Illuminance",
+    "RelativeHumidity",
+    "DepthCloud",
+    "Effort",
+    "InteractiveMarkers",
 )
+TOPIC_KEYS = ("Topic", "Image Topic", "Depth Map Topic", "Interactive Markers Namespace", "Update Topic")
+"""Where a display names its topic: most say ``Topic``; Camera ``Image Topic``; DepthCloud ``Depth Map Topic``;
+InteractiveMarkers ``Interactive Markers Namespace`` (ROS 2: ``<namespace>/update``) or ``Update Topic`` (ROS 1)."""
 
 SCENE_ROBOT_DISPLAYS = ("MotionPlanning", "PlanningScene")
 """MoveIt's displays (``moveit_rviz_plugin/…``) that draw the robot as their "Scene Robot"."""
@@ -137,6 +151,20 @@ class DisplayStyleSpec:
     position_tolerance: float | None = None
     """Odometry's Position Tolerance (m) and Angle Tolerance (rad)."""
     angle_tolerance: float | None = None
+    length: float | None = None
+    """Axes' Length (m); CameraInfo's Far clip (m)."""
+    radius: float | None = None
+    """Axes' Radius (m)."""
+    scale: float | None = None
+    """Effort's Scale."""
+    width: float | None = None
+    """Effort's Width (m)."""
+    value_range: tuple[float, float] | None = None
+    """The scalar point displays' Min and Max Intensity (RViz's defaults per type when unset)."""
+    color_topic: str | None = None
+    """DepthCloud's Color Image Topic."""
+    frame: str | None = None
+    """Axes' Reference Frame (None: the fixed frame)."""
 
 
 @dataclass(frozen=True)
