@@ -50,12 +50,12 @@ from r2d2_viz.viewer.files.whole import flush_file
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view, with_telemetry
 from r2d2_viz.viewer.notices import Notices
-from r2d2_viz.viewer.rviz_axes import start_view
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, update_blueprint
 from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.system.node_graph import NodeGraphLog
 from r2d2_viz.viewer.system.tf_graph import TfGraph
 from r2d2_viz.viewer.tf_recorded import RecordedTf
+from r2d2_viz.viewer.workbench.rviz_axes import start_view
 
 POLL_SECONDS = 0.02
 """At the latest this often, what arrived is taken from the graph and logged (one chunk per entity)…"""

@@ -38,11 +38,11 @@ from r2d2_viz.viewer.files.whole import flush_file, saved_rrd
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, joined_topics, plan_view
 from r2d2_viz.viewer.notices import run_notices
-from r2d2_viz.viewer.rviz_axes import start_view
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.system.health import system_views
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
+from r2d2_viz.viewer.workbench.rviz_axes import start_view
 from r2d2_viz.viewer.workbench.watch import watch_robot
 
 BATCH_CHUNK_SAMPLES = 20_000

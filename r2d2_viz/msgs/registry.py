@@ -8,7 +8,8 @@ from collections.abc import Callable
 import numpy as np
 
 from r2d2_viz.errors import one_line
-from r2d2_viz.msgs import accel, images, interactive, markers, nav, pointcloud, poses, scalar_points, scan, telemetry
+from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
+from r2d2_viz.msgs.rviz2 import accel, interactive, scalar_points
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError
 

@@ -280,5 +280,5 @@ class DecodeOptions:
     odometry_covariance: bool = False  # an Odometry's covariance ellipsoid (off unless a config asks for it)
     value_range: tuple[float, float] | None = None  # a scalar point display's Min/Max Intensity (None: RViz's)
     depth_cloud: tuple[str, str] | None = None  # DepthCloud: (its CameraInfo topic, its Color Image Topic or "")
-    effort: tuple[Any, ...] = ()  # Effort: the robot's revolute joints (r2d2_viz.msgs.effort.EffortJoint)
+    effort: tuple[Any, ...] = ()  # Effort: the robot's revolute joints (r2d2_viz.msgs.rviz2.effort.EffortJoint)
     effort_size: tuple[float, float] = (0.02, 1.0)  # Effort's Width (m) and Scale

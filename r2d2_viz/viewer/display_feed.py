@@ -21,8 +21,8 @@ import rerun as rr
 
 from r2d2_viz.errors import short
 from r2d2_viz.msgs.images import EncoderName, VideoEncoder
-from r2d2_viz.msgs.joined import Joins
 from r2d2_viz.msgs.nav import apply_grid_update
+from r2d2_viz.msgs.rviz2.joined import Joins
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, GridMap, Image, MarkerOp, MeshResource, VideoSample, is_plain
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_images

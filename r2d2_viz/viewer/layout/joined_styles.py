@@ -1,5 +1,5 @@
-"""The decode options of the RViz displays added for issue 46 (:mod:`r2d2_viz.msgs.joined`,
-:mod:`r2d2_viz.msgs.scalar_points`): a scalar display's Min/Max Intensity, DepthCloud's camera info and colour
+"""The decode options of the RViz displays added for issue 46 (:mod:`r2d2_viz.msgs.rviz2.joined`,
+:mod:`r2d2_viz.msgs.rviz2.scalar_points`): a scalar display's Min/Max Intensity, DepthCloud's camera info and colour
 topics, Effort's joints (the robot's revolute joints: RViz's Effort display draws no other), Width and Scale."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from r2d2_viz.msgs.effort import SCALE, WIDTH, EffortJoint
-from r2d2_viz.msgs.joined import info_topic
+from r2d2_viz.msgs.rviz2.effort import SCALE, WIDTH, EffortJoint
+from r2d2_viz.msgs.rviz2.joined import info_topic
 from r2d2_viz.robot.model import Robot
 from r2d2_viz.rviz.config import load_rviz
 from r2d2_viz.rviz.spec import TopicDisplay

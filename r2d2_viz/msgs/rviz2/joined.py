@@ -2,10 +2,10 @@
 
 - DepthCloud: a depth image (16UC1 / 32FC1) becomes points with its camera's latest CameraInfo (the depth topic's
   ``<namespace>/camera_info``, as image_transport names it) and the latest image of the Color Image Topic
-  (:mod:`r2d2_viz.msgs.depth_cloud`); drawn as the op ``("depth_cloud", 0)`` (on ``<topic>/depth_cloud/0``: the
+  (:mod:`r2d2_viz.msgs.rviz2.depth_cloud`); drawn as the op ``("depth_cloud", 0)`` (on ``<topic>/depth_cloud/0``: the
   topic's own entity may carry its camera's pinhole). Nothing is drawn before the first CameraInfo (RViz waits too).
-- InteractiveMarkers: pose updates move the markers of earlier updates (:mod:`r2d2_viz.msgs.interactive`).
-- Effort: a JointState's efforts at the robot's joints (:mod:`r2d2_viz.msgs.effort`), when its topic's options
+- InteractiveMarkers: pose updates move the markers of earlier updates (:mod:`r2d2_viz.msgs.rviz2.interactive`).
+- Effort: a JointState's efforts at the robot's joints (:mod:`r2d2_viz.msgs.rviz2.effort`), when its topic's options
   name the joints.
 
 Everything else is :func:`r2d2_viz.msgs.registry.decode`. Messages must come in receive order, each once. Pure: no
@@ -16,11 +16,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from r2d2_viz.msgs.depth_cloud import POINT_RADIUS, Projection, depth_points, projection_of
-from r2d2_viz.msgs.effort import effort_ops
 from r2d2_viz.msgs.geometry import header_of
-from r2d2_viz.msgs.interactive import UPDATE, InteractiveMarkers
 from r2d2_viz.msgs.registry import decode
+from r2d2_viz.msgs.rviz2.depth_cloud import POINT_RADIUS, Projection, depth_points, projection_of
+from r2d2_viz.msgs.rviz2.effort import effort_ops
+from r2d2_viz.msgs.rviz2.interactive import UPDATE, InteractiveMarkers
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, Image, MarkerOp
 from r2d2_viz.msgs.typestore import MsgError, deserialize
 
