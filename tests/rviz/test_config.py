@@ -229,11 +229,13 @@ def test_turtlebot3_burger_ros1_xy_orbit(tmp_path: Path) -> None:
     # (0.38 m along the camera's up, which leans north) moves it north and up
     assert spec.camera.eye[1] < focal[1] and spec.camera.eye[2] > 1.3
     assert spec.camera.target[2] == pytest.approx(0.2 * 1.910049319267273 * math.cos(0.7953976392745972), abs=1e-6)
-    # TF: Marker Scale 0.4, Show Names true; rviz/Axes display and rviz/Time panel have no counterpart
+    # TF: Marker Scale 0.4, Show Names true; the rviz/Time panel has no counterpart; the rviz/Axes display is
+    # RViz's axes in its Reference Frame (<Fixed Frame> there: the fixed frame)
     assert spec.tf is not None and spec.tf.marker_scale == pytest.approx(0.4) and spec.tf.show_names
-    assert any("display rviz/Axes: no counterpart" in n for n in spec.notes)
+    assert not any("rviz/Axes" in n for n in spec.notes)
     assert "rviz/Time" in _tools_and_panels(spec)
-    assert [(t.kind, t.topic) for t in spec.topics] == [("LaserScan", "/scan")]
+    assert [(t.kind, t.topic) for t in spec.topics] == [("Axes", ""), ("LaserScan", "/scan")]
+    assert spec.topics[0].style.frame is None
     components = _blueprint(spec, tmp_path)
     view = _scene(components)
     assert components[f"{view}/SpatialInformation"]["SpatialInformation:target_frame"] == ["base_footprint"]
