@@ -298,3 +298,22 @@ def test_unticked_frames_links_and_tf_parts_are_hidden(tmp_path: Path) -> None:
     no_axes = parse_rviz(text.replace("      Show Axes: true\n", "      Show Axes: false\n"), source="edited.rviz")
     components = _blueprint(no_axes, tmp_path)
     assert "/tf_axes" in _hidden(components, _scene(components))
+
+
+RVIZ2_DISPLAYS = """AccelStamped Axes Camera DepthCloud CameraInfo Effort Grid GridCells FluidPressure Illuminance Image
+InteractiveMarkers LaserScan Map PointCloud PointCloud2 Polygon Pose PoseWithCovariance Range RelativeHumidity
+RobotModel Temperature TF TwistStamped Marker MarkerArray Odometry PoseArray Path PointStamped Wrench""".split()
+"""RViz 2's display classes: ros2/rviz ``rviz_default_plugins/plugins_description.xml`` (rolling, commit f7112b1a),
+its entries whose base class is ``rviz_common::Display`` (the tools, view controllers and TF transformer left out)."""
+
+
+def test_a_config_with_every_rviz2_display_class_converts_without_a_missing_one() -> None:
+    path = REPO / "tests" / "data" / "rviz" / "all_displays.rviz"
+    classes = [
+        line.split("rviz_default_plugins/")[1] for line in path.read_text().splitlines() if "Class: rviz_def" in line
+    ]
+    assert sorted(classes[:-1]) == sorted(RVIZ2_DISPLAYS) and len(set(RVIZ2_DISPLAYS)) == 32  # (last: the view)
+    spec = load_rviz(path)
+    assert not [n for n in spec.notes if "no counterpart" in n or "not supported" in n], spec.notes
+    drawn = {t.kind for t in spec.topics} | {"Grid", "TF", "RobotModel"}
+    assert drawn == set(RVIZ2_DISPLAYS)
