@@ -14,8 +14,12 @@ rerun.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Mapping
 
+import numpy as np
+
+from r2d2_viz.errors import one_line
 from r2d2_viz.msgs.geometry import header_of
 from r2d2_viz.msgs.registry import decode
 from r2d2_viz.msgs.rviz2.depth_cloud import POINT_RADIUS, Projection, depth_points, projection_of
@@ -51,6 +55,18 @@ class Joins:
         return {*self.infos, *self.colors}
 
     def decode(
+        self, topic: str, msgtype: str, data: bytes | memoryview, options: DecodeOptions
+    ) -> Decoded | list[MarkerOp]:
+        """What the message draws; fails only with ``MsgError`` (as :func:`r2d2_viz.msgs.registry.decode`)."""
+        try:
+            with np.errstate(all="ignore"):
+                return self._decode(topic, msgtype, data, options)
+        except MsgError:
+            raise
+        except (IndexError, KeyError, TypeError, OverflowError, AttributeError, ValueError, struct.error) as exc:
+            raise MsgError(f"{msgtype}: {one_line(exc)}") from None
+
+    def _decode(
         self, topic: str, msgtype: str, data: bytes | memoryview, options: DecodeOptions
     ) -> Decoded | list[MarkerOp]:
         if msgtype == UPDATE:

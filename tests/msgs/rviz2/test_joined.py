@@ -177,3 +177,23 @@ def test_camera_info_is_its_frustum_far_clip_deep(run) -> None:
     w, h = _at(rows, "Pinhole:resolution", T0)[0]
     drawn = [tuple(np.linalg.solve(logged, [u, v, 1.0]) * far) for u, v in [(0, 0), (w, 0), (w, h), (0, h)]]
     np.testing.assert_allclose(drawn, corners, atol=1e-9)
+
+
+def test_a_depth_image_before_its_camera_info_draws_nothing_and_bad_bytes_are_one_error() -> None:
+    from rvizdisplaybags import DEPTH_MM, OPTICAL, camera_info, image
+
+    from r2d2_viz.msgs.rviz2.joined import Joins
+    from r2d2_viz.msgs.shapes import DecodeOptions
+    from r2d2_viz.msgs.typestore import MsgError
+
+    depth = DecodeOptions(depth_cloud=("/d/camera_info", ""))
+    joins = Joins({"/d/image": depth})
+    data = image(T0, OPTICAL, "16UC1", DEPTH_MM)
+    assert joins.decode("/d/image", "sensor_msgs/msg/Image", data, depth) == []  # RViz waits for the camera too
+    joins.decode("/d/camera_info", "sensor_msgs/msg/CameraInfo", camera_info(T0), DecodeOptions())
+    (op,) = joins.decode("/d/image", "sensor_msgs/msg/Image", data, depth)
+    assert len(op.decoded.items[0].positions) == int((DEPTH_MM != 0).sum())
+    update = "visualization_msgs/msg/InteractiveMarkerUpdate"
+    for cut in range(0, 64, 3):  # a cut message: one MsgError, nothing else
+        with pytest.raises(MsgError):
+            joins.decode("/im", update, b"\x00\x01\x00\x00" + bytes(cut), DecodeOptions())
