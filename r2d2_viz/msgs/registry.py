@@ -117,8 +117,10 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     "geometry_msgs/msg/PointStamped": ("PointStamped", "a small `Ellipsoids3D` sphere"),
     "geometry_msgs/msg/PolygonStamped": ("Polygon", "a closed `LineStrips3D`"),
     "geometry_msgs/msg/WrenchStamped": ("Wrench", "`Arrows3D`: force, and torque"),
-    "geometry_msgs/msg/TwistStamped": ("Twist, TwistStamped", "`Arrows3D`: linear and angular velocity"),
-    "geometry_msgs/msg/AccelStamped": ("AccelStamped", "`Arrows3D`: linear and angular acceleration"),
+    **dict.fromkeys(
+        ("geometry_msgs/msg/TwistStamped", "geometry_msgs/msg/AccelStamped"),
+        ("Twist, TwistStamped, AccelStamped", "`Arrows3D`: linear and angular velocity (acceleration)"),
+    ),
     "visualization_msgs/msg/InteractiveMarkerUpdate": (
         "InteractiveMarkers",
         "its controls' markers as Marker draws them (on `<topic>/<name>/<key>`), moved by pose updates, "

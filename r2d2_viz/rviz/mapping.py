@@ -118,7 +118,7 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "Effort",
         "Topic, Width, Scale",
         "the JointState topic (`/joint_states` too) read as a display: at each revolute joint's child link, RViz's arc "
-        "of radius 0.05 + e · Scale / 2 (e = min(|effort| / URDF limit, 1) + 0.05) around the axis and its arrow "
+        "of radius 0.05 + e · Scale / 2 (e = min(abs(effort) / URDF limit, 1) + 0.05) around the axis and its arrow "
         "head, in the rainbow colour of e (`<topic>/effort/<k>`)",
     ),
     (
