@@ -197,3 +197,41 @@ def test_a_depth_image_before_its_camera_info_draws_nothing_and_bad_bytes_are_on
     for cut in range(0, 64, 3):  # a cut message: one MsgError, nothing else
         with pytest.raises(MsgError):
             joins.decode("/im", update, b"\x00\x01\x00\x00" + bytes(cut), DecodeOptions())
+
+
+def test_the_live_path_joins_too(run) -> None:
+    """A live run calls ``DisplayFeed.log`` per message as it arrives: the depth cloud and the interactive marker's
+    pose update come out as in a replay (the bag's messages, in receive order)."""
+    import rerun as rr
+    from rosbags.highlevel import AnyReader
+
+    from r2d2_viz.msgs.shapes import DecodeOptions, MarkerOp
+    from r2d2_viz.sources.bag_displays import TopicMessage
+    from r2d2_viz.viewer import display_feed as feed_module
+    from r2d2_viz.viewer.display_feed import DisplayFeed, DisplayStyle
+    from r2d2_viz.viewer.notices import Notices
+
+    _, _, folder = run
+    rec = rr.RecordingStream("test_joined_live")
+    depth = DecodeOptions(depth_cloud=("/camera/depth/camera_info", "/camera/color/image_raw"))
+    feed = DisplayFeed(
+        Notices(rec),
+        clock="timestamp",
+        fixed_frame="base_link",
+        styles={"/camera/depth/image_raw": DisplayStyle(depth)},
+    )
+    sent: list[tuple[str, object]] = []
+    original = feed_module.log_decoded
+    feed_module.log_decoded = lambda rec, entity, decoded, **kw: sent.append((entity, decoded))  # type: ignore[assignment]
+    try:
+        with AnyReader([folder / "bag"], default_typestore=TS) as reader:
+            for connection, t, raw in reader.messages():
+                if connection.topic not in ("/joint_states", "/tf_static"):
+                    feed.log(TopicMessage(t, connection.topic, connection.msgtype, bytes(raw)))
+    finally:
+        feed_module.log_decoded = original
+    clouds = [d for e, d in sent if e == "/camera/depth/image_raw" and isinstance(d, list) and d]
+    assert len(clouds) == 1 and len(clouds[0][0].decoded.items[0].positions) == 9
+    moves = [d for e, d in sent if e == "/basic_controls/update" and isinstance(d, list)]
+    added = [op for ops in moves for op in ops if isinstance(op, MarkerOp) and op.action == "add"]
+    assert [op.decoded.items[0].T_frame_item.translation for op in added] == [(1.0, 0.0, 0.5), (2.0, 0.0, 0.5)]
