@@ -22,7 +22,7 @@ import numpy as np
 from r2d2_viz.errors import one_line
 from r2d2_viz.msgs.geometry import header_of
 from r2d2_viz.msgs.registry import decode
-from r2d2_viz.msgs.rviz2.depth_cloud import POINT_RADIUS, Projection, depth_points, projection_of
+from r2d2_viz.msgs.rviz2.depth_cloud import Projection, depth_points, projection_of
 from r2d2_viz.msgs.rviz2.effort import effort_ops
 from r2d2_viz.msgs.rviz2.interactive import UPDATE, InteractiveMarkers
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, Image, MarkerOp
@@ -93,6 +93,5 @@ class Joins:
         image, projection = decoded.items[0], self.projections.get(topic)
         if not isinstance(image, Image) or projection is None:
             return []
-        radius = options.point_radius if options.point_radius != DecodeOptions().point_radius else POINT_RADIUS
-        points = depth_points(image, projection, self.color_images.get(topic), radius)
+        points = depth_points(image, projection, self.color_images.get(topic), options.point_radius)  # Size (m) / 2
         return [MarkerOp("add", "depth_cloud", 0, Decoded(decoded.frame_id, decoded.stamp_ns, (points,)))]
