@@ -36,3 +36,34 @@ def test_the_configs_bounds_and_equal_bounds() -> None:
 
 def test_they_draw_in_3d_and_plot() -> None:
     assert in_3d("sensor_msgs/msg/Temperature") and in_3d("sensor_msgs/msg/FluidPressure")
+
+
+def test_the_webots_e_pucks_light_sensors() -> None:
+    """Real data: the e-puck's eight light sensors (``/ls0`` … ``/ls7``, Illuminance in lux, Webots), each message
+    deserialised by rosbags; its point in the sensor's frame, in RViz's colour over 0..1000 lux by hand."""
+    from conftest import REPO
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    bag = next(
+        (
+            p
+            for p in (REPO / "tests/data/bags/real", REPO.parent / "shared/bags/real")
+            if (p / "webots_epuck" / "metadata.yaml").is_file()
+        ),
+        None,
+    )
+    if bag is None:
+        pytest.skip("the third-party bag webots_epuck is not in this clone (tests/data/bags/real/README.md)")
+    with AnyReader([bag / "webots_epuck"], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        conns = [c for c in reader.connections if c.msgtype == "sensor_msgs/msg/Illuminance"]
+        assert len(conns) == 8
+        seen = set()
+        for connection, _, raw in reader.messages(connections=conns):
+            msg = reader.deserialize(raw, connection.msgtype)
+            decoded = decode(connection.msgtype, bytes(raw))
+            point, series = decoded.items
+            assert decoded.frame_id == msg.header.frame_id and series.values.tolist() == [msg.illuminance]
+            assert tuple(point.colors[0, :3].tolist()) == rviz_rainbow(1.0 - msg.illuminance / 1000.0)
+            seen.add(msg.illuminance)
+    assert len(seen) > 1  # not one value throughout
