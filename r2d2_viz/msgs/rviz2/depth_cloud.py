@@ -85,7 +85,8 @@ def depth_points(
     py = (np.arange(h, dtype=f32) - f32(projection.cy)) * f32(1.0 / projection.fy)
     vs, us = np.nonzero(valid)
     d = metres[vs, us]
-    positions: F32 = np.stack([px[us] * d, py[vs] * d, d], axis=1).astype(np.float32)
+    with np.errstate(all="ignore"):  # a hostile 3e38 m depth: inf, silently (as the registry's decoders)
+        positions: F32 = np.stack([px[us] * d, py[vs] * d, d], axis=1).astype(np.float32)
     colors = WHITE
     if color is not None and np.asarray(color.pixels).shape[:2] == (h, w):
         colors = rgba_of(color)[vs * w + us]

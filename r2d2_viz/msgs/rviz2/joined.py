@@ -17,8 +17,6 @@ from __future__ import annotations
 import struct
 from collections.abc import Mapping
 
-import numpy as np
-
 from r2d2_viz.errors import one_line
 from r2d2_viz.msgs.geometry import header_of
 from r2d2_viz.msgs.registry import decode
@@ -59,8 +57,7 @@ class Joins:
     ) -> Decoded | list[MarkerOp]:
         """What the message draws; fails only with ``MsgError`` (as :func:`r2d2_viz.msgs.registry.decode`)."""
         try:
-            with np.errstate(all="ignore"):
-                return self._decode(topic, msgtype, data, options)
+            return self._decode(topic, msgtype, data, options)
         except MsgError:
             raise
         except (IndexError, KeyError, TypeError, OverflowError, AttributeError, ValueError, struct.error) as exc:
