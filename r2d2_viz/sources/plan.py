@@ -188,7 +188,7 @@ def plan_bag(
         if text is not None:
             name = f"{bag.path.name}:/robot_description"
             robot = parse_urdf(text, source=name, base_dir=bag.path.parent, packages=packages)
-    shown, undisplayed = display_topics(bag, choice.joined)
+    shown, undisplayed = display_topics(bag, choice.joined if robot is not None or any(namespaces) else ())
     shown = {t: m for t, m in shown.items() if t in selected}
     undisplayed = {t: m for t, m in undisplayed.items() if t in selected}
     static = _static_tf(bag) if "/tf_static" in selected else None

@@ -235,3 +235,14 @@ def test_the_live_path_joins_too(run) -> None:
     moves = [d for e, d in sent if e == "/basic_controls/update" and isinstance(d, list)]
     added = [op for ops in moves for op in ops if isinstance(op, MarkerOp) and op.action == "add"]
     assert [op.decoded.items[0].T_frame_item.translation for op in added] == [(1.0, 0.0, 0.5), (2.0, 0.0, 0.5)]
+
+
+def test_without_a_robot_effort_reads_nothing_and_says_nothing(run, tmp_path: Path) -> None:
+    """No URDF: the Effort display has no joints to draw at; /joint_states is not read as a display (no "cannot be
+    shown" line for it), the other displays draw as before."""
+    _, _, folder = run
+    out = tmp_path / "out.rrd"
+    result = cli("--bag", str(folder / "bag"), "--rviz", str(CONFIG), "--save", str(out))
+    assert result.returncode == 0 and "cannot be shown" not in result.stderr, result.stderr
+    recording = read_recording(out)
+    assert not any(e.startswith("/joint_states/") for e in recording) and "/accel/0" in recording
