@@ -55,6 +55,7 @@ from r2d2_viz.viewer.stream import LiveRobots, RobotStream, robot_namespaces
 from r2d2_viz.viewer.system.node_graph import NodeGraphLog
 from r2d2_viz.viewer.system.tf_graph import TfGraph
 from r2d2_viz.viewer.tf_recorded import RecordedTf
+from r2d2_viz.viewer.workbench.rviz_axes import start_view
 
 POLL_SECONDS = 0.02
 """At the latest this often, what arrived is taken from the graph and logged (one chunk per entity)…"""
@@ -250,8 +251,7 @@ class _Scene:
         self.streamer: RobotStream | None = None
         self.samples = 0
         self.notices = Notices(rec, at_ns=live_start_ns(batches), clock="timestamp")  # load-time warnings: first
-        for note in view.notes:
-            self.notices.report(note)
+        start_view(self.notices, view.notes, view.spec, view.layout.fixed_frame or fixed_frame)  # and RViz's Axes
         self.recorded = RecordedTf(rec, clock="timestamp", axis_length=view.axis_length)
         self.recorded.graph = TfGraph(rec, clock="timestamp") if config.tf_tree else None
         self.nodes = NodeGraphLog(rec, clock="timestamp").watch(source if config.tf_tree else None)

@@ -36,12 +36,13 @@ from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import FieldsRun, fields_run, undecoded_line
 from r2d2_viz.viewer.files.whole import flush_file, saved_rrd
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
-from r2d2_viz.viewer.layout.plan import ViewPlan, plan_view
+from r2d2_viz.viewer.layout.plan import ViewPlan, joined_topics, plan_view
 from r2d2_viz.viewer.notices import run_notices
 from r2d2_viz.viewer.sinks import Recording, SinkConfig, close_recording, open_recording
 from r2d2_viz.viewer.stream import RobotFeed, RobotStream
 from r2d2_viz.viewer.system.health import system_views
 from r2d2_viz.viewer.tf_recorded import RecordedTf, TfFeed
+from r2d2_viz.viewer.workbench.rviz_axes import start_view
 from r2d2_viz.viewer.workbench.watch import watch_robot
 
 BATCH_CHUNK_SAMPLES = 20_000
@@ -192,7 +193,7 @@ def _plan(config: RunConfig, inputs: ExitStack) -> RunPlan:
             time=config.time,
             fixed_frame=config.fixed_frame,
             packages=packages,
-            choice=BagChoice(config.start_offset, config.duration, config.topics),
+            choice=BagChoice(config.start_offset, config.duration, config.topics, joined_topics(config.rviz)),
             shared_frames=config.shared_frames or SHARED_FRAMES,
         )
     loaded = robot()
@@ -218,8 +219,7 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
             streamers = _robot_streams(recording, plan, view, clock, gather) if tree is not None else []
             streamer = streamers[0] if streamers else None
             notices = run_notices(rec, plan, clock, streamers)  # untimed warnings at the run's first time
-            for note in (*plan.notes, *view.notes):
-                notices.report(note)
+            start_view(notices, (*plan.notes, *view.notes), view.spec, view.layout.fixed_frame or plan.fixed_frame)
             recorded = RecordedTf(rec, clock=clock, skip=set(plan.skip_edges), axis_length=view.axis_length)
             recorded.graph = system_views(rec, clock, plan.replay) if config.tf_tree else None
             if plan.static_tf is not None:

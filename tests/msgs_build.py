@@ -121,6 +121,22 @@ def _marker(kind: int) -> Any:
     )
 
 
+def _rviz2_samples() -> list[Any]:
+    """AccelStamped and an InteractiveMarkerUpdate with one marker of one control (issue 46's displays)."""
+    accel = T("geometry_msgs/msg/Accel")(linear=vec(1, 0, 0), angular=vec(0, 0, 1))
+    control = T("visualization_msgs/msg/InteractiveMarkerControl")(
+        name="c", orientation=quat(), orientation_mode=0, interaction_mode=0, always_visible=True,
+        markers=[marker_msg(1, header=header(""))], independent_marker_orientation=False, description="",
+    )  # fmt: skip
+    im = T("visualization_msgs/msg/InteractiveMarker")(
+        header=header(), pose=pose(1, 0, 0), name="m", description="", scale=1.0, menu_entries=[], controls=[control]
+    )
+    update = T("visualization_msgs/msg/InteractiveMarkerUpdate")(
+        server_id="s", seq_num=1, type=1, markers=[im], poses=[], erases=[]
+    )
+    return [T("geometry_msgs/msg/AccelStamped")(header=header(), accel=accel), update]
+
+
 def samples() -> dict[str, bytes]:
     """One small valid message of every display type, serialised."""
     stamped = T("geometry_msgs/msg/PoseStamped")
@@ -211,6 +227,7 @@ def samples() -> dict[str, bytes]:
             header=header(), wrench=T("geometry_msgs/msg/Wrench")(force=vec(1, 0, 0), torque=vec(0, 0, 1))
         ),
         T("geometry_msgs/msg/TwistStamped")(header=header(), twist=twist),
+        *_rviz2_samples(),
     ]
     msgs += _telemetry_samples()
     out = {m.__msgtype__: cdr(m) for m in msgs}

@@ -92,7 +92,7 @@ def decode_polygon_stamped(data: bytes | memoryview, options: DecodeOptions) -> 
     return Decoded(frame, stamp, (LineStrips(strips, one_color(POLYGON_COLOR), 0.0),))
 
 
-def _pair(first: Any, second: Any, scale: float, colors: tuple[Any, Any], radius: float) -> tuple[Shape, Shape]:
+def vector_pair(first: Any, second: Any, scale: float, colors: tuple[Any, Any], radius: float) -> tuple[Shape, Shape]:
     zero = np.zeros((1, 3), dtype=np.float32)
     return (
         Arrows(zero, np.array([xyz(first)], dtype=np.float32) * scale, one_color(colors[0]), radius),
@@ -104,7 +104,7 @@ def decode_wrench_stamped(data: bytes | memoryview, options: DecodeOptions) -> D
     """A WrenchStamped as a force arrow and a torque arrow (the torque straight, along its axis)."""
     msg = deserialize(data, "geometry_msgs/msg/WrenchStamped")
     frame, stamp = header_of(msg)
-    items = _pair(msg.wrench.force, msg.wrench.torque, WRENCH_SCALE, (FORCE_COLOR, TORQUE_COLOR), 0.05)
+    items = vector_pair(msg.wrench.force, msg.wrench.torque, WRENCH_SCALE, (FORCE_COLOR, TORQUE_COLOR), 0.05)
     return Decoded(frame, stamp, items)
 
 
@@ -112,5 +112,5 @@ def decode_twist_stamped(data: bytes | memoryview, options: DecodeOptions) -> De
     """A TwistStamped as a linear-velocity arrow and an angular-velocity arrow (along its axis), x 1."""
     msg = deserialize(data, "geometry_msgs/msg/TwistStamped")
     frame, stamp = header_of(msg)
-    items = _pair(msg.twist.linear, msg.twist.angular, 1.0, (FORCE_COLOR, TORQUE_COLOR), 0.05)
+    items = vector_pair(msg.twist.linear, msg.twist.angular, 1.0, (FORCE_COLOR, TORQUE_COLOR), 0.05)
     return Decoded(frame, stamp, items)

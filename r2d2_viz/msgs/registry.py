@@ -9,6 +9,7 @@ import numpy as np
 
 from r2d2_viz.errors import one_line
 from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
+from r2d2_viz.msgs.rviz2 import accel, interactive, scalar_points
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.stacks import detections, particles, voxels
 from r2d2_viz.msgs.typestore import MsgError
@@ -37,6 +38,8 @@ DECODERS: dict[str, Decoder] = {
     "geometry_msgs/msg/PolygonStamped": poses.decode_polygon_stamped,
     "geometry_msgs/msg/WrenchStamped": poses.decode_wrench_stamped,
     "geometry_msgs/msg/TwistStamped": poses.decode_twist_stamped,
+    "geometry_msgs/msg/AccelStamped": accel.decode_accel_stamped,
+    "visualization_msgs/msg/InteractiveMarkerUpdate": interactive.decode_interactive_update,
     "rcl_interfaces/msg/Log": telemetry.decode_log,
     "rosgraph_msgs/msg/Log": telemetry.decode_ros1_log,
     "diagnostic_msgs/msg/DiagnosticArray": telemetry.decode_diagnostics,
@@ -44,7 +47,7 @@ DECODERS: dict[str, Decoder] = {
     "sensor_msgs/msg/Imu": telemetry.decode_imu,
     "sensor_msgs/msg/NavSatFix": telemetry.decode_navsatfix,
     "sensor_msgs/msg/BatteryState": telemetry.decode_battery,
-    **telemetry.SCALAR_DECODERS,
+    **scalar_points.DECODERS,
     **telemetry.NUMBER_DECODERS,
     # the navigation and perception stacks' displays (issue 46)
     "nav2_msgs/msg/ParticleCloud": particles.decode_particle_cloud,
@@ -64,13 +67,13 @@ VIEWS: dict[str, str] = {
     **dict.fromkeys([*telemetry.SCALAR_DECODERS, *telemetry.NUMBER_DECODERS], "plot"),
 }
 """The view beside the 3D one that a type needs: a log, a state timeline, a map, a plot (NavSatFix's altitude is
-plotted too)."""
+plotted too; the scalar sensors' points are drawn in 3D too)."""
 
 
 def in_3d(msgtype: str) -> bool:
     """Whether a display type draws in the 3D view, in a frame: not a log line, a state or a plot (an Imu's axes
     are drawn in its frame beside its plots)."""
-    return msgtype not in VIEWS or msgtype == "sensor_msgs/msg/Imu"
+    return msgtype not in VIEWS or msgtype == "sensor_msgs/msg/Imu" or msgtype in scalar_points.BOUNDS
 
 
 SHOWN_AS: dict[str, tuple[str, str]] = {
@@ -120,7 +123,15 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
     "geometry_msgs/msg/PointStamped": ("PointStamped", "a small `Ellipsoids3D` sphere"),
     "geometry_msgs/msg/PolygonStamped": ("Polygon", "a closed `LineStrips3D`"),
     "geometry_msgs/msg/WrenchStamped": ("Wrench", "`Arrows3D`: force, and torque"),
-    "geometry_msgs/msg/TwistStamped": ("Twist", "`Arrows3D`: linear and angular velocity"),
+    **dict.fromkeys(
+        ("geometry_msgs/msg/TwistStamped", "geometry_msgs/msg/AccelStamped"),
+        ("Twist, TwistStamped, AccelStamped", "`Arrows3D`: linear and angular velocity (acceleration)"),
+    ),
+    "visualization_msgs/msg/InteractiveMarkerUpdate": (
+        "InteractiveMarkers",
+        "its controls' markers as Marker draws them (on `<topic>/<name>/<key>`), moved by pose updates, "
+        "erases as `Clear`; display only",
+    ),
     "rcl_interfaces/msg/Log": (
         "rqt_console",
         "`TextLog` with its level (FATAL as Rerun's CRITICAL), `[node] text (file:function:line)`, in a log view",
@@ -141,7 +152,14 @@ SHOWN_AS: dict[str, tuple[str, str]] = {
         "`GeoPoints` on a map view (none without a fix); altitude plotted",
     ),
     "sensor_msgs/msg/BatteryState": ("(rqt_plot)", "voltage, current, charge, percentage, temperature `Scalars`"),
-    **dict.fromkeys(telemetry.SCALAR_SENSORS, ("(rqt_plot)", "`Scalars` of its value (not its variance)")),
+    **{
+        t: (
+            "Temperature, FluidPressure, Illuminance, RelativeHumidity",
+            "a `Points3D` point in its frame, RViz's rainbow over the display's Min/Max Intensity; `Scalars` of its "
+            "value (not its variance)",
+        )
+        for t in telemetry.SCALAR_SENSORS
+    },
     **dict.fromkeys(telemetry.NUMBERS, ("(rqt_plot)", "`Scalars` of its data (a Bool as 0/1)")),
     **dict.fromkeys(
         [

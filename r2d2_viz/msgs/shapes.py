@@ -7,7 +7,7 @@ Colours are RGBA8 arrays ``(N, 4)`` (one per instance) or ``(1, 4)`` (one for al
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -300,3 +300,7 @@ class DecodeOptions:
     only_edge: bool = False  # Detection3DArray: edges of the boxes only, Line Width wide
     line_width: float = 0.05
     alpha: float = 1.0
+    value_range: tuple[float, float] | None = None  # a scalar point display's Min/Max Intensity (None: RViz's)
+    depth_cloud: tuple[str, str] | None = None  # DepthCloud: (its CameraInfo topic, its Color Image Topic or "")
+    effort: tuple[Any, ...] = ()  # Effort: the robot's revolute joints (r2d2_viz.msgs.rviz2.effort.EffortJoint)
+    effort_size: tuple[float, float] = (0.02, 1.0)  # Effort's Width (m) and Scale

@@ -80,4 +80,9 @@ def wanted_topics(rviz: Path | None) -> set[str] | None:
     """The enabled displays' topics of an RViz config (None without one: every displayable topic)."""
     if rviz is None:
         return None
-    return {t.topic for t in load_rviz(rviz).topics if t.enabled and t.topic}
+    topics = set()
+    for t in load_rviz(rviz).topics:
+        if t.enabled and t.topic:  # a DepthCloud reads its camera's info and its colour images too
+            extra = (t.topic.rsplit("/", 1)[0] + "/camera_info", t.style.color_topic) if t.kind == "DepthCloud" else ()
+            topics |= {t.topic, *(e for e in extra if e)}
+    return topics

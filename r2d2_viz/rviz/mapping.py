@@ -60,7 +60,8 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
     ),
     (
         "LaserScan, PointCloud2, PointCloud, Marker, MarkerArray, Path, Odometry, Pose, PoseWithCovariance, "
-        "PoseArray, Map, Polygon, PointStamped, Range, GridCells, Wrench, Twist",
+        "PoseArray, Map, Polygon, PointStamped, Range, GridCells, Wrench, Twist, TwistStamped, AccelStamped, "
+        "CameraInfo, Temperature, FluidPressure, Illuminance, RelativeHumidity, InteractiveMarkers, Effort, DepthCloud",
         "Topic, Enabled",
         "the topic's messages, decoded by r2d2-viz from either storage, in their TF frame on the entity of the "
         "topic's name (`/scan`), hidden when disabled (the table below says what each message becomes)",
@@ -82,6 +83,50 @@ MAPPING: tuple[tuple[str, str, str], ...] = (
         "not mapped on markers",
     ),
     ("Map", "Color Scheme", "map, costmap or raw colours (RViz's palettes)"),
+    (
+        "Axes",
+        "Reference Frame, Length, Radius",
+        "`/rviz_axes/<name>`: three cylinders (x red, y green, z blue) Length long and Radius thick from the frame's "
+        "origin (RViz's `rviz_rendering::Axes`; 1 m, 0.1 m by default)",
+    ),
+    (
+        "TwistStamped, AccelStamped",
+        "Topic",
+        "linear (204, 51, 51) and angular (204, 204, 51) arrows along their vectors, as Twist (RViz 2's class names)",
+    ),
+    (
+        "CameraInfo",
+        "Far clip, Color, Alpha",
+        "the frustum of the pinhole logged from the camera's K and size, Far clip deep, in Color · Alpha, 1 cm lines "
+        "(a view override of `Pinhole`'s `image_plane_distance`, `color`, `line_width`); RViz's far polygon: "
+        "lines only",
+    ),
+    (
+        "Temperature, FluidPressure, Illuminance, RelativeHumidity",
+        "Min Intensity, Max Intensity, Size (m)",
+        "a point at the frame's origin in RViz's rainbow over [min, max] (its defaults: 0–100 inverted, "
+        "98000–105000, 0–1000, 0–1), the value plotted",
+    ),
+    (
+        "DepthCloud",
+        "Depth Map Topic, Color Image Topic",
+        "`<depth topic>/depth_cloud/0`: each pixel with a depth (16UC1 mm, 0 none; 32FC1 m) through the pinhole of "
+        "the depth topic's `camera_info` (its P, binning, ROI), coloured by the latest image of the Color Image "
+        "Topic of the same size (white without); Queue Size, Occlusion Compensation: none",
+    ),
+    (
+        "Effort",
+        "Topic, Width, Scale",
+        "the JointState topic (`/joint_states` too) read as a display: at each revolute joint's child link, RViz's arc "
+        "of radius 0.05 + e · Scale / 2 (e = min(abs(effort) / URDF limit, 1) + 0.05) around the axis and its arrow "
+        "head, in the rainbow colour of e (`<topic>/effort/<k>`)",
+    ),
+    (
+        "InteractiveMarkers",
+        "Interactive Markers Namespace (ROS 2), Update Topic (ROS 1)",
+        "`<namespace>/update`: its controls' markers at the marker's pose (`<topic>/<name>/<key>`), moved by pose "
+        "updates, cleared by erases; display only (no menus, handles or feedback)",
+    ),
     (
         "Odometry",
         "Keep, Position Tolerance, Angle Tolerance, Covariance",

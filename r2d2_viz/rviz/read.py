@@ -14,6 +14,7 @@ from r2d2_viz.rviz.spec import (
     FOV_Y,
     SCENE_ROBOT_DISPLAYS,
     TOPIC_DISPLAYS,
+    TOPIC_KEYS,
     XY_ORBIT_LIFT,
     Camera,
     DisplayStyleSpec,
@@ -130,8 +131,10 @@ class Reader:
                     )
                 else:
                     self.note(f"display {display.get('Class')}: no counterpart in Rerun; skipped")
-            elif kind in TOPIC_DISPLAYS:
-                topic = self.text(display, "Topic", "", where) or self.text(display, "Image Topic", "", where)
+            elif kind in TOPIC_DISPLAYS or kind == "Axes":  # Axes: no topic, a frame
+                topic = next((t for key in TOPIC_KEYS if (t := self.text(display, key, "", where))), "")
+                if kind == "InteractiveMarkers" and "Interactive Markers Namespace" in display and topic:
+                    topic = topic.rstrip("/") + "/update"  # ROS 2: the server's update topic in its namespace
                 enabled = self.enabled(display, where)
                 style = display_style(self, display, where)
                 topics.append(TopicDisplay(kind, str(display.get("Name", kind)), topic, enabled, style))
@@ -250,7 +253,23 @@ def display_style(self: Reader, display: Mapping[str, Any], where: str) -> Displ
         shape=str(display["Shape"]) if display.get("Shape") is not None else None,
         arrow_lengths=(number("Min Arrow Length"), number("Max Arrow Length")),
         only_edge=self.flag(display, "Only Edge", False, where) if display.get("Only Edge") is not None else None,
+        length=number("Length") if display.get("Length") is not None else number("Far clip"),
+        radius=number("Radius"),
+        scale=number("Scale"),
+        width=number("Width"),
+        value_range=_range(number("Min Intensity"), number("Max Intensity")),
+        color_topic=self.text(display, "Color Image Topic", "", where) or None,
+        frame=_frame(self.text(display, "Reference Frame", "", where)),
     )
+
+
+def _range(low: float | None, high: float | None) -> tuple[float, float] | None:
+    return (low, high) if low is not None and high is not None else None
+
+
+def _frame(name: str) -> str | None:
+    """A display's Reference Frame (None: RViz's ``<Fixed Frame>``, or unset)."""
+    return None if name in ("", FIXED) else name
 
 
 def read_camera(self: Reader, v: Mapping[str, Any], fixed: str) -> Camera:

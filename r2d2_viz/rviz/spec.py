@@ -58,7 +58,21 @@ TOPIC_DISPLAYS = (
     # the navigation and perception stacks' (nav2_rviz_plugins/ParticleCloud, vision_msgs_rviz_plugins/…)
     "ParticleCloud",
     "Detection3DArray",
+    # issue 46: RViz 2's classes (rviz_default_plugins/plugins_description.xml) drawn since
+    "TwistStamped",
+    "AccelStamped",
+    "CameraInfo",
+    "Temperature",
+    "FluidPressure",
+    "Illuminance",
+    "RelativeHumidity",
+    "DepthCloud",
+    "Effort",
+    "InteractiveMarkers",
 )
+TOPIC_KEYS = ("Topic", "Image Topic", "Depth Map Topic", "Interactive Markers Namespace", "Update Topic")
+"""Where a display names its topic: most say ``Topic``; Camera ``Image Topic``; DepthCloud ``Depth Map Topic``;
+InteractiveMarkers ``Interactive Markers Namespace`` (ROS 2: ``<namespace>/update``) or ``Update Topic`` (ROS 1)."""
 
 SCENE_ROBOT_DISPLAYS = ("MotionPlanning", "PlanningScene")
 """MoveIt's displays (``moveit_rviz_plugin/…``) that draw the robot as their "Scene Robot"."""
@@ -144,6 +158,20 @@ class DisplayStyleSpec:
     shape: str | None = None
     arrow_lengths: tuple[float | None, float | None] = (None, None)
     only_edge: bool | None = None
+    length: float | None = None
+    """Axes' Length (m); CameraInfo's Far clip (m)."""
+    radius: float | None = None
+    """Axes' Radius (m)."""
+    scale: float | None = None
+    """Effort's Scale."""
+    width: float | None = None
+    """Effort's Width (m)."""
+    value_range: tuple[float, float] | None = None
+    """The scalar point displays' Min and Max Intensity (RViz's defaults per type when unset)."""
+    color_topic: str | None = None
+    """DepthCloud's Color Image Topic."""
+    frame: str | None = None
+    """Axes' Reference Frame (None: the fixed frame)."""
 
 
 @dataclass(frozen=True)

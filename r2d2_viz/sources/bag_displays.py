@@ -38,12 +38,13 @@ class TopicMessage:
     """What the viewer built ahead from ``decoded`` to log it (opaque here; None: nothing built)."""
 
 
-def display_topics(bag: Bag) -> tuple[dict[str, str], dict[str, str]]:
-    """``(topic → type)`` of the bag's topics a display draws, and of the others (not ours, no display)."""
-    shown: dict[str, str] = {}
+def display_topics(bag: Bag, joined: Iterable[str] = ()) -> tuple[dict[str, str], dict[str, str]]:
+    """``(topic → type)`` of the bag's topics a display draws, and of the others (not ours, no display);
+    ``joined``: topics drawn with others' help (an RViz Effort display's JointState topic), ours or not."""
+    shown: dict[str, str] = {t: bag.topics[t].msgtype for t in joined if t in bag.topics}
     other: dict[str, str] = {}
     for topic, info in sorted(bag.topics.items()):
-        if topic in OURS or topic.endswith("/robot_description"):
+        if topic in OURS or topic.endswith("/robot_description") or topic in shown:
             continue  # a robot's description (any namespace's) is its model, not a String to show
         (shown if info.msgtype in DECODERS or info.msgtype == GRID_UPDATE else other)[topic] = info.msgtype
     return shown, other

@@ -160,6 +160,7 @@ class BagChoice:
     start_offset_s: float = 0.0
     duration_s: float | None = None
     topics: tuple[str, ...] | None = None
+    joined: tuple[str, ...] = ()  # read as display topics too: an RViz Effort display's JointState topic
 
 
 def plan_bag(
@@ -187,7 +188,7 @@ def plan_bag(
         if text is not None:
             name = f"{bag.path.name}:/robot_description"
             robot = parse_urdf(text, source=name, base_dir=bag.path.parent, packages=packages)
-    shown, undisplayed = display_topics(bag)
+    shown, undisplayed = display_topics(bag, choice.joined if robot is not None or any(namespaces) else ())
     shown = {t: m for t, m in shown.items() if t in selected}
     undisplayed = {t: m for t, m in undisplayed.items() if t in selected}
     static = _static_tf(bag) if "/tf_static" in selected else None
@@ -207,7 +208,7 @@ def plan_bag(
     joint_topics = joint_topics_of(bag, robots, selected)
     robot_topics = (*(t for t, a in joint_topics if a), *(t for t, _ in tf_read[1:]))
     read = (*bag_topics_read(bag, None if robots else actuated, shown), *robot_topics)
-    read = tuple(t for t in read if t in selected)  # --topics: /tf only when named
+    read = tuple(dict.fromkeys(t for t in read if t in selected))  # --topics: /tf only when named
     lookahead = [Segment(read, start, min(stop, start + LOOKAHEAD_NS))]
     preview = BagPass(
         bag,
@@ -277,8 +278,7 @@ def _robots_tf(
     stop: int,
     shared: Sequence[str],
 ) -> tuple[TfRecords | None, TfRecords | None]:
-    """``tf`` (static, moving: what the plan read of ``/tf_static`` and ``/tf``) with the robots' own
-    ``/<ns>/tf_static`` and ``/<ns>/tf`` (as far as the plan reads it) merged in, their frames prefixed."""
+    """``tf`` (static, moving: the plan's reads) with the robots' ``/<ns>/tf_static``, ``/<ns>/tf`` merged, prefixed."""
     static, moving = [tf[0]], [tf[1]]
     for topic, prefix in tf_topics(robots, selected, "tf_static").items():
         if prefix and (records := _static_tf(bag, topic)) is not None:

@@ -22,7 +22,7 @@ import rerun as rr
 from r2d2_viz.errors import short
 from r2d2_viz.msgs.images import EncoderName, VideoEncoder
 from r2d2_viz.msgs.nav import apply_grid_update
-from r2d2_viz.msgs.registry import decode
+from r2d2_viz.msgs.rviz2.joined import Joins
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, GridMap, Image, MarkerOp, MeshResource, VideoSample, is_plain
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_images
@@ -179,6 +179,7 @@ class DisplayFeed:
         """Called with each map drawn and its frame (the tools' ground grows to cover it)."""
         self.columns = ColumnRuns(self.rec, timeline, clock, hold=hold)  # images, points: columns (until())
         self.odometry = OdometryKeep(lambda topic: (self.styles.get(topic) or DisplayStyle()).tolerance)
+        self.joins = Joins({topic: style.options for topic, style in self.styles.items()})  # DepthCloud, Effort…
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -301,7 +302,9 @@ class DisplayFeed:
             return message
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
-            decoded: Decoded | list[MarkerOp] | MsgError = decode(message.msgtype, message.data, style.options)
+            decoded: Decoded | list[MarkerOp] | MsgError = self.joins.decode(
+                message.topic, message.msgtype, message.data, style.options
+            )
             decoded = self.video.encode(message.topic, message.time_ns, decoded)
         except MsgError as exc:
             decoded = exc

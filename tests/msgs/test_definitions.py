@@ -173,14 +173,16 @@ def test_ros1_bytes_to_cdr_with_a_pre_2010_header() -> None:
 
 def test_which_distros_definitions_need_converting() -> None:
     """Known history of the message packages: Humble added Marker's texture and mesh_file fields (Foxy and Noetic
-    lack them); Jazzy added Range's ``variance``. Everything else the app decodes kept its layout."""
+    lack them, and so does InteractiveMarkerUpdate, whose controls hold Markers); Jazzy added Range's ``variance``.
+    Everything else the app decodes kept its layout."""
+    IM_UPDATE = "visualization_msgs/msg/InteractiveMarkerUpdate"
     from r2d2_viz.msgs.registry import DECODERS
 
     expected = {
         Stores.ROS2_HUMBLE: set(),
         Stores.ROS2_JAZZY: {"sensor_msgs/msg/Range"},
-        Stores.ROS2_FOXY: {"visualization_msgs/msg/Marker", "visualization_msgs/msg/MarkerArray"},
-        Stores.ROS1_NOETIC: {"visualization_msgs/msg/Marker", "visualization_msgs/msg/MarkerArray"},
+        Stores.ROS2_FOXY: {"visualization_msgs/msg/Marker", "visualization_msgs/msg/MarkerArray", IM_UPDATE},
+        Stores.ROS1_NOETIC: {"visualization_msgs/msg/Marker", "visualization_msgs/msg/MarkerArray", IM_UPDATE},
     }
     for distro, differing in expected.items():
         store, ros1 = get_typestore(distro), distro == Stores.ROS1_NOETIC

@@ -232,11 +232,13 @@ def test_turtlebot3_burger_ros1_xy_orbit(tmp_path: Path) -> None:
     # (0.38 m along the camera's up, which leans north) moves it north and up
     assert spec.camera.eye[1] < focal[1] and spec.camera.eye[2] > 1.3
     assert spec.camera.target[2] == pytest.approx(0.2 * 1.910049319267273 * math.cos(0.7953976392745972), abs=1e-6)
-    # TF: Marker Scale 0.4, Show Names true; rviz/Axes display and rviz/Time panel have no counterpart
+    # TF: Marker Scale 0.4, Show Names true; the rviz/Time panel has no counterpart; the rviz/Axes display is
+    # RViz's axes in its Reference Frame (<Fixed Frame> there: the fixed frame)
     assert spec.tf is not None and spec.tf.marker_scale == pytest.approx(0.4) and spec.tf.show_names
-    assert any("display rviz/Axes: no counterpart" in n for n in spec.notes)
+    assert not any("rviz/Axes" in n for n in spec.notes)
     assert "rviz/Time" in _tools_and_panels(spec)
-    assert [(t.kind, t.topic) for t in spec.topics] == [("LaserScan", "/scan")]
+    assert [(t.kind, t.topic) for t in spec.topics] == [("Axes", ""), ("LaserScan", "/scan")]
+    assert spec.topics[0].style.frame is None
     components = _blueprint(spec, tmp_path)
     view = _scene(components)
     assert components[f"{view}/SpatialInformation"]["SpatialInformation:target_frame"] == ["base_footprint"]
@@ -299,3 +301,22 @@ def test_unticked_frames_links_and_tf_parts_are_hidden(tmp_path: Path) -> None:
     no_axes = parse_rviz(text.replace("      Show Axes: true\n", "      Show Axes: false\n"), source="edited.rviz")
     components = _blueprint(no_axes, tmp_path)
     assert "/tf_axes" in _hidden(components, _scene(components))
+
+
+RVIZ2_DISPLAYS = """AccelStamped Axes Camera DepthCloud CameraInfo Effort Grid GridCells FluidPressure Illuminance Image
+InteractiveMarkers LaserScan Map PointCloud PointCloud2 Polygon Pose PoseWithCovariance Range RelativeHumidity
+RobotModel Temperature TF TwistStamped Marker MarkerArray Odometry PoseArray Path PointStamped Wrench""".split()
+"""RViz 2's display classes: ros2/rviz ``rviz_default_plugins/plugins_description.xml`` (rolling, commit f7112b1a),
+its entries whose base class is ``rviz_common::Display`` (the tools, view controllers and TF transformer left out)."""
+
+
+def test_a_config_with_every_rviz2_display_class_converts_without_a_missing_one() -> None:
+    path = REPO / "tests" / "data" / "rviz" / "all_displays.rviz"
+    classes = [
+        line.split("rviz_default_plugins/")[1] for line in path.read_text().splitlines() if "Class: rviz_def" in line
+    ]
+    assert sorted(classes[:-1]) == sorted(RVIZ2_DISPLAYS) and len(set(RVIZ2_DISPLAYS)) == 32  # (last: the view)
+    spec = load_rviz(path)
+    assert not [n for n in spec.notes if "no counterpart" in n or "not supported" in n], spec.notes
+    drawn = {t.kind for t in spec.topics} | {"Grid", "TF", "RobotModel"}
+    assert drawn == set(RVIZ2_DISPLAYS)

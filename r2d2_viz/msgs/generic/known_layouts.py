@@ -13,6 +13,7 @@ import hashlib
 
 TYPES = (
     "diagnostic_msgs/msg/DiagnosticArray",
+    "geometry_msgs/msg/AccelStamped",
     "geometry_msgs/msg/PointStamped",
     "geometry_msgs/msg/PolygonStamped",
     "geometry_msgs/msg/PoseArray",
@@ -53,6 +54,7 @@ TYPES = (
     "std_msgs/msg/UInt64",
     "std_msgs/msg/UInt8",
     "tf2_msgs/msg/TFMessage",
+    "visualization_msgs/msg/InteractiveMarkerUpdate",
     "visualization_msgs/msg/Marker",
     "visualization_msgs/msg/MarkerArray",
 )
@@ -61,6 +63,7 @@ TYPES = (
 KNOWN = frozenset(
     (
         "0a2c4b15d90c4525ef01da543e314451",  # diagnostic_msgs/msg/DiagnosticArray
+        "071ff2345d2793bf6acedbff83831cf1",  # geometry_msgs/msg/AccelStamped
         "42e4d7bfe08fffa4d6cfceeaf6e9aed5",  # geometry_msgs/msg/PointStamped
         "a651b9710cef03bf731be5a986cee94e",  # geometry_msgs/msg/PolygonStamped
         "2c04f5c1307896d39a58beebfa09e7b1",  # geometry_msgs/msg/PoseArray
@@ -101,6 +104,7 @@ KNOWN = frozenset(
         "25aed5508911d459bbef7ac107182856",  # std_msgs/msg/UInt64
         "f2a9094c7c23ace5d4f8d6ca528f990a",  # std_msgs/msg/UInt8
         "7bce0057594f2252a16382f1f8e3b06b",  # tf2_msgs/msg/TFMessage
+        "292dba06ea9e9d17ef995d3f85c82105",  # visualization_msgs/msg/InteractiveMarkerUpdate
         "ceb9671c29b91bbb6d59bbb20901bd55",  # visualization_msgs/msg/Marker
         "29e8b6f67604f6c01c4a0557ace2c001",  # visualization_msgs/msg/MarkerArray
     )

@@ -36,6 +36,7 @@ from r2d2_viz.viewer.entities import (
     path,
     robot_root,
 )
+from r2d2_viz.viewer.layout.frustum import frustums
 
 DEFAULT_BLUEPRINT_PATH = Path("blueprints/r2d2.rbl")
 _ID_NAMESPACE = uuid.UUID("5f1b7a52-3c1e-4d0e-9a43-6b2f3f2d2d20")
@@ -94,8 +95,7 @@ def generate_blueprint(
     spec = spec or tutorial_spec()
     layout = layout or Layout()
     fixed = layout.fixed_frame or spec.fixed_frame
-    overrides: dict[str, rrb.EntityBehavior | rrb.VisibleTimeRanges] = {**_hidden(spec, layout, hidden_links)}
-    overrides.update(_decay(spec))
+    overrides: dict[str, object] = {**_hidden(spec, layout, hidden_links), **_decay(spec), **frustums(spec)}
     scene = rrb.Spatial3DView(
         name=f"3D: {fixed} (Grid · TF · RobotModel)",
         origin="/",
@@ -288,7 +288,7 @@ def _hidden(spec: ViewSpec, layout: Layout, hidden_links: Sequence[str]) -> dict
 
 ODOMETRY_KEEP = 100
 """RViz's Odometry Keep by default (:data:`r2d2_viz.viewer.display_feed.KEEP`)."""
-TWO_ITEMS = ("PoseWithCovariance", "Wrench", "Twist")
+TWO_ITEMS = ("PoseWithCovariance", "Wrench", "Twist", "TwistStamped", "AccelStamped")
 """Displays whose message draws two things, logged on ``<topic>/0`` and ``<topic>/1``."""
 
 
@@ -297,7 +297,7 @@ def decay_entities(display: TopicDisplay) -> tuple[str, ...]:
     own, ``<topic>/<i>`` for a message drawn as several things, ``<topic>/<k>`` for Odometry's Keep slots.
     Markers go on ``<topic>/<ns>/<id>``, known only from the data: none here."""
     topic, style = display.topic, display.style
-    if display.kind in ("Marker", "MarkerArray", "Image", "Camera"):
+    if display.kind in ("Marker", "MarkerArray", "Image", "Camera", "InteractiveMarkers", "Effort", "DepthCloud"):
         return ()
     if display.kind == "Odometry":
         keep = style.keep if style.keep and style.keep > 0 else ODOMETRY_KEEP

@@ -18,6 +18,7 @@ from r2d2_viz.msgs.extent import extent_points
 from r2d2_viz.msgs.registry import VIEWS, decode
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions
 from r2d2_viz.msgs.typestore import MsgError
+from r2d2_viz.robot.model import Robot
 from r2d2_viz.rviz.config import load_rviz, tutorial_spec
 from r2d2_viz.rviz.spec import Camera, TopicDisplay, ViewSpec, missing_fixed_frame, orbit_eye
 from r2d2_viz.sources.bag_displays import IMAGES, camera_images, frames_of
@@ -30,6 +31,8 @@ from r2d2_viz.viewer.blocks.stack_styles import stack_options
 from r2d2_viz.viewer.display_feed import DisplayStyle
 from r2d2_viz.viewer.layout.blueprint import Layout, robot_display
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH, ViewFit, fit_scene, fit_view
+from r2d2_viz.viewer.layout.joined_styles import joined_options
+from r2d2_viz.viewer.layout.joined_styles import joined_topics as joined_topics  # the runner's
 
 PREVIEW_TIMES = 256
 """A bag's view follows its recorded TF at this many times spread over the whole bag…"""
@@ -113,7 +116,7 @@ def plan_view(
     )
     layout = with_telemetry(layout, plan.displays)
     show_names = spec.tf.show_names if spec.tf is not None else False
-    styles = _styles(spec) if rviz is not None else {}
+    styles = _styles(spec, plan.tree.robot if plan.tree is not None else None) if rviz is not None else {}
     return ViewPlan(spec, layout, axis_length, show_names, tuple(notes), styles)
 
 
@@ -187,14 +190,15 @@ NAVSAT = "sensor_msgs/msg/NavSatFix"
 MAP_SCHEMES = ("map", "costmap", "raw")
 
 
-def _styles(spec: ViewSpec) -> dict[str, DisplayStyle]:
+def _styles(spec: ViewSpec, robot: Robot | None = None) -> dict[str, DisplayStyle]:
     """How the config's topic displays draw: colour and alpha, point size, the flat-colour transformer, a
-    map's colour scheme, Odometry's Keep, Covariance, Position and Angle Tolerance (what a display leaves unset keeps
-    RViz's default)."""
+    map's colour scheme, Odometry's Keep, Covariance, Position and Angle Tolerance, the scalar displays' bounds,
+    DepthCloud's camera and colour topics, Effort's joints (``robot``'s), Width and Scale (what a display leaves
+    unset keeps RViz's default)."""
     styles = {}
     for display in spec.topics:
         s = display.style
-        changes: dict[str, Any] = {}
+        changes: dict[str, Any] = joined_options(display, robot)
         if s.color is not None:
             alpha = 1.0 if s.alpha is None else min(max(s.alpha, 0.0), 1.0)
             changes["flat_color"] = (*s.color, round(255 * alpha))
