@@ -56,9 +56,7 @@ class FlushAhead:
     def __enter__(self) -> FlushAhead:
         return self
 
-    def __exit__(
-        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
-    ) -> None:
+    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
         if kind is None:
             self.wait()
         elif self._thread is not None:  # already failing: the flush's own error would only hide this one
