@@ -114,8 +114,13 @@ class ColumnRuns:
                     columns = build(name, [run.items[i] for i in rows], [run.frames[i] for i in rows])
                     send(self.rec, name, self.timeline, time_array(times_ns[rows], self.clock), columns)
             for i, item in enumerate(run.items):  # an image a row: its column is a view of its message's bytes
-                if isinstance(item, shapes.Image | shapes.CompressedImage):
+                if isinstance(item, shapes.Image):
                     send(self.rec, name, self.timeline, time_array(times_ns[i : i + 1], self.clock), _image(item))
+            encoded_images = [i for i, item in enumerate(run.items) if isinstance(item, shapes.CompressedImage)]
+            for media_type in dict.fromkeys(_media(run.items[i]) for i in encoded_images):  # a run of JPEGs: one call
+                rows = [i for i in encoded_images if _media(run.items[i]) == media_type]
+                columns = _encoded_images([run.items[i] for i in rows])
+                send(self.rec, name, self.timeline, time_array(times_ns[rows], self.clock), columns)
 
     def interrupt(self, *entities: str, everything: bool = False) -> None:
         """Before a message logged on its own (on ``entities``; or at the end of a block: all of them, unless the
@@ -183,9 +188,25 @@ def _image(item: Shape) -> Encoded:
     return [(rr.EncodedImage.descriptor_blob(), _blob(item.data)), *_media_type(item.media_type)]
 
 
-@cache
-def _media_type(media_type: str) -> Encoded:
-    return encoded(rr.EncodedImage.columns(media_type=[media_type]))
+def _media(item: Shape) -> str:
+    assert isinstance(item, shapes.CompressedImage)
+    return item.media_type
+
+
+def _encoded_images(items: list[Shape]) -> Encoded:
+    """A run of ``EncodedImage`` s of one media type, a row each (issue 48: a call and a chunk per JPEG cost more
+    than copying their few kB into one column); one alone is :func:`_image`'s row (a view of its bytes)."""
+    if len(items) == 1:
+        return _image(items[0])
+    blobs = [np.frombuffer(i.data, dtype=np.uint8) for i in items if isinstance(i, shapes.CompressedImage)]
+    values = pa.array(np.concatenate(blobs), type=pa.uint8())
+    column = _lists(_lists(values, [len(b) for b in blobs], _BLOB), np.ones(len(blobs), dtype=np.int64))
+    return [(rr.EncodedImage.descriptor_blob(), column), *_media_type(_media(items[0]), len(blobs))]
+
+
+@lru_cache(maxsize=256)
+def _media_type(media_type: str, rows: int = 1) -> Encoded:
+    return encoded(rr.EncodedImage.columns(media_type=[media_type] * rows))
 
 
 def _pinholes(entity: str, items: list[Shape], frames: list[str]) -> Encoded:
