@@ -6,6 +6,7 @@
     python benchmarks/bigbag.py --smoke              # 3 s and 1 s of bag, every row once: CI, no thresholds
     python benchmarks/bigbag.py --zstd               # the same bags with zstd-compressed chunks (2.85 GB)
     python benchmarks/bigbag.py --only arm           # only the 1 h × 100 Hz JointState bag's row (~1 min)
+    python benchmarks/bigbag.py --only layouts --seconds 20   # every layout (issue 48) of a 20 s bag, side by side
 
 The bag is written inside the benchmark by ``rosbags`` (its writer, MCAP storage, uncompressed 1 MB chunks as
 rosbags writes them; ``--db3`` also writes it as .db3), like the issue's: a camera (``Image`` rgb8 640×480 at
@@ -21,9 +22,16 @@ Every figure is a whole command in a subprocess, side by side in the same run, a
 
 * wall and CPU time of ``r2d2-viz --bag BAG.mcap --save out.rrd`` and ``rerun mcap convert BAG.mcap -o out.rrd``
   (the ``rerun`` binary beside this Python; issue 38's goal: ≤ 0.5× its wall at ≤ 300 MB);
-* **peak anonymous memory**: ``RssAnon`` of the process and all its descendants (found through
+* **peak anonymous memory**: ``RssAnon`` + ``RssShmem`` of the process and all its descendants (found through
   ``/proc/PID/task/*/children``), summed, polled every 20 ms from ``/proc/PID/status``. File pages (a bag read
-  through ``mmap``, shared libraries) are not counted: they are the page cache's, not the program's;
+  through ``mmap``, shared libraries) are not counted: they are the page cache's, not the program's; shared memory
+  (a worker's ring) is;
+* **every layout** (issue 48, ``--layouts``, ``benchmarks/bag_layouts.py``): the same content written by rosbags'
+  writer, as ``ros2 bag record`` writes MCAP (rosbag2_storage_mcap's defaults: 768 KiB chunks, uncompressed and
+  zstd), topic by topic, and as ``.db3``; each one's chunk layout printed, ``--save`` beside ``rerun mcap convert``
+  (which reads MCAP only), the layouts and the commands alternating round by round;
+* before every whole command of a side-by-side figure, the outputs are deleted and the disk synced (an older output
+  left in place makes the next writer's page-cache writes dearer and a ratio flattering);
 * the same for a 30 s bag of the same kind (the goal: the 150 s bag ≤ 500 MB and ≤ 1.25× (+50 MB) of it);
 * a live replay's **time to first data**: ``r2d2-viz --bag BAG --save x.rrd --realtime`` with
   ``R2D2_VIZ_PACING_LOG=path`` (the pacing hook of ``r2d2_viz/pacing.py``), from process start to the log's first
