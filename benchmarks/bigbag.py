@@ -6,6 +6,7 @@
     python benchmarks/bigbag.py --smoke              # 3 s and 1 s of bag, every row once: CI, no thresholds
     python benchmarks/bigbag.py --zstd               # the same bags with zstd-compressed chunks (2.85 GB)
     python benchmarks/bigbag.py --only arm           # only the 1 h × 100 Hz JointState bag's row (~1 min)
+    python benchmarks/bigbag.py --only layouts --seconds 20   # every layout (issue 48) of a 20 s bag, side by side
 
 The bag is written inside the benchmark by ``rosbags`` (its writer, MCAP storage, uncompressed 1 MB chunks as
 rosbags writes them; ``--db3`` also writes it as .db3), like the issue's: a camera (``Image`` rgb8 640×480 at
@@ -21,9 +22,16 @@ Every figure is a whole command in a subprocess, side by side in the same run, a
 
 * wall and CPU time of ``r2d2-viz --bag BAG.mcap --save out.rrd`` and ``rerun mcap convert BAG.mcap -o out.rrd``
   (the ``rerun`` binary beside this Python; issue 38's goal: ≤ 0.5× its wall at ≤ 300 MB);
-* **peak anonymous memory**: ``RssAnon`` of the process and all its descendants (found through
+* **peak anonymous memory**: ``RssAnon`` + ``RssShmem`` of the process and all its descendants (found through
   ``/proc/PID/task/*/children``), summed, polled every 20 ms from ``/proc/PID/status``. File pages (a bag read
-  through ``mmap``, shared libraries) are not counted: they are the page cache's, not the program's;
+  through ``mmap``, shared libraries) are not counted: they are the page cache's, not the program's; shared memory
+  (a worker's ring) is;
+* **every layout** (issue 48, ``--layouts``, ``benchmarks/bag_layouts.py``): the same content written by rosbags'
+  writer, as ``ros2 bag record`` writes MCAP (rosbag2_storage_mcap's defaults: 768 KiB chunks, uncompressed and
+  zstd), topic by topic, and as ``.db3``; each one's chunk layout printed, ``--save`` beside ``rerun mcap convert``
+  (which reads MCAP only), the layouts and the commands alternating round by round;
+* before every whole command of a side-by-side figure, the outputs are deleted and the disk synced (an older output
+  left in place makes the next writer's page-cache writes dearer and a ratio flattering);
 * the same for a 30 s bag of the same kind (the goal: the 150 s bag ≤ 500 MB and ≤ 1.25× (+50 MB) of it);
 * a live replay's **time to first data**: ``r2d2-viz --bag BAG --save x.rrd --realtime`` with
   ``R2D2_VIZ_PACING_LOG=path`` (the pacing hook of ``r2d2_viz/pacing.py``), from process start to the log's first
@@ -398,18 +406,25 @@ def _tree(pid: int) -> list[int]:
 
 
 def rss_anon_kb(pid: int) -> int:
-    """RssAnon of ``pid`` and its descendants, summed (kB)."""
+    """RssAnon + RssShmem of ``pid`` and its descendants, summed (kB): shared memory (a worker's ring) counted."""
     total = 0
     for p in _tree(pid):
         try:
             with open(f"/proc/{p}/status") as f:
                 for line in f:
-                    if line.startswith("RssAnon:"):
+                    if line.startswith(("RssAnon:", "RssShmem:")):
                         total += int(line.split()[1])
-                        break
         except OSError:
             continue
     return total
+
+
+def fresh(*outputs: Path) -> None:
+    """``outputs`` deleted and the disk synced before a command: an older output left in place makes the next
+    writer's page-cache writes dearer (issue 48: 0.74× measured that way, 1.11× with outputs deleted)."""
+    for out in outputs:
+        out.unlink(missing_ok=True)
+    os.sync()
 
 
 @dataclass
@@ -510,7 +525,9 @@ def side_by_side(bag: Path, rerun: str | None, rounds: int, out: Path) -> dict[s
     runs: dict[str, list[Run]] = {name: [] for name in commands}
     for _ in range(rounds):
         for name, command in commands.items():
+            fresh(out / "ours.rrd", out / "rerun.rrd")
             runs[name].append(_checked(run_watched(command), command))
+    fresh(out / "ours.rrd", out / "rerun.rrd")
     return runs
 
 
@@ -524,7 +541,15 @@ def main() -> None:
     parser.add_argument("--db3", action="store_true", help="also write the big bag as .db3 and replay it")
     parser.add_argument("--zstd", action="store_true", help="the sensor bags' chunks zstd-compressed (2.85 GB)")
     parser.add_argument("--arm-minutes", type=float, default=60.0, help="the 100 Hz JointState bag's length")
-    parser.add_argument("--only", choices=["arm"], help="only these rows: arm = the 100 Hz JointState bag's")
+    parser.add_argument(
+        "--only", choices=["arm", "layouts"], help="only these rows: the 100 Hz JointState bag's, or the layouts'"
+    )
+    parser.add_argument(
+        "--layouts",
+        type=lambda text: [x for x in text.split(",") if x],
+        default=["rosbags", "rosbag2", "rosbag2_zstd", "topics", "db3"],
+        help="the layouts measured side by side (comma-separated; see benchmarks/bag_layouts.py; '' for none)",
+    )
     parser.add_argument("--json", type=Path, help="also write the figures here")
     parser.add_argument("--smoke", action="store_true", help="3 s and 1 s bags, every row once, no thresholds")
     args = parser.parse_args()
@@ -539,6 +564,16 @@ def main() -> None:
             data.mkdir(parents=True, exist_ok=True)
             table = Table()
             arm_rows(table, data, Path(tmp), rerun, args.arm_minutes, args.rounds, args.smoke)
+            table.print()
+            if args.json:
+                args.json.write_text(json.dumps(table.figures, indent=2))
+        return
+    if args.only == "layouts":
+        with tempfile.TemporaryDirectory(prefix="r2d2-bigbag-") as tmp:
+            data = args.data or Path(tmp)
+            data.mkdir(parents=True, exist_ok=True)
+            table = Table()
+            layout_rows(table, data, Path(tmp), rerun, args)
             table.print()
             if args.json:
                 args.json.write_text(json.dumps(table.figures, indent=2))
@@ -656,12 +691,72 @@ def main() -> None:
         )
 
         seek_rows(table, big, scratch, args, ours_wall, ours_mem)
+        if args.layouts:
+            layout_rows(table, data, scratch, rerun, args)
 
         if rerun is not None:
             arm_rows(table, data, scratch, rerun, args.arm_minutes, args.rounds, smoke)
         table.print()
         if args.json:
             args.json.write_text(json.dumps(table.figures, indent=2))
+
+
+def layout_rows(table: Table, data: Path, scratch: Path, rerun: str | None, args: argparse.Namespace) -> None:
+    """Every layout of ``bag_layouts`` (issue 48): ``--save`` beside ``rerun mcap convert`` of the same file, the
+    layouts and the two commands alternating round by round, outputs deleted and synced before each command."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import bag_layouts
+
+    messages = _Messages(args.seconds)
+    events = schedule(args.seconds)
+    bags: dict[str, Path] = {}
+    for layout in args.layouts:
+        if layout in ("rosbags", "db3"):  # the bags the rows above use
+            bags[layout] = sensor_bag(data, args.seconds, "db3" if layout == "db3" else "mcap")
+        else:
+            folder = data / f"sensors_{args.seconds:g}s_{layout}"
+            bags[layout] = bag_layouts.layout_bag(folder, layout, events, messages.message, TYPES, messages.ts)
+    outs = (scratch / "layout.rrd", scratch / "layout_rerun.rrd")
+    runs: dict[tuple[str, str], list[Run]] = {}
+    loads = [os.getloadavg()[0]]
+    for _ in range(args.rounds):
+        for layout, bag in bags.items():
+            commands = {"ours": [APP, "--bag", str(bag), "--save", str(outs[0])]}
+            if rerun is not None and bag.suffix == ".mcap":  # the converter reads MCAP only
+                commands["rerun"] = [rerun, "mcap", "convert", str(bag), "-o", str(outs[1])]
+            for name, command in commands.items():
+                fresh(*outs)
+                runs.setdefault((layout, name), []).append(_checked(run_watched(command), command))
+        loads.append(os.getloadavg()[0])
+    fresh(*outs)
+    table.notes.append(
+        f"Layouts ({args.seconds:g} s of bag each; load average {min(loads):.1f}–{max(loads):.1f} over the rounds):\n"
+        + "\n".join(f"- {layout}: {bag_layouts.describe(bag)}" for layout, bag in bags.items())
+    )
+    for layout in bags:
+        ours = runs[(layout, "ours")]
+        wall, cpu, mem = (_med([getattr(r, k) for r in ours]) for k in ("wall", "cpu", "peak_anon_mb"))
+        table.figures |= {f"layout_{layout}_wall_s": wall, f"layout_{layout}_cpu_s": cpu, f"layout_{layout}_mb": mem}
+        theirs = runs.get((layout, "rerun"))
+        goal = 0.55 if layout.endswith("zstd") else 0.8
+        if theirs:
+            r_wall, r_cpu, r_mem = (_med([getattr(r, k) for r in theirs]) for k in ("wall", "cpu", "peak_anon_mb"))
+            table.figures |= {f"layout_{layout}_rerun_wall_s": r_wall, f"layout_{layout}_rerun_cpu_s": r_cpu}
+            table.add(
+                f"layout `{layout}` `--save`: wall, CPU, peak RssAnon+RssShmem",
+                f"{wall:.1f} s, {cpu:.1f} s, {mem:,.0f} MB",
+                f"{r_wall:.1f} s, {r_cpu:.1f} s, {r_mem:,.0f} MB",
+                f"{wall / r_wall:.2f}× (CPU {cpu / r_cpu:.2f}×)",
+                f"≤ {goal}× and ≤ 300 MB" + _verdict(wall / r_wall <= goal and mem <= 300, args.smoke),
+            )
+        else:
+            table.add(
+                f"layout `{layout}` `--save`: wall, CPU, peak RssAnon+RssShmem",
+                f"{wall:.1f} s, {cpu:.1f} s, {mem:,.0f} MB",
+                "(reads MCAP only)" if rerun is not None else "(no rerun binary)",
+                "",
+                "≤ 300 MB" + _verdict(mem <= 300, args.smoke),
+            )
 
 
 def seek_rows(

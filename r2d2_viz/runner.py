@@ -34,6 +34,7 @@ from r2d2_viz.sources.playback import LIVE_WINDOW_BYTES, WINDOW_BYTES, Window, r
 from r2d2_viz.sources.robots import SHARED_FRAMES
 from r2d2_viz.viewer.display_feed import DisplayFeed, VideoFeed
 from r2d2_viz.viewer.fields_feed import FieldsRun, fields_run, undecoded_line
+from r2d2_viz.viewer.files.flush_ahead import FLUSH_BYTES, FlushAhead
 from r2d2_viz.viewer.files.whole import flush_file, saved_rrd
 from r2d2_viz.viewer.layout.blueprint import generate_blueprint
 from r2d2_viz.viewer.layout.plan import ViewPlan, joined_topics, plan_view
@@ -53,8 +54,6 @@ LIVE_BLOCK_SECONDS = 5.0
 """Live runs compute this much robot time at once, then send each sample when due; sinks waited for once a block…"""
 LIVE_BLOCK_SAMPLES = 1000
 """…and a block has at most this many samples, so at high rates computing one makes only a sample or two late."""
-FLUSH_BYTES = 64 << 20
-"""A batch run waits for the sinks after about this much data (bag bytes, and the Arrow bytes of robot samples)."""
 LAP_SAMPLES = 1440
 """One lap of the tutorial's odom circle: 360° / (¼° per sample) — 48 s at the default 30 Hz."""
 
@@ -257,8 +256,8 @@ def _record(config: RunConfig, plan: RunPlan, on_ready: Callable[[str], None] | 
                         streamer, windows, feeds, speed=config.speed, progress=shown, stop=stop, flush=flush
                     )
                 else:
-                    with sigterm_raises():
-                        samples = _batch(streamer, windows, feeds, flush, shown)
+                    with sigterm_raises(), FlushAhead(flush) as ahead:  # a mark waits for the previous one's flush
+                        samples = _batch(streamer, windows, feeds, ahead, shown)
             keep_serving(config.sink.serve and config.bag is not None and not interrupted, flush)
             if line := undecoded_line(plan.undisplayed, fields):  # no display, and fields not decodable either
                 notices.report(f"{config.bag}: {line}")
@@ -343,7 +342,7 @@ def _batch(
         chunk = window.joints if streamer is not None else None
         prepared = streamer.prepare(chunk) if streamer is not None and chunk is not None and len(chunk) else None
         unflushed += window.nbytes + (prepared.nbytes if prepared is not None else 0)
-        if unflushed > FLUSH_BYTES:  # backpressure: the sinks have taken what came before
+        if unflushed > FLUSH_BYTES:  # backpressure: the sinks have taken what came before the previous mark
             flush()
             unflushed = 0
         if streamer is not None and prepared is not None and chunk is not None:

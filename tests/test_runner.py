@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 
 from r2d2_viz.runner import LAP_SAMPLES, RunConfig, _temp_path, batch_chunk_samples
@@ -36,6 +37,7 @@ def test_a_batch_run_waits_for_the_sinks_after_the_arrow_bytes_of_its_samples(tm
     waits: list[int] = []
     monkeypatch.setattr(runner, "flush_file", lambda rec, path: (waits.append(len(handed)), rec.flush()))
     monkeypatch.setattr(runner, "FLUSH_BYTES", 1 << 20)
+    monkeypatch.setattr(runner, "FlushAhead", contextlib.nullcontext)  # marks flushed at once: when, not how
     runner.run(RunConfig(urdf=urdf, duration=60.0, rate=30.0, sink=SinkConfig(save=tmp_path / "o.rrd")))
     assert len(handed) == 2 and handed[0] > 1 << 20 > handed[1]  # 1,800 samples of 59 joints: 1,694 + 106
     assert waits == [1]  # before sending the first chunk; the second is under 1 MB

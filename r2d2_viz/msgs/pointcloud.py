@@ -95,12 +95,14 @@ def decode_pointcloud2(data: bytes | memoryview, options: DecodeOptions) -> Deco
     xyz = _xyz(points)
     finite = np.isfinite(xyz)
     everything = bool(finite.all())  # (the whole array at once: a reduction along rows of 3 is slow)
-    keep = finite[:, 0] & finite[:, 1] & finite[:, 2]
     flat = options.color_transformer == "FlatColor"
     colors = one_color(options.flat_color) if flat else cloud_colors(points, options.flat_color)
-    if colors.shape[0] > 1 and not everything:
+    if everything:  # the common case: no mask built (issue 48)
+        return Decoded(frame, stamp, (Points(xyz, colors, options.point_radius),))
+    keep = finite[:, 0] & finite[:, 1] & finite[:, 2]
+    if colors.shape[0] > 1:
         colors = colors[keep]
-    return Decoded(frame, stamp, (Points(xyz if everything else xyz[keep], colors, options.point_radius),))
+    return Decoded(frame, stamp, (Points(xyz[keep], colors, options.point_radius),))
 
 
 def _xyz(points: np.ndarray) -> F32:

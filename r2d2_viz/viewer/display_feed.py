@@ -168,6 +168,7 @@ class DisplayFeed:
         self.overlays = overlay_frames(topics or {}, fixed_frame)  # 2D detections: on their camera's image
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
         self._unflushed = 0
+        self._flushes = not hold  # a batch run's only backpressure is the runner's (viewer/files/flush_ahead.py)
         self._topic_types = dict(topics or {})
         self.maps: dict[str, bytes] = {}
         """The latest OccupancyGrid (CDR) of each map topic: what its updates apply to."""
@@ -334,7 +335,7 @@ def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[_TopicState, str]:
     state.markers.anchor = feed._anchored
     state.messages += 1
     feed._unflushed += len(message.data)
-    if feed._unflushed > FLUSH_BYTES:  # backpressure: big messages must not pile up ahead of the sinks
+    if feed._flushes and feed._unflushed > FLUSH_BYTES:  # backpressure: big messages must not pile up (live)
         feed.rec.flush()
         feed._unflushed = 0
     keep = _keep(feed.styles, message.topic, message.msgtype)  # a history: <topic>/<k>, k = the message's slot

@@ -217,3 +217,26 @@ def test_each_map_drawn_is_handed_on_with_its_frame() -> None:
     feed.on_map = lambda frame, grid: seen.append(frame) or drawing.cover(frame, grid)
     feed.log(TopicMessage(MAP_TIME, "/map", "nav_msgs/msg/OccupancyGrid", occupancy_grid()))
     assert seen == ["odom"] and drawing.extent == (-1.0, -0.5, 1.0, 0.5)
+
+
+def test_a_batch_feed_leaves_backpressure_to_the_runner_and_a_live_one_flushes_itself() -> None:
+    """Issue 48: a batch run flushed twice per mark (the runner's marks and this feed's own); its only marks are now
+    the runner's, which wait for the previous mark's flush (viewer/files/flush_ahead.py). A live feed keeps its own."""
+    import r2d2_viz.viewer.display_feed as feed_module
+
+    class _Rec:
+        flushes = 0
+
+        def flush(self, *args: object, **kwargs: object) -> None:
+            self.flushes += 1
+
+    class _Notices:
+        def __init__(self) -> None:
+            self.rec = _Rec()
+
+    big = TopicMessage(1, "/points", "sensor_msgs/msg/PointCloud2", bytes(feed_module.FLUSH_BYTES // 2 + 1))
+    for hold, flushes in ((True, 0), (False, 1)):  # hold: a batch run's feed (runner.py)
+        feed = DisplayFeed(_Notices(), clock="timestamp", fixed_frame="odom", hold=hold)  # type: ignore[arg-type]
+        feed_module._count(feed, big)
+        feed_module._count(feed, big)  # past FLUSH_BYTES
+        assert feed.rec.flushes == flushes, hold

@@ -141,3 +141,78 @@ def test_a_batch_run_holds_no_view_of_a_messages_bytes_across_windows(tmp_path: 
     assert runs.runs == {} and runs.held == 0
     rec.flush()
     rec.disconnect()
+
+
+def test_a_run_of_one_camera_model_is_built_once_per_length_and_is_what_rerun_converts(monkeypatch) -> None:
+    """Issue 48: a camera's pinhole went through Rerun's ``Pinhole.columns`` for every run on three entities. A run
+    of one model is now built once per model and length; its columns are Rerun's own converter's for those rows
+    (``_pinhole_columns``: ``rr.Pinhole.columns``), a run of two models is converted row by row as before."""
+    from r2d2_viz.viewer.blocks import display_columns as dc
+
+    other = shapes.Pinhole(K * 2, 320, 240)
+    calls: list[int] = []
+    convert = rr.Pinhole.columns
+    monkeypatch.setattr(rr.Pinhole, "columns", lambda **kw: calls.append(len(kw["parent_frame"])) or convert(**kw))
+    dc._same_pinholes.cache_clear()
+    model = [shapes.Pinhole(K.copy(), 640, 480) for _ in range(3)]
+
+    def arrays(columns: list) -> list:
+        return [(d.component, a.to_pylist()) for d, a in columns]
+
+    expected = arrays(dc._pinhole_columns("/cam/info", model, ["cam"] * 3))
+    calls.clear()
+    assert arrays(dc._pinholes("/cam/info", model, ["cam"] * 3)) == expected and calls == [3]
+    assert arrays(dc._pinholes("/cam/info", [shapes.Pinhole(K.copy(), 640, 480) for _ in range(3)], ["cam"] * 3)) == (
+        expected
+    )
+    assert calls == [3]  # the same model and length: not converted again
+    assert arrays(dc._pinholes("/cam/info", model[:2], ["cam"] * 2)) == [(c, v[:2]) for c, v in expected]
+    mixed = [model[0], other]
+    assert arrays(dc._pinholes("/cam/info", mixed, ["cam", "cam"])) == arrays(
+        dc._pinhole_columns("/cam/info", mixed, ["cam", "cam"])
+    )
+    assert [v for c, v in arrays(dc._pinholes("/cam/info", mixed, ["cam", "cam"])) if "resolution" in c] == [
+        [[[640.0, 480.0]], [[320.0, 240.0]]]  # a list of one resolution a row
+    ]
+
+
+def test_a_run_of_encoded_images_goes_in_one_call_per_media_type_with_the_rows_logging_gives(
+    tmp_path: Path, monkeypatch
+) -> None:
+    """Issue 48: a call (and a chunk) per JPEG. A run of them now goes in one call per media type; read back, the
+    rows are those one ``rec.log`` per message gives (the bytes written by hand below)."""
+    from r2d2_viz.viewer.blocks import display_columns as dc
+
+    images = [
+        shapes.CompressedImage(b"\xff\xd8one", "image/jpeg"),
+        shapes.CompressedImage(b"\x89PNG", "image/png"),
+        shapes.CompressedImage(b"\xff\xd8second!", "image/jpeg"),
+        shapes.CompressedImage(b"", "image/jpeg"),
+    ]
+    calls: list[int] = []
+    send = dc.send
+    monkeypatch.setattr(
+        dc,
+        "send",
+        lambda rec, entity, timeline, times, columns: (
+            calls.append(len(times)) or send(rec, entity, timeline, times, columns)
+        ),
+    )
+    for name, columns in (("each", False), ("run", True)):
+        rec = rr.RecordingStream("test_display_columns_jpegs")
+        rec.save(tmp_path / f"{name}.rrd")
+        runs = ColumnRuns(rec, "time", "timestamp")
+        for i, image in enumerate(images):
+            decoded = Decoded("cam", 0, (image,))
+            if columns:
+                runs.add(TopicMessage((i + 1) * S, "/jpeg", "", b"x", decoded=decoded), "/jpeg")
+            else:
+                log_decoded(rec, "/jpeg", decoded, timeline="time", time_ns=(i + 1) * S, clock="timestamp")
+        runs.interrupt(everything=True)
+        rec.flush()
+        rec.disconnect()
+    assert calls == [3, 1]  # the JPEGs in one call, the PNG in another
+    each, run = read_recording(tmp_path / "each.rrd")["/jpeg"], read_recording(tmp_path / "run.rrd")["/jpeg"]
+    assert run.times == each.times and dict(run.temporal) == dict(each.temporal)
+    blobs = [b for b in run.temporal["EncodedImage:blob"] if b is not None]
+    assert blobs == [[list(b"\xff\xd8one")], [list(b"\x89PNG")], [list(b"\xff\xd8second!")], [[]]]
