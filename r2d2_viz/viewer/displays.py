@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 import pyarrow as pa
@@ -50,8 +50,23 @@ class MarkerBook:
     """(time, frame) where the topic's entities were placed before their first message (the display feed's)."""
 
 
-def set_time(rec: rr.RecordingStream, timeline: str, time_ns: int, clock: Clock) -> None:
+class Rows(Protocol):
+    """Where display rows may go instead of the recording: a stand-in that gathers them as columns
+    (:class:`r2d2_viz.viewer.blocks.row_columns.RowColumns`), its time given as nanoseconds."""
+
+    def log(self, entity_path: str, entity: rr.AsComponents, *extra: rr.AsComponents, static: bool = False) -> None: ...
+    def at(self, time_ns: int) -> None: ...  # the time of the rows logged next
+
+
+Recorder = rr.RecordingStream | Rows
+"""The recording, or rows gathered for it."""
+
+
+def set_time(rec: Recorder, timeline: str, time_ns: int, clock: Clock) -> None:
     """Set ``timeline`` to ``time_ns``, as a duration or as a timestamp."""
+    if not isinstance(rec, rr.RecordingStream):
+        rec.at(time_ns)
+        return
     if clock == "duration":
         rec.set_time(timeline, duration=np.timedelta64(time_ns, "ns"))
     else:
@@ -203,7 +218,7 @@ def _typed(fields: dict[str, object]) -> dict[str, object]:
     return {k: pa.array(v) if isinstance(v, np.ndarray) and not len(v) else v for k, v in fields.items()}
 
 
-def _statuses(rec: rr.RecordingStream, entity_path: str, item: shapes.Statuses, book: PlainBook) -> None:
+def _statuses(rec: Recorder, entity_path: str, item: shapes.Statuses, book: PlainBook) -> None:
     for status in item.items:
         entity, state = status_entity(entity_path, status), state_of(status)
         while book.lanes.setdefault(entity, status.name) != status.name:  # another name made the same path
@@ -222,7 +237,7 @@ def _statuses(rec: rr.RecordingStream, entity_path: str, item: shapes.Statuses, 
         )
 
 
-def log_plain(rec: rr.RecordingStream, entity_path: str, item: shapes.Plain, book: PlainBook) -> None:
+def log_plain(rec: Recorder, entity_path: str, item: shapes.Plain, book: PlainBook) -> None:
     """Log one plain item of a message of the topic on ``entity_path`` (the time is set already)."""
     if isinstance(item, shapes.LogLine):
         rec.log(entity_path, rr.TextLog(item.text, level=item.level or None))
@@ -273,7 +288,7 @@ def prepare(decoded: Decoded, load: MeshLoader | None = None) -> Prepared | None
 
 
 def _log_items(
-    rec: rr.RecordingStream,
+    rec: Recorder,
     entity_path: str,
     decoded: Decoded,
     load: MeshLoader | None,
@@ -294,7 +309,7 @@ def _log_items(
             log_plain(rec, entity_path, item, plain if plain is not None else PlainBook())
 
 
-def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, time_ns: int, clock: Clock) -> None:
+def expire_markers(rec: Recorder, book: MarkerBook, timeline: str, time_ns: int, clock: Clock) -> None:
     """Clear (at their expiry time) the markers whose lifetime has run out by ``time_ns``."""
     expired = sorted((t, e) for e, t in book.live.items() if t is not None and t <= time_ns)
     for expiry, entity in expired:
@@ -303,7 +318,7 @@ def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, tim
         del book.live[entity]
 
 
-def _clear(rec: rr.RecordingStream, prefix: str, book: MarkerBook) -> None:
+def _clear(rec: Recorder, prefix: str, book: MarkerBook) -> None:
     """Clear the drawn marker entities at and below ``prefix``, one by one (those cleared already stay so: a
     tracker's DELETEALL costs as many rows as it has markers shown, however many ids it has used), each put back
     in the anchor's frame (the fixed frame; without an anchor, its own): it draws nothing, and the view can place
@@ -316,7 +331,7 @@ def _clear(rec: rr.RecordingStream, prefix: str, book: MarkerBook) -> None:
         book.drawn.discard(entity)
 
 
-def _place(rec: rr.RecordingStream, entity: str, frame: str, book: MarkerBook, when: tuple[str, int, Clock]) -> None:
+def _place(rec: Recorder, entity: str, frame: str, book: MarkerBook, when: tuple[str, int, Clock]) -> None:
     """A marker entity's first drawing at ``when`` (timeline, time, clock): before it, from the anchor's time on,
     the entity sits in the anchor's frame (the fixed frame), like the topic's own entity."""
     timeline, time_ns, clock = when
@@ -329,7 +344,7 @@ def _place(rec: rr.RecordingStream, entity: str, frame: str, book: MarkerBook, w
 
 
 def _log_markers(
-    rec: rr.RecordingStream,
+    rec: Recorder,
     entity_path: str,
     ops: list[MarkerOp],
     book: MarkerBook,
@@ -354,7 +369,7 @@ def _log_markers(
 
 
 def log_decoded(
-    rec: rr.RecordingStream,
+    rec: Recorder,
     entity_path: str,
     decoded: Decoded | list[MarkerOp],
     *,
