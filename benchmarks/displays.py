@@ -122,7 +122,9 @@ def write_console_bag(path: Path, seconds: float) -> int:
         for i in range(int(seconds * 100)):
             t = T0 + i * S // 100
             for k, connection in enumerate(custom):
-                writer.write(connection, t + k, bytes(ts.serialize_cdr(custom_message(T, k, i, t, rng), connection.msgtype)))
+                writer.write(
+                    connection, t + k, bytes(ts.serialize_cdr(custom_message(T, k, i, t, rng), connection.msgtype))
+                )
             while j < len(rows) and rows[j][0] < t + S // 100:
                 t_msg, topic, msgtype, n = rows[j]
                 writer.write(displays[topic], t_msg, bytes(ts.serialize_cdr(_display(T, msgtype, t_msg, n), msgtype)))
@@ -143,7 +145,9 @@ def _marker(T: Any, k: int, i: int) -> Any:
         type=kind,
         action=0,
         pose=pose,
-        scale=T["geometry_msgs/msg/Vector3"](0.2, 0.05, 0.05) if kind == 0 else T["geometry_msgs/msg/Vector3"](0.1, 0.1, 0.1),
+        scale=T["geometry_msgs/msg/Vector3"](0.2, 0.05, 0.05)
+        if kind == 0
+        else T["geometry_msgs/msg/Vector3"](0.1, 0.1, 0.1),
         color=T["std_msgs/msg/ColorRGBA"](0.2, 0.4, 1.0, 1.0),
         lifetime=T["builtin_interfaces/msg/Duration"](0, 0),
         frame_locked=False,
@@ -189,7 +193,8 @@ def side_by_side(name: str, bag: Path, out: Path, rounds: int, smoke: bool) -> d
     loads = []
     for _ in range(rounds):
         for key, command in (("ours", ours), ("theirs", theirs)):
-            out.unlink(missing_ok=True)  # outputs deleted first
+            if key == "ours":
+                out.unlink(missing_ok=True)  # outputs deleted first
             loads.append(os.getloadavg()[0])
             got[key].append(measured(command))
     med = {k: tuple(statistics.median(r[j] for r in runs) for j in range(3)) for k, runs in got.items()}

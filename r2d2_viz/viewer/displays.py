@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import Literal
 
 import numpy as np
 import pyarrow as pa
@@ -29,6 +29,7 @@ import rerun as rr
 from r2d2_viz.msgs import shapes
 from r2d2_viz.msgs.shapes import Decoded, MarkerOp, Pose, is_plain
 from r2d2_viz.msgs.telemetry import status_fields
+from r2d2_viz.viewer.recorder import NUMBERS, Recorder
 
 Clock = Literal["duration", "timestamp"]
 MeshLoader = Callable[[str], "tuple[bytes, str] | None"]
@@ -50,24 +51,11 @@ class MarkerBook:
     """(time, frame) where the topic's entities were placed before their first message (the display feed's)."""
 
 
-class Rows(Protocol):
-    """Where display rows may go instead of the recording: a stand-in that gathers them as columns
-    (:class:`r2d2_viz.viewer.blocks.row_columns.RowColumns`), its time given as nanoseconds."""
-
-    def log(self, entity_path: str, entity: rr.AsComponents, *extra: rr.AsComponents, static: bool = False) -> None: ...
-    def at(self, time_ns: int) -> None: ...  # the time of the rows logged next
-
-
-Recorder = rr.RecordingStream | Rows
-"""The recording, or rows gathered for it."""
-
-
 def set_time(rec: Recorder, timeline: str, time_ns: int, clock: Clock) -> None:
     """Set ``timeline`` to ``time_ns``, as a duration or as a timestamp."""
     if not isinstance(rec, rr.RecordingStream):
         rec.at(time_ns)
-        return
-    if clock == "duration":
+    elif clock == "duration":
         rec.set_time(timeline, duration=np.timedelta64(time_ns, "ns"))
     else:
         rec.set_time(timeline, timestamp=np.datetime64(time_ns, "ns"))
@@ -239,6 +227,12 @@ def _statuses(rec: Recorder, entity_path: str, item: shapes.Statuses, book: Plai
 
 def log_plain(rec: Recorder, entity_path: str, item: shapes.Plain, book: PlainBook) -> None:
     """Log one plain item of a message of the topic on ``entity_path`` (the time is set already)."""
+    if (
+        not isinstance(item, shapes.Series)
+        and not isinstance(rec, rr.RecordingStream)
+        and rec.take(entity_path, item, "")
+    ):
+        return
     if isinstance(item, shapes.LogLine):
         rec.log(entity_path, rr.TextLog(item.text, level=item.level or None))
     elif isinstance(item, shapes.Statuses):
@@ -248,7 +242,8 @@ def log_plain(rec: Recorder, entity_path: str, item: shapes.Plain, book: PlainBo
         if entity not in book.styled:
             book.styled.add(entity)
             rec.log(entity, rr.SeriesLines(names=list(item.labels)), static=True)
-        rec.log(entity, rr.Scalars(item.values))
+        if isinstance(rec, rr.RecordingStream) or not rec.take(entity, item, ""):
+            rec.log(entity, rr.Scalars(item.values))
     else:
         rec.log(entity_path, rr.GeoPoints(lat_lon=[[item.latitude, item.longitude]], radii=rr.Radius.ui_points(6.0)))
 
@@ -281,8 +276,10 @@ def _components(item: shapes.Shape, decoded: Decoded, entity: str, load: MeshLoa
 def prepare(decoded: Decoded, load: MeshLoader | None = None) -> Prepared | None:
     """The archetypes of every item of ``decoded`` (pure: a bag's reader thread builds them beside the logging);
     None when they depend on the entity they go to (a camera's pinhole names its image plane by it)."""
-    if any(isinstance(item, shapes.Pinhole) or is_plain(item) for item in decoded.items):
-        return None  # (plain items: logged with what their topic was given so far)
+    if any(isinstance(i, shapes.Pinhole | shapes.Plain) for i in decoded.items) or all(
+        isinstance(i, NUMBERS) for i in decoded.items
+    ):
+        return None  # plain items: as their topic's book says; NUMBERS: rows of numbers (viewer/blocks/row_items)
     many = len(decoded.items) > 1
     return [(f"/{i}" if many else "", _components(item, decoded, "", load)) for i, item in enumerate(decoded.items)]
 
@@ -303,7 +300,8 @@ def _log_items(
     many = len(drawn) > 1
     for i, item in enumerate(drawn):
         entity = f"{entity_path}/{i}" if many else entity_path
-        rec.log(entity, *_components(item, decoded, entity, load))
+        if isinstance(rec, rr.RecordingStream) or not rec.take(entity, item, decoded.frame_id):
+            rec.log(entity, *_components(item, decoded, entity, load))
     for item in decoded.items:
         if isinstance(item, shapes.LogLine | shapes.Statuses | shapes.Series | shapes.GeoPoint):
             log_plain(rec, entity_path, item, plain if plain is not None else PlainBook())

@@ -23,6 +23,8 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 
+from r2d2_viz.msgs.shapes import Shape
+from r2d2_viz.viewer.blocks.row_items import Builder, row_of
 from r2d2_viz.viewer.columns import send, time_array
 from r2d2_viz.viewer.displays import Clock, set_time
 
@@ -40,9 +42,12 @@ class _Group:
     """Consecutive rows of one entity with the same components."""
 
     descriptors: tuple[rr.ComponentDescriptor, ...]
+    builders: tuple[Builder, ...] | None
+    """How each column is built from its rows' numbers (:mod:`~r2d2_viz.viewer.blocks.row_items`); None: the rows
+    are Arrow arrays of instances already (an archetype's)."""
     times_ns: list[int] = field(default_factory=list)
-    arrays: list[list[pa.Array]] = field(default_factory=list)
-    """Per descriptor, each row's array of instances."""
+    arrays: list[list[Any]] = field(default_factory=list)
+    """Per descriptor, each row's instances."""
     nbytes: int = 0
 
 
@@ -81,18 +86,34 @@ class RowColumns:
                 arrays.append(array)
         self.add(entity, tuple(descriptors), arrays)
 
-    def add(self, entity: str, descriptors: tuple[rr.ComponentDescriptor, ...], arrays: list[pa.Array]) -> None:
-        """A row of prebuilt component arrays (one array of instances per descriptor) at the time set."""
+    def take(self, entity: str, item: Shape, frame: str) -> bool:
+        """Whether ``item`` (drawn in ``frame``) was taken as a row of numbers (:func:`row_of`), not archetypes."""
+        row = row_of(item, frame)
+        if row is None:
+            return False
+        self.add(entity, tuple(d for d, _, _ in row), [v for _, _, v in row], tuple(b for _, b, _ in row))
+        return True
+
+    def add(
+        self,
+        entity: str,
+        descriptors: tuple[rr.ComponentDescriptor, ...],
+        values: list[Any],
+        builders: tuple[Builder, ...] | None = None,
+    ) -> None:
+        """A row at the time set: an array of instances per descriptor (Arrow arrays; or numbers ``builders`` make
+        columns of)."""
         assert self.now is not None, "rows need a time"
         groups = self.runs.setdefault(entity, [])
-        if not groups or groups[-1].descriptors != descriptors:
-            groups.append(_Group(descriptors, arrays=[[] for _ in descriptors]))
+        if not groups or groups[-1].descriptors != descriptors or groups[-1].builders != builders:
+            groups.append(_Group(descriptors, builders, arrays=[[] for _ in descriptors]))
         group = groups[-1]
         before = group.nbytes
         group.times_ns.append(self.now)
-        for column, array in zip(group.arrays, arrays, strict=True):
-            column.append(array)
-            group.nbytes += array.nbytes
+        for column, value in zip(group.arrays, values, strict=True):
+            column.append(value)
+        if builders is None:
+            group.nbytes += sum(a.get_total_buffer_size() for a in values)
         self.held += 1
         self.held_bytes += group.nbytes - before
         if self.held >= HELD_ROWS or self.held_bytes >= HELD_BYTES:
@@ -111,7 +132,10 @@ class RowColumns:
                 self.held -= len(group.times_ns)
                 self.held_bytes -= group.nbytes
                 times = time_array(np.array(group.times_ns, dtype=np.int64), self.clock)
-                columns = [(d, _column(rows)) for d, rows in zip(group.descriptors, group.arrays, strict=True)]
+                builders = group.builders or (_concatenated,) * len(group.descriptors)
+                columns = [
+                    (d, _column(*b(v))) for d, b, v in zip(group.descriptors, builders, group.arrays, strict=True)
+                ]
                 send(self.rec, name, self.timeline, times, columns)
 
     def window_end(self, *, everything: bool = False) -> None:
@@ -126,9 +150,13 @@ class RowColumns:
             set_time(self.rec, self.timeline, self.now, self.clock)
 
 
-def _column(rows: list[pa.Array]) -> pa.Array:
-    """Each row's array of instances as one list array, a row per list."""
-    values = rows[0] if len(rows) == 1 else pa.concat_arrays(rows)
-    offsets = np.zeros(len(rows) + 1, dtype=np.int32)
-    np.cumsum([len(r) for r in rows], out=offsets[1:])
-    return pa.Array.from_buffers(pa.list_(values.type), len(rows), [None, pa.py_buffer(offsets)], children=[values])
+def _concatenated(rows: list[pa.Array]) -> tuple[pa.Array, list[int]]:
+    """Rows of Arrow arrays of instances (an archetype's) → their instances as one array, and each row's count."""
+    return (rows[0] if len(rows) == 1 else pa.concat_arrays(rows)), [len(r) for r in rows]
+
+
+def _column(values: pa.Array, lengths: list[int] | np.ndarray) -> pa.Array:
+    """``values`` cut into a list a row, of ``lengths``: a component column."""
+    offsets = np.zeros(len(lengths) + 1, dtype=np.int32)
+    np.cumsum(lengths, out=offsets[1:])
+    return pa.Array.from_buffers(pa.list_(values.type), len(lengths), [None, pa.py_buffer(offsets)], children=[values])

@@ -54,7 +54,9 @@ def _markers(k: int) -> bytes:
     line = marker_msg(4, ns="a", id=2, points=[vec(0, 0, 0, "Point"), vec(k, 1, 0, "Point")], scale=vec(0.1, 0, 0))
     sphere = marker_msg(2, ns="b", id=3, pose=pose(0, k, 0), lifetime=duration(0, 250_000_000))
     text = marker_msg(9, ns="b", id=4, text=f"t{k}", pose=pose(0, 0, k))
-    markers = [cube, line, sphere, text]
+    cylinder = marker_msg(3, ns="c", id=5, pose=pose(k, k, 0), scale=vec(0.2, 0.2, 1.0))
+    arrow = marker_msg(0, ns="c", id=6, pose=pose(0, 0, k), scale=vec(1.0, 0.1, 0.1), color=color(1, 0, 0, 0.5))
+    markers = [cube, line, sphere, text, cylinder, arrow]
     if k == 3:
         markers[2] = marker_msg(2, ns="b", id=3, action=2)  # DELETE
     if k == 5:
@@ -98,7 +100,11 @@ TOPICS = {  # topic → (type, message maker)
     "/battery": ("sensor_msgs/msg/BatteryState", _battery),
 }
 MESSAGES = sorted(
-    (TopicMessage(T0 + k * S // 10 + i, topic, msgtype, make(k)) for i, (topic, (msgtype, make)) in enumerate(TOPICS.items()) for k in range(6)),
+    (
+        TopicMessage(T0 + k * S // 10 + i, topic, msgtype, make(k))
+        for i, (topic, (msgtype, make)) in enumerate(TOPICS.items())
+        for k in range(6)
+    ),
     key=lambda m: m.time_ns,
 )
 """Six messages a topic, 0.1 s apart (the topics 1 ns apart in each step), in receive order."""
@@ -116,6 +122,9 @@ class _PerMessage:
     def log(self, entity: str, *archetypes: Any, static: bool = False) -> None:
         self.rec.log(entity, *archetypes, static=static)
 
+    def take(self, entity: str, item: object, frame: str) -> bool:
+        return False  # every item as its archetypes
+
     def send(self, *entities: str) -> None:
         pass
 
@@ -128,7 +137,13 @@ def _record(path: Path, how: str) -> dict[str, Rows]:
     stretches, held runs) or ``live`` (logged as they come, in batches of 7)."""
     rec = rr.RecordingStream(f"test_row_columns_{how}")
     rec.save(path)
-    feed = DisplayFeed(Notices(rec), clock="timestamp", fixed_frame="odom", topics={t: m for t, (m, _) in TOPICS.items()}, hold=how == "batch")
+    feed = DisplayFeed(
+        Notices(rec),
+        clock="timestamp",
+        fixed_frame="odom",
+        topics={t: m for t, (m, _) in TOPICS.items()},
+        hold=how == "batch",
+    )
     if how == "before":
         feed.rows = _PerMessage(rec)  # type: ignore[assignment]
     if how == "live":
@@ -211,10 +226,14 @@ def test_the_values_are_the_messages(recordings: dict[str, dict[str, Rows]], how
         )
         np.testing.assert_allclose(vectors, rotation.T * 0.3, atol=1e-6)
     lines = _drawn(got["/rosout"], "TextLog:text")
-    assert [(t, text) for t, text in lines] == [(t, [f"[node] {m.msg} (a.cpp:f:{m.line})"]) for t, m in _deserialized("/rosout")]
+    assert [(t, text) for t, text in lines] == [
+        (t, [f"[node] {m.msg} (a.cpp:f:{m.line})"]) for t, m in _deserialized("/rosout")
+    ]
     states = _drawn(got["/diagnostics/motor_0"], "StateChange:state")
     levels = {0: "OK", 1: "WARN", 2: "ERROR"}
-    assert states == [(t, [f"{levels[m.status[0].level]}: {m.status[0].message}"]) for t, m in _deserialized("/diagnostics")]
+    assert states == [
+        (t, [f"{levels[m.status[0].level]}: {m.status[0].message}"]) for t, m in _deserialized("/diagnostics")
+    ]
     cube = _drawn(got["/markers/a/1"], "InstancePoses3D:translations")
     assert cube == [(t, [[m.markers[0].pose.position.x, 0.0, 0.0]]) for t, m in _deserialized("/markers")]
     strip = _drawn(got["/markers/a/2"], "LineStrips3D:strips")
@@ -224,7 +243,9 @@ def test_the_values_are_the_messages(recordings: dict[str, dict[str, Rows]], how
     voltage = _drawn(got["/battery/voltage"], "Scalars:scalars")
     assert voltage == [(t, [m.voltage]) for t, m in _deserialized("/battery")]
     path = _drawn(got["/path"], "LineStrips3D:strips")
-    assert path == [(t, [[[p.pose.position.x, p.pose.position.y, 0.0] for p in m.poses]]) for t, m in _deserialized("/path")]
+    assert path == [
+        (t, [[[p.pose.position.x, p.pose.position.y, 0.0] for p in m.poses]]) for t, m in _deserialized("/path")
+    ]
 
 
 def test_a_delete_and_a_deleteall_clear_at_their_times(recordings: dict[str, dict[str, Rows]]) -> None:
