@@ -49,7 +49,8 @@ def _diagnostics(k: int) -> bytes:
 
 
 def _markers(k: int) -> bytes:
-    """Three markers a message; the 4th message deletes the sphere, the 6th clears namespace "b"."""
+    """Six markers a message; the 4th message deletes the sphere, the 6th draws it and clears namespace "b" (at
+    one time: the clear comes after the drawing)."""
     cube = marker_msg(1, ns="a", id=1, pose=pose(k, 0, 0), scale=vec(0.5, 0.5, 0.5), color=color(0, 0, 1))
     line = marker_msg(4, ns="a", id=2, points=[vec(0, 0, 0, "Point"), vec(k, 1, 0, "Point")], scale=vec(0.1, 0, 0))
     sphere = marker_msg(2, ns="b", id=3, pose=pose(0, k, 0), lifetime=duration(0, 250_000_000))
@@ -60,7 +61,7 @@ def _markers(k: int) -> bytes:
     if k == 3:
         markers[2] = marker_msg(2, ns="b", id=3, action=2)  # DELETE
     if k == 5:
-        markers = [cube, marker_msg(0, ns="b", action=3)]  # DELETEALL of namespace b
+        markers = [cube, sphere, marker_msg(0, ns="b", action=3)]  # drawn, then DELETEALL of namespace b: cleared
     return cdr(T("visualization_msgs/msg/MarkerArray")(markers))
 
 
@@ -237,7 +238,7 @@ def test_the_values_are_the_messages(recordings: dict[str, dict[str, Rows]], how
     cube = _drawn(got["/markers/a/1"], "InstancePoses3D:translations")
     assert cube == [(t, [[m.markers[0].pose.position.x, 0.0, 0.0]]) for t, m in _deserialized("/markers")]
     strip = _drawn(got["/markers/a/2"], "LineStrips3D:strips")
-    assert [t for t, _ in strip] == [t for t, m in _deserialized("/markers") if len(m.markers) > 2]
+    assert [t for t, _ in strip] == [t for t, m in _deserialized("/markers") if any(mk.type == 4 for mk in m.markers)]
     fixes = _drawn(got["/fix"], "GeoPoints:positions")
     assert fixes == [(t, [[m.latitude, m.longitude]]) for t, m in _deserialized("/fix")]
     voltage = _drawn(got["/battery/voltage"], "Scalars:scalars")
