@@ -32,9 +32,9 @@ def _vectors(size: int, dtype: type[np.floating[Any]] = np.float32) -> Builder:
     kind = pa.list_(pa.field("item", item, nullable=False), size)
 
     def build(values: list[Any]) -> tuple[pa.Array, list[int] | np.ndarray]:
-        rows = [np.asarray(v, dtype=dtype).reshape(-1, size) for v in values]
-        flat = pa.array(np.concatenate(rows).reshape(-1), type=item)
-        return pa.FixedSizeListArray.from_arrays(flat, type=kind), [len(r) for r in rows]
+        block, lengths = _even(values, dtype, size)
+        flat = pa.array(block.reshape(-1), type=item)
+        return pa.FixedSizeListArray.from_arrays(flat, type=kind), lengths
 
     return build
 
@@ -43,10 +43,24 @@ def _numbers(dtype: type[np.generic], kind: pa.DataType) -> Builder:
     """Rows of numbers (one, or an array each) → one Arrow array of ``kind``."""
 
     def build(values: list[Any]) -> tuple[pa.Array, list[int] | np.ndarray]:
-        rows = [np.asarray(v, dtype=dtype).reshape(-1) for v in values]
-        return pa.array(np.concatenate(rows), type=kind), [len(r) for r in rows]
+        block, lengths = _even(values, dtype, 1)
+        return pa.array(block.reshape(-1), type=kind), lengths
 
     return build
+
+
+def _even(values: list[Any], dtype: type[np.generic], size: int) -> tuple[np.ndarray, list[int] | np.ndarray]:
+    """Rows of ``size``-number instances as one ``(n, size)`` block, and each row's count: in one conversion when
+    every row has as many (a marker's pose, a colour, a number), else row by row."""
+    try:
+        block = np.array(values, dtype=dtype)
+    except ValueError:  # rows of different lengths
+        block = None
+    if block is not None and block.ndim >= 1 and (size == 1 or (block.ndim >= 2 and block.shape[-1] == size)):
+        each = int(np.prod(block.shape[1:])) // size
+        return block.reshape(-1, size), np.full(len(values), each, dtype=np.int64)
+    rows = [np.asarray(v, dtype=dtype).reshape(-1, size) for v in values]
+    return np.concatenate(rows), [len(r) for r in rows]
 
 
 def _texts(values: list[Any]) -> tuple[pa.Array, list[int] | np.ndarray]:
