@@ -29,7 +29,7 @@ import rerun as rr
 from r2d2_viz.msgs import shapes
 from r2d2_viz.msgs.shapes import Decoded, MarkerOp, Pose, is_plain
 from r2d2_viz.msgs.telemetry import status_fields
-from r2d2_viz.viewer.recorder import NUMBERS, Recorder
+from r2d2_viz.viewer.blocks.recorder import NUMBERS, Recorder
 
 Clock = Literal["duration", "timestamp"]
 MeshLoader = Callable[[str], "tuple[bytes, str] | None"]

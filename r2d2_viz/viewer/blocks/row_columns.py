@@ -65,8 +65,9 @@ class RowColumns:
         """What :func:`~r2d2_viz.viewer.displays.set_time` calls: the time of the rows logged next."""
         self.now = time_ns
 
-    def log(self, entity: str, *archetypes: Any, static: bool = False) -> None:
+    def log(self, entity: str, first: rr.AsComponents, *extra: rr.AsComponents, static: bool = False) -> None:
         """One row on ``entity`` at the time set (a static one, or a ``Clear``: logged at once, in order)."""
+        archetypes = (first, *extra)
         if static:
             self.rec.log(entity, *archetypes, static=True)
             return

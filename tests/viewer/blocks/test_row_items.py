@@ -10,9 +10,9 @@ import pytest
 import rerun as rr
 
 from r2d2_viz.msgs import shapes
+from r2d2_viz.viewer.blocks.recorder import NUMBERS
 from r2d2_viz.viewer.blocks.row_items import row_of
 from r2d2_viz.viewer.displays import archetypes
-from r2d2_viz.viewer.recorder import NUMBERS
 
 POSE = shapes.Pose((1.0, 2.0, 3.0), (0.0, 0.0, 0.6, 0.8))
 RED, BLUE = np.array([[255, 0, 0, 255]], np.uint8), np.array([[0, 0, 255, 128], [9, 8, 7, 6]], np.uint8)

@@ -17,7 +17,7 @@ decoded message of these alone is not prepared ahead."""
 class Rows(Protocol):
     """Display rows gathered as columns (:class:`r2d2_viz.viewer.blocks.row_columns.RowColumns`)."""
 
-    def log(self, entity_path: str, entity: rr.AsComponents, *extra: rr.AsComponents, static: bool = False) -> None:
+    def log(self, entity: str, first: rr.AsComponents, *extra: rr.AsComponents, static: bool = False) -> None:
         """As ``rec.log``: a row of archetypes at the time given last."""
 
     def at(self, time_ns: int) -> None:
