@@ -59,11 +59,12 @@ class RowColumns:
         self.rec, self.timeline, self.clock, self.hold = rec, timeline, clock, hold
         self.runs: dict[str, list[_Group]] = {}
         self.now: int | None = None
+        self._moved = False
         self.held = self.held_bytes = 0
 
     def at(self, time_ns: int) -> None:
         """What :func:`~r2d2_viz.viewer.displays.set_time` calls: the time of the rows logged next."""
-        self.now = time_ns
+        self.now, self._moved = time_ns, True
 
     def log(self, entity: str, first: rr.AsComponents, *extra: rr.AsComponents, static: bool = False) -> None:
         """One row on ``entity`` at the time set (a static one, or a ``Clear``: logged at once, in order)."""
@@ -147,8 +148,10 @@ class RowColumns:
         self._release_time()
 
     def _release_time(self) -> None:
-        if self.now is not None:
+        """The recording's time where the rows logged since the last release left it (logging them would have)."""
+        if self._moved and self.now is not None:
             set_time(self.rec, self.timeline, self.now, self.clock)
+        self._moved = False
 
 
 def _concatenated(rows: list[pa.Array]) -> tuple[pa.Array, list[int]]:
