@@ -42,6 +42,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -96,21 +97,23 @@ def write_bag(path: Path, seconds: float, rate: float = 100.0) -> int:
         ]
         for i in range(n):
             t = T0 + int(i * 1e9 / rate)
-            header = T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](*divmod(t, 1_000_000_000)), "base_link")
             for k, connection in enumerate(connections):
-                msgtype = f"bench_msgs/msg/Sensor{k:02d}"
-                x = rng.standard_normal(6)
-                if k % 2 == 0:
-                    force = T["geometry_msgs/msg/Vector3"](*x[:3])
-                    msg = T[msgtype](
-                        header, x[0], x[1], np.float32(x[2]), i, i % 4, bool(i % 2), x[:4].astype(np.float32), force
-                    )
-                else:
-                    samples = [T["bench_msgs/msg/Sample"](float(x[j]), j) for j in range(3)]
-                    msg = T[msgtype](header, "position", x, x * 0.5, samples, i % 7)
-                writer.write(connection, t + k, bytes(ts.serialize_cdr(msg, msgtype)))
+                msg = custom_message(T, k, i, t, rng)
+                writer.write(connection, t + k, bytes(ts.serialize_cdr(msg, f"bench_msgs/msg/Sensor{k:02d}")))
                 count += 1
     return count
+
+
+def custom_message(T: Any, k: int, i: int, t: int, rng: np.random.Generator) -> Any:
+    """The ``i``-th message (at ``t``) of custom topic ``k`` (types ``T`` of a store with :func:`_types` in it)."""
+    header = T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](*divmod(t, 1_000_000_000)), "base_link")
+    msgtype = f"bench_msgs/msg/Sensor{k:02d}"
+    x = rng.standard_normal(6)
+    if k % 2 == 0:
+        force = T["geometry_msgs/msg/Vector3"](*x[:3])
+        return T[msgtype](header, x[0], x[1], np.float32(x[2]), i, i % 4, bool(i % 2), x[:4].astype(np.float32), force)
+    samples = [T["bench_msgs/msg/Sample"](float(x[j]), j) for j in range(3)]
+    return T[msgtype](header, "position", x, x * 0.5, samples, i % 7)
 
 
 def _rosbags(bag: object, blocks: list, stores: dict) -> float:  # type: ignore[type-arg]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -37,14 +38,13 @@ def xyz(v: Any) -> tuple[float, float, float]:
 
 def xyzw(q: Any) -> tuple[float, float, float, float]:
     """A Quaternion message normalised (all zeros reads as identity, as RViz does); non-finite is refused."""
-    v = np.array([q.x, q.y, q.z, q.w], dtype=np.float64)
-    norm = float(np.linalg.norm(v))
-    if not np.isfinite(norm):
-        raise MsgError(f"non-finite quaternion {v.tolist()}")
+    x, y, z, w = float(q.x), float(q.y), float(q.z), float(q.w)  # plain floats: one message's, numpy costs more
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    if not math.isfinite(norm):
+        raise MsgError(f"non-finite quaternion {[x, y, z, w]}")
     if norm < 1e-12:
         return (0.0, 0.0, 0.0, 1.0)
-    x, y, z, w = (v / norm).tolist()
-    return (x, y, z, w)
+    return (x / norm, y / norm, z / norm, w / norm)
 
 
 def pose_of(p: Any) -> Pose:
@@ -96,9 +96,8 @@ def rotate(q: Sequence[float], v: F64) -> F64:
 
 def rgba8(c: Any) -> Rgba8:
     """A std_msgs/ColorRGBA (floats 0..1) as 8-bit RGBA; NaN reads as 0."""
-    v = np.nan_to_num(np.array([c.r, c.g, c.b, c.a], dtype=np.float64), nan=0.0)
-    r, g, b, a = np.round(np.clip(v, 0.0, 1.0) * 255).astype(int).tolist()
-    return (r, g, b, a)
+    r, g, b, a = (0 if v != v else round(min(max(float(v), 0.0), 1.0) * 255) for v in (c.r, c.g, c.b, c.a))
+    return (r, g, b, a)  # (round: half to even, as numpy's)
 
 
 def colors8(colors: Sequence[Any]) -> U8:

@@ -30,6 +30,7 @@ from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
 from r2d2_viz.viewer.blocks.image_overlays import on_image, overlay_frames
 from r2d2_viz.viewer.blocks.odometry_keep import OdometryKeep, Tolerance
+from r2d2_viz.viewer.blocks.row_columns import RowColumns
 from r2d2_viz.viewer.decay import FixedFramePlacer
 from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, PlainBook, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
@@ -179,6 +180,7 @@ class DisplayFeed:
         self.on_map: Callable[[str, GridMap], object] | None = None
         """Called with each map drawn and its frame (the tools' ground grows to cover it)."""
         self.columns = ColumnRuns(self.rec, timeline, clock, hold=hold)  # images, points: columns (until())
+        self.rows = RowColumns(self.rec, timeline, clock, hold=hold)  # every other display's rows: columns too
         self.odometry = OdometryKeep(lambda topic: (self.styles.get(topic) or DisplayStyle()).tolerance)
         self.joins = Joins({topic: style.options for topic, style in self.styles.items()})  # DepthCloud, Effort…
 
@@ -220,22 +222,24 @@ class DisplayFeed:
             message = self.decode(message)
             if _simple(self, message, message.decoded):
                 entity = _count(self, message)[1]
+                self.rows.send(entity, *self.cameras.get(message.topic, ()))
                 self.columns.add(message, entity, self.cameras.get(message.topic, ()), header_time=self.header_time)
             else:  # on its own: after what its entities' runs hold, at the time the runs left
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
                 self._log(message)
         self.columns.interrupt(everything=time_ns is None)  # everything taken: held runs too
+        end = _FOREVER if time_ns is None else time_ns
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
             if state.markers.live:
-                expire_markers(
-                    self.rec, state.markers, self.timeline, _FOREVER if time_ns is None else time_ns, self.clock
-                )
+                expire_markers(self.rows, state.markers, self.timeline, end, self.clock)
+        self.rows.window_end(everything=time_ns is None)
         return len(due)
 
-    def log(self, message: TopicMessage) -> None:
-        """Decode and log one message (a live source calls this as messages arrive), unless RViz would not draw it."""
-        if self.odometry.kept([message]):
+    def log(self, *messages: TopicMessage) -> None:
+        """Decode and log a live source's messages as they come (rows as columns), unless RViz would not draw them."""
+        for message in self.odometry.kept(list(messages)):
             self._log(message)
+        self.rows.window_end()
 
     def _log(self, message: TopicMessage) -> None:
         if message.msgtype == GRID_UPDATE:
@@ -284,7 +288,7 @@ class DisplayFeed:
         for t in times:
             for target in (entity, *images):
                 log_decoded(
-                    self.rec,
+                    self.rows,
                     target,
                     decoded,
                     timeline=self.timeline,
@@ -314,13 +318,13 @@ class DisplayFeed:
             prepared = prepare(decoded)  # the archetypes too, off the logging thread
         return dataclasses.replace(message, decoded=decoded, prepared=prepared)
 
-    def _where(self, topic: str) -> str:
-        # the topic's problem follows: the name gets less room than in a list of names
+    def _where(self, topic: str) -> str:  # the topic's problem follows: less room than in a list of names
         return f"{self.source_name}: {short(topic, 60)}" if self.source_name else short(topic, 60)
 
     def finish(self) -> None:
         """Send the runs still held; say, per topic, how many messages could not be shown (beyond the first)."""
         self.columns.send()
+        self.rows.send()
         for topic, note in self.video.finish():
             self.notices.report(f"{self._where(topic)}: {note}")
         for topic, state in self.topics.items():

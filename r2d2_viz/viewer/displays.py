@@ -29,6 +29,7 @@ import rerun as rr
 from r2d2_viz.msgs import shapes
 from r2d2_viz.msgs.shapes import Decoded, MarkerOp, Pose, is_plain
 from r2d2_viz.msgs.telemetry import status_fields
+from r2d2_viz.viewer.blocks.recorder import NUMBERS, Recorder
 
 Clock = Literal["duration", "timestamp"]
 MeshLoader = Callable[[str], "tuple[bytes, str] | None"]
@@ -50,9 +51,11 @@ class MarkerBook:
     """(time, frame) where the topic's entities were placed before their first message (the display feed's)."""
 
 
-def set_time(rec: rr.RecordingStream, timeline: str, time_ns: int, clock: Clock) -> None:
+def set_time(rec: Recorder, timeline: str, time_ns: int, clock: Clock) -> None:
     """Set ``timeline`` to ``time_ns``, as a duration or as a timestamp."""
-    if clock == "duration":
+    if not isinstance(rec, rr.RecordingStream):
+        rec.at(time_ns)
+    elif clock == "duration":
         rec.set_time(timeline, duration=np.timedelta64(time_ns, "ns"))
     else:
         rec.set_time(timeline, timestamp=np.datetime64(time_ns, "ns"))
@@ -219,7 +222,7 @@ def _typed(fields: dict[str, object]) -> dict[str, object]:
     return {k: pa.array(v) if isinstance(v, np.ndarray) and not len(v) else v for k, v in fields.items()}
 
 
-def _statuses(rec: rr.RecordingStream, entity_path: str, item: shapes.Statuses, book: PlainBook) -> None:
+def _statuses(rec: Recorder, entity_path: str, item: shapes.Statuses, book: PlainBook) -> None:
     for status in item.items:
         entity, state = status_entity(entity_path, status), state_of(status)
         while book.lanes.setdefault(entity, status.name) != status.name:  # another name made the same path
@@ -238,8 +241,14 @@ def _statuses(rec: rr.RecordingStream, entity_path: str, item: shapes.Statuses, 
         )
 
 
-def log_plain(rec: rr.RecordingStream, entity_path: str, item: shapes.Plain, book: PlainBook) -> None:
+def log_plain(rec: Recorder, entity_path: str, item: shapes.Plain, book: PlainBook) -> None:
     """Log one plain item of a message of the topic on ``entity_path`` (the time is set already)."""
+    if (
+        not isinstance(item, shapes.Series)
+        and not isinstance(rec, rr.RecordingStream)
+        and rec.take(entity_path, item, "")
+    ):
+        return
     if isinstance(item, shapes.LogLine):
         rec.log(entity_path, rr.TextLog(item.text, level=item.level or None))
     elif isinstance(item, shapes.Statuses):
@@ -249,7 +258,8 @@ def log_plain(rec: rr.RecordingStream, entity_path: str, item: shapes.Plain, boo
         if entity not in book.styled:
             book.styled.add(entity)
             rec.log(entity, rr.SeriesLines(names=list(item.labels)), static=True)
-        rec.log(entity, rr.Scalars(item.values))
+        if isinstance(rec, rr.RecordingStream) or not rec.take(entity, item, ""):
+            rec.log(entity, rr.Scalars(item.values))
     else:
         rec.log(entity_path, rr.GeoPoints(lat_lon=[[item.latitude, item.longitude]], radii=rr.Radius.ui_points(6.0)))
 
@@ -282,14 +292,16 @@ def _components(item: shapes.Shape, decoded: Decoded, entity: str, load: MeshLoa
 def prepare(decoded: Decoded, load: MeshLoader | None = None) -> Prepared | None:
     """The archetypes of every item of ``decoded`` (pure: a bag's reader thread builds them beside the logging);
     None when they depend on the entity they go to (a camera's pinhole names its image plane by it)."""
-    if any(isinstance(item, shapes.Pinhole) or is_plain(item) for item in decoded.items):
-        return None  # (plain items: logged with what their topic was given so far)
+    if any(isinstance(i, shapes.Pinhole | shapes.Plain) for i in decoded.items) or all(
+        isinstance(i, NUMBERS) for i in decoded.items
+    ):
+        return None  # plain items: as their topic's book says; NUMBERS: rows of numbers (viewer/blocks/row_items)
     many = len(decoded.items) > 1
     return [(f"/{i}" if many else "", _components(item, decoded, "", load)) for i, item in enumerate(decoded.items)]
 
 
 def _log_items(
-    rec: rr.RecordingStream,
+    rec: Recorder,
     entity_path: str,
     decoded: Decoded,
     load: MeshLoader | None,
@@ -304,13 +316,14 @@ def _log_items(
     many = len(drawn) > 1
     for i, item in enumerate(drawn):
         entity = f"{entity_path}/{i}" if many else entity_path
-        rec.log(entity, *_components(item, decoded, entity, load))
+        if isinstance(rec, rr.RecordingStream) or not rec.take(entity, item, decoded.frame_id):
+            rec.log(entity, *_components(item, decoded, entity, load))
     for item in decoded.items:
         if isinstance(item, shapes.LogLine | shapes.Statuses | shapes.Series | shapes.GeoPoint):
             log_plain(rec, entity_path, item, plain if plain is not None else PlainBook())
 
 
-def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, time_ns: int, clock: Clock) -> None:
+def expire_markers(rec: Recorder, book: MarkerBook, timeline: str, time_ns: int, clock: Clock) -> None:
     """Clear (at their expiry time) the markers whose lifetime has run out by ``time_ns``."""
     expired = sorted((t, e) for e, t in book.live.items() if t is not None and t <= time_ns)
     for expiry, entity in expired:
@@ -319,7 +332,7 @@ def expire_markers(rec: rr.RecordingStream, book: MarkerBook, timeline: str, tim
         del book.live[entity]
 
 
-def _clear(rec: rr.RecordingStream, prefix: str, book: MarkerBook) -> None:
+def _clear(rec: Recorder, prefix: str, book: MarkerBook) -> None:
     """Clear the drawn marker entities at and below ``prefix``, one by one (those cleared already stay so: a
     tracker's DELETEALL costs as many rows as it has markers shown, however many ids it has used), each put back
     in the anchor's frame (the fixed frame; without an anchor, its own): it draws nothing, and the view can place
@@ -332,7 +345,7 @@ def _clear(rec: rr.RecordingStream, prefix: str, book: MarkerBook) -> None:
         book.drawn.discard(entity)
 
 
-def _place(rec: rr.RecordingStream, entity: str, frame: str, book: MarkerBook, when: tuple[str, int, Clock]) -> None:
+def _place(rec: Recorder, entity: str, frame: str, book: MarkerBook, when: tuple[str, int, Clock]) -> None:
     """A marker entity's first drawing at ``when`` (timeline, time, clock): before it, from the anchor's time on,
     the entity sits in the anchor's frame (the fixed frame), like the topic's own entity."""
     timeline, time_ns, clock = when
@@ -345,7 +358,7 @@ def _place(rec: rr.RecordingStream, entity: str, frame: str, book: MarkerBook, w
 
 
 def _log_markers(
-    rec: rr.RecordingStream,
+    rec: Recorder,
     entity_path: str,
     ops: list[MarkerOp],
     book: MarkerBook,
@@ -370,7 +383,7 @@ def _log_markers(
 
 
 def log_decoded(
-    rec: rr.RecordingStream,
+    rec: Recorder,
     entity_path: str,
     decoded: Decoded | list[MarkerOp],
     *,
