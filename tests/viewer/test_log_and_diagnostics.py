@@ -36,7 +36,7 @@ from telemetrybags import (
     write_telemetry_bag,
 )
 
-from r2d2_viz.viewer.displays import STATE_COLORS, PlainBook, state_of
+from r2d2_viz.viewer.blocks.plain_log import STATE_COLORS
 
 
 def _replay(tmp_path: Path, bag: Path) -> tuple[Path, str]:
@@ -180,23 +180,6 @@ def test_bad_strings_and_non_finite_values_are_said_once_per_topic(tmp_path: Pat
     assert not _rows(recording["/imu"], "Arrows3D:vectors")
 
 
-def test_a_field_keeps_the_kind_it_was_first_logged_as() -> None:
-    """Rerun fixes a component's type at its first row: a key first seen as text stays text."""
-    import rerun as rr
-
-    from r2d2_viz.msgs.shapes import Status, Statuses
-    from r2d2_viz.msgs.telemetry import KINDS
-    from r2d2_viz.viewer.displays import log_plain
-
-    rec = rr.RecordingStream("test", recording_id="t")
-    book = PlainBook()
-    log_plain(rec, "/d", Statuses((Status(("a",), "OK", "", "", (("kind test key", "idle"),)),)), book)
-    log_plain(rec, "/d", Statuses((Status(("a",), "WARN", "m", "", (("kind test key", "3.5"),)),)), book)
-    assert KINDS["kind test key"] is False
-    assert book.states["/d/a"] == ["OK", "WARN: m"]
-    assert state_of(Status(("a",), "ERROR", "", "", ())) == "ERROR"
-
-
 REAL_LOGS = {
     "ros1/example-lz4.bag": {1: "DEBUG", 2: "INFO", 4: "WARN", 8: "ERROR", 16: "CRITICAL"},  # rosgraph_msgs/Log
     "talker_mcap": {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "CRITICAL"},  # rcl_interfaces/msg/Log
@@ -291,17 +274,3 @@ def test_terminal_escapes_from_a_bag_never_reach_the_recordings_text(tmp_path: P
         for t in strings(c)
     ]
     assert "WARN: hot" in texts and not [t for t in texts if "\x1b" in t or "\x07" in t]
-
-
-def test_distinct_status_names_that_make_the_same_path_get_a_lane_each() -> None:
-    """`motor: left` and `motor left` both make `motor_left`: two names, two lanes (by hand)."""
-    import rerun as rr
-
-    from r2d2_viz.msgs.shapes import Status, Statuses
-    from r2d2_viz.viewer.displays import log_plain
-
-    rec = rr.RecordingStream("test", recording_id="lanes")
-    book = PlainBook()
-    for name in ("motor: left", "motor left", "motor: left"):
-        log_plain(rec, "/d", Statuses((Status(("motor_left",), "OK", "", "", (), name),)), book)
-    assert book.lanes == {"/d/motor_left": "motor: left", "/d/motor_left_": "motor left"}

@@ -3,7 +3,7 @@ message (``rr.Arrows3D(…)``, ``rr.Scalars(…)``: their converters) cost more 
 
 :func:`row_of` gives, for an arrow set, boxes, ellipsoids, cylinders, line strips or a label in a named frame, and
 for a plotted number, a log line or a fix, the components :func:`r2d2_viz.viewer.displays.archetypes` and
-:func:`~r2d2_viz.viewer.displays.log_plain` would log — the same descriptors, and values that become the same
+:func:`~r2d2_viz.viewer.blocks.plain_log.log_plain` would log — the same descriptors, and values that become the same
 Arrow arrays — as (descriptor, how its column is built, this row's value); :class:`Builder` s turn a run's values
 into one Arrow array each, a numpy concatenation per column. Anything else (meshes, maps, images, states, pinholes,
 items in no frame) goes through the archetypes, row by row.
@@ -114,6 +114,8 @@ def row_of(item: shapes.Shape, frame: str) -> Row | None:
 
 
 def _shaped(item: shapes.Shape) -> Row | None:
+    if isinstance(item, shapes.Boxes) and (item.labels or item.edges):  # detections: as archetypes (labels, edges)
+        return None
     if isinstance(item, shapes.Arrows):
         return [
             (rr.Arrows3D.descriptor_vectors(), _VEC3, item.vectors),
