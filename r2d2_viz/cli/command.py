@@ -128,13 +128,6 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             f"--save {args.save}: unknown extension {args.save.suffix or '(none)'!r}; "
             "write a recording (.rrd) or a ROS 2 bag (.mcap)"
         )
-    _quiet_rerun()
-    from r2d2_viz.progress import wanted
-    from r2d2_viz.runner import RunConfig, print_summary, run
-    from r2d2_viz.rviz.tools import parse_tool_topics
-    from r2d2_viz.viewer.sinks import SinkConfig, has_display
-
-    _started()
     if args.bag is not None:  # "--bag b.mcap ur_type:=ur5e": the xacro arguments after the bags
         args.xacro_args = [*(str(b) for b in args.bag if ":=" in str(b)), *args.xacro_args]
         args.bag = [b for b in args.bag if ":=" not in str(b)] or None
@@ -165,7 +158,10 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         return compare_main(args)
     fleet = (args.save_dir, args.dataset, args.jobs, args.ray, args.summary)
     if args.force or any(value is not None for value in fleet):
+        _quiet_rerun()
         from r2d2_viz.fleet.commands import fleet_main
+
+        _started()
 
         return fleet_main(args)
     if args.bag is not None and len(args.bag) > 1:
@@ -186,12 +182,22 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         from r2d2_viz.cli.system import tf_tree_main, tf_tree_sink
 
         if not (live or args.save or args.headless):
+            _started()
             return tf_tree_main(args)
         tf_tree_sink(args)
     if args.list and not args.ros:
         if args.bag is None:
             raise UsageError("--list lists the topics of a live ROS 2 graph or a bag: use it with --ros or --bag PATH")
+        _started()
         return _list_bag(args.bag)
+    # rerun (0.7 s of CPU to import) only once a run needs it: a refused flag, --list and --tf-tree return first
+    _quiet_rerun()
+    from r2d2_viz.progress import wanted
+    from r2d2_viz.runner import RunConfig, print_summary, run
+    from r2d2_viz.rviz.tools import parse_tool_topics
+    from r2d2_viz.viewer.sinks import SinkConfig, has_display
+
+    _started()
     if args.ros:
         if args.bag is not None or args.motion not in (None, "sliders"):  # sliders: published on /joint_states
             raise UsageError("--ros shows the live graph; it cannot be combined with --bag or --motion (but sliders)")
