@@ -121,7 +121,10 @@ def test_a_frame_looks_like_the_native_viewers_screenshot(
     result = cli("--bag", str(rendered.bag), "--save", str(rrd))
     assert result.returncode == 0, result.stderr
     shot = viewers.screenshot_native(
-        rrd, artifacts_dir / "native.png", display=x_display.display, window_size=(640, 400)
+        rrd,
+        artifacts_dir / "native.png",
+        display=x_display.display,
+        window_size=(1600, 1000),  # the toasts (Docker, lavapipe) sit over the plots, not the 3D view
     )
     native = viewers.load_png(shot.path)
     x0, y0, x1, y1 = _view_rect(native)

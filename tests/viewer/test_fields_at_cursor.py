@@ -155,11 +155,9 @@ def test_header_time_moves_the_plots_and_fields_with_unset_stamps_at_receive_tim
             T["geometry_msgs/msg/PoseWithCovariance"](pose, np.zeros(36)),
             T["geometry_msgs/msg/TwistWithCovariance"](twist, np.zeros(36)),
         )
-        accel = T["geometry_msgs/msg/AccelStamped"](
-            _header(stamp, "odom"), T["geometry_msgs/msg/Accel"](twist.linear, twist.angular)
-        )
+        accel = T["geometry_msgs/msg/Vector3Stamped"](_header(stamp, "odom"), twist.linear)  # no display: fields
         msgs.append(("/odom", "nav_msgs/msg/Odometry", T0 + k * 10**8, odom))
-        msgs.append(("/accel", "geometry_msgs/msg/AccelStamped", T0 + k * 10**8 + 1, accel))
+        msgs.append(("/accel", "geometry_msgs/msg/Vector3Stamped", T0 + k * 10**8 + 1, accel))
     bag, written = _write(tmp_path / "bag", msgs)
     out = tmp_path / "out.rrd"
     result = cli(
@@ -177,7 +175,7 @@ def test_header_time_moves_the_plots_and_fields_with_unset_stamps_at_receive_tim
         return sorted(out)
 
     assert _series(recording, 0, "/odom.twist.twist.linear.x").times == when("/odom", "nav_msgs/msg/Odometry")
-    assert recording["/topics/accel"].times == when("/accel", "geometry_msgs/msg/AccelStamped")
+    assert recording["/topics/accel"].times == when("/accel", "geometry_msgs/msg/Vector3Stamped")
 
 
 def test_joint_states_without_a_robot_are_a_topic_like_any_other(tmp_path: Path) -> None:
