@@ -192,8 +192,8 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         return _list_bag(args.bag)
     # rerun (0.7 s of CPU to import) only once a run needs it: a refused flag, --list and --tf-tree return first
     _quiet_rerun()
-    from r2d2_viz.progress import wanted
-    from r2d2_viz.runner import RunConfig, print_summary, run
+    from r2d2_viz.cli.run_args import run_config
+    from r2d2_viz.runner import print_summary, run
     from r2d2_viz.rviz.tools import parse_tool_topics
     from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
@@ -236,30 +236,14 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     mappings = xacro_mappings(args)
     if args.tree:
         return _print_tree(args, mappings)
-    config = RunConfig(
-        urdf=args.urdf,
+    config = run_config(
+        args,
         mappings=mappings,
-        package_paths=tuple(args.package_path),
-        motion=args.motion,
-        rate=args.rate,
-        duration=args.duration,
         sink=sink,
         realtime=args.realtime,
-        bag=args.bag,
-        speed=args.speed,
-        time=args.time,
-        fixed_frame=args.fixed_frame,
-        shared_frames=_frames(args.shared_frames),
-        rviz=args.rviz,
         ros=args.ros,
-        start_offset=args.start_offset,
-        topics=tuple(args.topics) if args.topics is not None else None,
-        video=args.video,
-        progress=wanted(),
         tool_topics=parse_tool_topics(args.tool_topic),
-        plots=tuple(tuple(p) for p in args.plot),
         tf_tree=args.tf_tree is not None,
-        show=frozenset(k for k, on in (("mass", args.mass), ("inertia", args.inertia), ("axes", args.link_axes)) if on),
         watch=args.watch,
     )
     if args.watch and (args.bag is not None or args.ros or not config.live):
@@ -315,18 +299,6 @@ def _check_video(args: argparse.Namespace) -> None:
     if args.save is not None and args.save.suffix == ".mcap":
         raise UsageError(f"--save {args.save}: a bag keeps its images as they are; --video is for recordings")
     require_av()
-
-
-def _frames(text: str | None) -> tuple[str, ...] | None:
-    """``--shared-frames map,world`` → its frames."""
-    if text is None:
-        return None
-    from r2d2_viz.errors import UsageError
-
-    frames = tuple(f.strip() for f in text.split(",") if f.strip())
-    if not frames:
-        raise UsageError(f"--shared-frames {text!r}: expected frame names separated by commas, such as map,world")
-    return frames
 
 
 def _no_display(serving: str, port: int, web_port: int) -> str:

@@ -63,47 +63,14 @@ def _fleet_jobs(bags: list[Path], out_dir: Path, suffix: str) -> list[tuple[Path
     return jobs
 
 
-def _shared(text: str | None) -> tuple[str, ...] | None:
-    """``--shared-frames map,world`` → its frames (as the other runs read it)."""
-    if text is None:
-        return None
-    frames = tuple(f.strip() for f in text.split(",") if f.strip())
-    if not frames:
-        raise UsageError(f"--shared-frames {text!r}: expected frame names separated by commas, such as map,world")
-    return frames
-
-
 def _render_all(args: argparse.Namespace, jobs: list[tuple[Path | None, Path]], size: tuple[int, int]) -> int:
-    from r2d2_viz.cli.parser import xacro_mappings
-    from r2d2_viz.progress import wanted
+    from r2d2_viz.cli.run_args import run_config
     from r2d2_viz.run.render import RenderConfig, render
-    from r2d2_viz.runner import RunConfig
 
     said_software: list[bool] = [False]
     failed = 0
     for bag, out in jobs:
-        config = RunConfig(
-            urdf=args.urdf,
-            mappings=xacro_mappings(args),
-            package_paths=tuple(args.package_path),
-            motion=args.motion,
-            rate=args.rate,
-            duration=args.duration,
-            bag=bag,
-            speed=args.speed,
-            time=args.time,
-            fixed_frame=args.fixed_frame,
-            shared_frames=_shared(args.shared_frames),
-            rviz=args.rviz,
-            start_offset=args.start_offset,
-            topics=tuple(args.topics) if args.topics is not None else None,
-            video=args.video,
-            progress=wanted(),
-            plots=tuple(tuple(p) for p in args.plot),
-            show=frozenset(
-                k for k, on in (("mass", args.mass), ("inertia", args.inertia), ("axes", args.link_axes)) if on
-            ),
-        )
+        config = run_config(args, bag=bag)
         video = RenderConfig(out=out, size=size, fps=args.fps, view=args.view)
         try:
             result = render(config, video, say=_say, said_software=said_software)
