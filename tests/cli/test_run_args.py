@@ -22,7 +22,19 @@ def test_shared_frames_are_the_names_between_commas() -> None:
 def test_a_run_config_reads_the_flags_and_the_caller_decides_the_rest(tmp_path: Path) -> None:
     bag = tmp_path / "b.mcap"
     args = build_parser().parse_args(
-        ["--bag", str(bag), "--time", "header", "--shared-frames", "map", "--plot", "/odom.x", "--mass", "--topics", "/a"]
+        [
+            "--bag",
+            str(bag),
+            "--time",
+            "header",
+            "--shared-frames",
+            "map",
+            "--plot",
+            "/odom.x",
+            "--mass",
+            "--topics",
+            "/a",
+        ]
     )
     config = run_config(args, bag=bag, realtime=True)
     assert config.bag == bag and config.realtime
