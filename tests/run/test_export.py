@@ -226,7 +226,7 @@ def test_ctrl_c_appends_nothing_and_leaves_no_work_folder(tmp_path: Path) -> Non
     import signal
     import time
 
-    bag = write_arm_bag(tmp_path / "long", seconds=6.0)  # stopped as soon as its work begins
+    bag = write_arm_bag(tmp_path / "long", seconds=30.0)  # stopped at once (6 s: done first in CI)
     root = tmp_path / "ds"
     command = [sys.executable, "-c", "from r2d2_viz.cli import main; raise SystemExit(main())"]
     proc = subprocess.Popen([*command, "--bag", str(bag.path), "--export-lerobot", str(root)], stderr=subprocess.PIPE)

@@ -49,7 +49,8 @@ def _decoder(msgtype: str) -> Callable[[bytes | memoryview, DecodeOptions], Deco
         with np.errstate(all="ignore"):
             color = point_color(value, lo, hi, invert)
         point = Points(np.zeros((1, 3), dtype=np.float32), color, options.point_radius)
-        return Decoded(frame, stamp, (point, Series("", (field,), np.array([value]))))
+        # the plot on <topic>/<field>: the point's entity keeps its frame (a plain row beside it cleared it in 3D)
+        return Decoded(frame, stamp, (point, Series(field, (field,), np.array([value]))))
 
     decode.__doc__ = f"A {msgtype.rsplit('/', 1)[-1]} as RViz's coloured point in its frame, and its {field} plotted."
     return decode

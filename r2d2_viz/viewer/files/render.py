@@ -13,6 +13,7 @@ adapter draws (``wgpu adapter backend: … device_type: Cpu``), and :attr:`Rende
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import socket
@@ -214,7 +215,14 @@ def _viewer(
         )
     try:
         _wait_listening(proc, port, log)
-        yield ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy"), log, proc
+        try:
+            client = ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
+        except ConnectionError:  # it listened, then found no adapter and exited before we connected (a busy machine)
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(timeout=2)
+            _wait_listening(proc, port, log)  # exited: a ViewerStartError saying why
+            raise
+        yield client, log, proc
     finally:
         proc.terminate()
         try:

@@ -87,7 +87,8 @@ def test_scalar_sensors_are_rvizs_coloured_point_and_a_plot(run, topic: str) -> 
     assert _at(rows, "Points3D:positions", T0) == [[0.0, 0.0, 0.0]]
     assert _rgba(_at(rows, "Points3D:colors", T0)[0]) == (*rviz_rainbow(LEVELS[topic]), 255)
     assert _at(rows, "Points3D:radii", T0) == pytest.approx([0.025 if topic == "/temperature" else 0.005])
-    assert _at(rows, "Scalars:scalars", T0) == pytest.approx([SCALARS[topic][2]])
+    plot = recording[f"{topic}/{SCALARS[topic][1]}"]  # its own entity: a plot row on the point's cleared its frame
+    assert _at(plot, "Scalars:scalars", T0) == pytest.approx([SCALARS[topic][2]])
 
 
 def test_depth_cloud_is_the_pinhole_projection_coloured_by_the_rgb_image(run) -> None:
