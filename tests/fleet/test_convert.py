@@ -243,9 +243,17 @@ def test_ctrl_c_while_two_convert_starts_no_other_and_counts_what_finished(tmp_p
         start_new_session=True,
     )
     try:
-        converting = set(_wait_converting(proc, out, 2, written=1 << 20))  # both writing their samples
-        # on a busy machine the first bag may be done before the second worker has started: done before the signal
-        done_before = {p.stem for p in out.glob("*.rrd")}
+        # both writing their samples — or, on a busy machine, the first done before the second has written 1 MB (a
+        # CI run saw the four done one after the other, never two at once): one converting, two begun in all
+        deadline = time.monotonic() + 180
+        while proc.poll() is None and time.monotonic() < deadline:
+            converting = set(_converting(out, 1 << 20))
+            done_before = {p.stem for p in out.glob("*.rrd")}
+            if converting and len(converting | done_before) >= 2:
+                break
+            time.sleep(0.02)
+        else:
+            raise AssertionError(f"never a second conversion while one was writing (exit {proc.poll()})")
         proc.send_signal(signal.SIGINT)  # to the app alone, as in the finding
         _, err = proc.communicate(timeout=180)
     finally:
