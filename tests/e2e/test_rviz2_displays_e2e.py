@@ -21,11 +21,13 @@ from . import viewers
 pytestmark = [pytest.mark.e2e, pytest.mark.slow]
 
 WINDOW = (1600, 1000)
-VIEW3D: viewers.Region = (0.14, 0.08, 0.69, 0.95)
+VIEW3D: viewers.Region = (0.14, 0.08, 0.69, 0.59)
+"""The 3D view alone (to 0.95 it took in the plots below: the yellow counted as the angular arrow was the
+relative-humidity series' legend there; the angular arrow itself is not in view at this time: the recording's
+test holds its values)."""
 SHOT_NS = T0 + 4 * S // 10
 COLOURS = {  # (rgb, tolerance): what each drawing is painted in, as the viewer shades it
     "accel linear": ((204, 51, 51), 30),
-    "accel angular": ((204, 204, 51), 30),
     "axes blue": ((0, 0, 255), 60),
     "effort arc": ((0, 255, 64), 30),  # rviz_rainbow(0.55); the axes' green is (0, 255, 0)
     "frustum": ((61, 188, 188), 25),  # (85, 255, 255) at alpha 0.5 over the background
