@@ -284,9 +284,11 @@ def test_a_worker_killed_on_a_bag_named_with_glob_characters_leaves_no_partial_f
         start_new_session=True,
     )
     try:
-        pid = _wait_converting(proc, out, 1)
+        # its partial file as soon as it exists (empty too: a batch run's file grows at its flushes, so a loaded
+        # machine could miss the stretch when it held bytes; a suite run did)
+        pid = _wait_converting(proc, out, 1, written=-1)
         while "run[4]" not in pid and proc.poll() is None:
-            pid = _wait_converting(proc, out, 1)
+            pid = _wait_converting(proc, out, 1, written=-1)
         os.kill(pid["run[4]"], signal.SIGKILL)  # the worker dies mid-conversion: its partial file stays behind it
         _, err = proc.communicate(timeout=180)
     finally:
