@@ -192,10 +192,9 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         return _list_bag(args.bag)
     # rerun (0.7 s of CPU to import) only once a run needs it: a refused flag, --list and --tf-tree return first
     _quiet_rerun()
-    from r2d2_viz.cli.run_args import run_config
+    from r2d2_viz.cli.run_args import run_config, sink_config
     from r2d2_viz.runner import print_summary, run
     from r2d2_viz.rviz.tools import parse_tool_topics
-    from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
     _started()
     if args.ros:
@@ -217,22 +216,12 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if not (math.isfinite(args.start_offset) and args.start_offset >= 0):
         raise UsageError(f"--start-offset must be a number of seconds >= 0, got {args.start_offset:g}")
     _check_video(args)
-    implied = not (live or args.save or args.headless)  # no sink flag: the native viewer…
-    fallback = implied and not has_display()  # …or, where no window can open, the web viewer on loopback
+    implied = not (live or args.save or args.headless)  # no sink flag: the native viewer (or the web one)
     sliders = args.motion == "sliders"  # joint_state_publisher_gui: on the page (served, or beside the native viewer)
     if sliders and (args.connect or args.headless or (args.save and not (args.serve or args.spawn))):
         raise UsageError("--motion sliders: the sliders are on a served page; use --serve or --spawn (with --save)")
-    sink = SinkConfig(
-        spawn=args.spawn or (implied and not fallback),
-        connect=args.connect,
-        serve=args.serve or fallback,
-        save=args.save,
-        headless=args.headless,
-        bind=args.bind,
-        port=args.port,
-        web_port=args.web_port,
-        page=sliders,
-    )
+    sink = sink_config(args, implied, page=sliders)
+    fallback = sink.serve and not args.serve  # no window can open: the web viewer on loopback instead
     mappings = xacro_mappings(args)
     if args.tree:
         return _print_tree(args, mappings)

@@ -26,10 +26,10 @@ ALONE = (
 
 
 def compare_main(args: argparse.Namespace) -> int:
+    from r2d2_viz.cli.run_args import sink_config
     from r2d2_viz.progress import wanted
     from r2d2_viz.run.compare import CompareConfig, compare
     from r2d2_viz.runner import RunConfig
-    from r2d2_viz.viewer.sinks import SinkConfig, has_display
 
     for name, flag in ALONE:
         if getattr(args, name, None) not in (None, False, []):
@@ -42,17 +42,7 @@ def compare_main(args: argparse.Namespace) -> int:
     if len(live) > 1:
         raise UsageError(f"choose one live sink, not {' and '.join(live)}")
     implied = not (live or args.save or args.headless or args.summary)
-    fallback = implied and not has_display()
-    sink = SinkConfig(
-        spawn=args.spawn or (implied and not fallback),
-        connect=args.connect,
-        serve=args.serve or fallback,
-        save=args.save,
-        headless=args.headless,
-        bind=args.bind,
-        port=9876 if args.port is None else args.port,
-        web_port=args.web_port,
-    )
+    sink = sink_config(args, implied)
     base = RunConfig(
         urdf=args.urdf,
         mappings=xacro_mappings(args),

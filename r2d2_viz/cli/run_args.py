@@ -11,6 +11,7 @@ from r2d2_viz.errors import UsageError
 
 if TYPE_CHECKING:
     from r2d2_viz.runner import RunConfig
+    from r2d2_viz.viewer.sinks import SinkConfig
 
 
 def shared_frames(text: str | None) -> tuple[str, ...] | None:
@@ -21,6 +22,25 @@ def shared_frames(text: str | None) -> tuple[str, ...] | None:
     if not frames:
         raise UsageError(f"--shared-frames {text!r}: expected frame names separated by commas, such as map,world")
     return frames
+
+
+def sink_config(args: argparse.Namespace, implied: bool, *, page: bool = False) -> SinkConfig:
+    """Where a run goes: the sink flags; with none of them (``implied``) the native viewer, or, where no window
+    can open, the web viewer on loopback (``sink.serve`` without ``--serve``: the caller says why)."""
+    from r2d2_viz.viewer.sinks import DEFAULT_GRPC_PORT, SinkConfig, has_display  # rerun: not for --list
+
+    fallback = implied and not has_display()
+    return SinkConfig(
+        spawn=args.spawn or (implied and not fallback),
+        connect=args.connect,
+        serve=args.serve or fallback,
+        save=args.save,
+        headless=args.headless,
+        bind=args.bind,
+        port=DEFAULT_GRPC_PORT if args.port is None else args.port,
+        web_port=args.web_port,
+        page=page,
+    )
 
 
 def run_config(args: argparse.Namespace, **fields: Any) -> RunConfig:

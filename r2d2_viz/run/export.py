@@ -135,7 +135,8 @@ def export_main(args: argparse.Namespace) -> int:
         parts.append(f"{skipped} already in it")
     if failed:
         parts.append(f"{failed} failed")
-    _say(f"r2d2-viz: {', '.join(parts)} → {root} in {time.perf_counter() - start:.1f} s")
+    where = f" → {root}" if root.is_dir() else ""  # nothing went in and the folder was ours: no arrow to nowhere
+    _say(f"r2d2-viz: {', '.join(parts)}{where} in {time.perf_counter() - start:.1f} s")
     return EXIT_BAD_INPUT if failed else EXIT_OK
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from r2d2_viz.cli.parser import build_parser
-from r2d2_viz.cli.run_args import run_config, shared_frames
+from r2d2_viz.cli.run_args import run_config, shared_frames, sink_config
 from r2d2_viz.errors import UsageError
 
 
@@ -40,3 +40,17 @@ def test_a_run_config_reads_the_flags_and_the_caller_decides_the_rest(tmp_path: 
     assert config.bag == bag and config.realtime
     assert config.time == "header" and config.shared_frames == ("map",)
     assert config.plots == (("/odom.x",),) and config.show == frozenset({"mass"}) and config.topics == ("/a",)
+
+
+@pytest.mark.parametrize(("display", "spawn", "serve"), [("", False, True), (":99", True, False)])
+def test_with_no_sink_flag_the_native_viewer_or_where_no_window_opens_the_web_one(
+    monkeypatch: pytest.MonkeyPatch, display: str, spawn: bool, serve: bool
+) -> None:
+    """RViz opens a window; where none can open (no DISPLAY on Linux) the served page is the viewer."""
+    monkeypatch.setenv("DISPLAY", display)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    args = build_parser().parse_args(["--web-port", "9100", "--port", "9877"])
+    sink = sink_config(args, implied=True, page=True)
+    assert (sink.spawn, sink.serve, sink.port, sink.web_port, sink.page) == (spawn, serve, 9877, 9100, True)
+    told = sink_config(build_parser().parse_args(["--save", "x.rrd"]), implied=False)
+    assert (told.spawn, told.serve, told.save) == (False, False, Path("x.rrd"))

@@ -169,6 +169,8 @@ def test_a_bag_with_no_joint_states_and_no_camera_is_one_line(tmp_path: Path) ->
     assert done.stderr.count("\n") == 2 and "Traceback" not in done.stderr  # the error, then the summary
     assert f"{bag.path}: no /joint_states and no camera topic" in done.stderr
     assert not (tmp_path / "ds").exists()  # nothing written, not even the folder
+    assert "0 episodes (0 frames) exported, 1 failed in " in done.stderr  # and no "→ ds" to a folder not there
+    assert "→" not in done.stderr
 
 
 def test_a_missing_action_topic_is_named_and_the_other_bag_goes_in(tmp_path: Path) -> None:
