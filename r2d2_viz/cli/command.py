@@ -84,14 +84,25 @@ def _checked_main(argv: list[str] | None) -> int:
     except KeyboardInterrupt:
         print("r2d2-viz: interrupted; nothing saved", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except OSError as exc:
+        if exc.filename is None or os.environ.get(DEBUG_ENV):  # not about a path: unexpected (the lines below)
+            return _unexpected(exc)
+        # a path the command line named (or one inside it) the system refused: too long, not allowed, no room…
+        print(stderr_line(f"error: {exc.filename}: {exc.strerror or exc}"), file=sys.stderr)
+        return EXIT_BAD_INPUT
     except Exception as exc:
-        if os.environ.get(DEBUG_ENV):
-            traceback.print_exc()
-        print(
-            stderr_line(f"error: unexpected {type(exc).__name__}: {exc} (set R2D2_VIZ_DEBUG=1 for details)"),
-            file=sys.stderr,
-        )
-        return EXIT_UNEXPECTED
+        return _unexpected(exc)
+
+
+def _unexpected(exc: Exception) -> int:
+    """A failure of ours: one line (the traceback with R2D2_VIZ_DEBUG=1), exit 1. Called in its ``except``."""
+    if os.environ.get(DEBUG_ENV):
+        traceback.print_exc()
+    print(
+        stderr_line(f"error: unexpected {type(exc).__name__}: {exc} (set R2D2_VIZ_DEBUG=1 for details)"),
+        file=sys.stderr,
+    )
+    return EXIT_UNEXPECTED
 
 
 def _which_flag(exc: R2d2VizError, args: argparse.Namespace) -> str:

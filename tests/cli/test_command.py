@@ -77,6 +77,9 @@ BAD_INPUT = [
     (["--tool-topic", "select=/x"], "--tool-topic 'select=/x': expected TOOL=TOPIC, TOOL one of goal"),
     (["--tool-topic", "goal"], "--tool-topic 'goal': expected TOOL=TOPIC"),
     (["--tool-topic", "goal=move base"], "'move base' is not a ROS topic name"),
+    # a name longer than the file system takes (255 bytes on ext4, Linux's NAME_MAX): the OS's words, the file named
+    (["--save", "a" * 300 + ".rrd"], ".rrd: File name too long"),
+    (["--render", "b" * 300 + ".mp4", "--duration", "1"], ".mp4: File name too long"),
 ]
 CONSOLE_SCRIPT = {"--bogus", "--urdf"}
 """The cases run by the real console script, each in its own process: one the parser refuses, one the library does.
@@ -102,7 +105,8 @@ print(json.dumps(results))
 
 
 def _with_save(args: list[str], folder: Path) -> list[str]:
-    return [*args, "--save", str(folder / "out.rrd")] if "--save" not in args and "--headless" not in args else args
+    writes = {"--save", "--headless", "--render"} & set(args)
+    return [*args, "--save", str(folder / "out.rrd")] if not writes else args
 
 
 @pytest.fixture(scope="module")
