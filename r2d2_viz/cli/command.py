@@ -25,6 +25,7 @@ from r2d2_viz.cli.parser import (
     xacro_mappings,
 )
 from r2d2_viz.errors import DEBUG_ENV, ListenError, R2d2VizError, UsageError, shown, shown_in_line, stderr_line
+from r2d2_viz.signals import sigterm_raises
 
 EXIT_STDOUT_CLOSED = 141
 """stdout closed early (``r2d2-viz --bag b --list | head``): quiet, with the status a shell gives ``seq`` or ``cat``
@@ -156,17 +157,20 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     if args.export_lerobot is not None:  # bags -> a LeRobot dataset (issue 45)
         from r2d2_viz.run.export import export_main
 
-        return export_main(args)
+        with sigterm_raises():  # a hangup or kill ends it as Ctrl-C does: nothing half-written
+            return export_main(args)
     if args.render is not None:  # --render (issue 45): a view as a video, one per bag with --save-dir
         from r2d2_viz.cli.render import render_main
 
-        return render_main(args)
+        with sigterm_raises():  # a hangup or kill ends it as Ctrl-C does: nothing half-written
+            return render_main(args)
     if args.view is not None:
         raise UsageError("--view chooses the view --render draws: use it with --render OUT.mp4")
     if args.compare is not None:  # issue 47: several runs in one recording
         from r2d2_viz.cli.compare import compare_main
 
-        return compare_main(args)
+        with sigterm_raises():  # a hangup or kill ends it as Ctrl-C does: nothing half-written
+            return compare_main(args)
     fleet = (args.save_dir, args.dataset, args.jobs, args.ray, args.summary)
     if args.force or any(value is not None for value in fleet):
         _quiet_rerun()

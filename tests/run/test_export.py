@@ -224,7 +224,8 @@ def test_lerobot_loads_it(exported: dict[str, Any], tmp_path: Path) -> None:
     assert set(got["task"].tolist()) == {"wave the arm"}
 
 
-def test_ctrl_c_appends_nothing_and_leaves_no_work_folder(tmp_path: Path) -> None:
+@pytest.mark.parametrize("stop", ["SIGINT", "SIGHUP"])  # Ctrl-C; a dropped ssh session (SIGTERM: the same handler)
+def test_ctrl_c_appends_nothing_and_leaves_no_work_folder(tmp_path: Path, stop: str) -> None:
     import signal
     import time
 
@@ -235,7 +236,7 @@ def test_ctrl_c_appends_nothing_and_leaves_no_work_folder(tmp_path: Path) -> Non
     deadline = time.monotonic() + 120
     while not list(root.glob(".r2d2-viz-export-*")) and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.02)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(getattr(signal, stop))  # a hangup killed it before: its work folder was left in DIR
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err.decode()
     assert "interrupted; nothing appended" in err.decode() and b"Traceback" not in err
