@@ -169,6 +169,11 @@ def convert_one(job: Job) -> Outcome:
         if getattr(exc, "stuck", False):  # Rerun's file sink deadlocked on a full disk: its threads would hold
             atexit.register(os._exit, 0)  # this worker's exit for ever (run before Rerun's own exit handler)
         return Outcome(job, one_line(exc).replace(str(tmp), str(job.out)), time.perf_counter() - start)
+    except OSError as exc:  # a full disk, a name too long: the system's words, named after the output
+        if exc.filename is None:
+            return Outcome(job, f"unexpected {type(exc).__name__}: {one_line(exc)}", time.perf_counter() - start)
+        where = str(exc.filename).replace(str(tmp), str(job.out))
+        return Outcome(job, f"cannot write {where}: {exc.strerror or exc}", time.perf_counter() - start)
     except Exception as exc:
         return Outcome(job, f"unexpected {type(exc).__name__}: {one_line(exc)}", time.perf_counter() - start)
     finally:

@@ -57,6 +57,10 @@ def export_one(job: ExportJob) -> ExportOutcome:
         return ExportOutcome(job, export_episode(job.spec))
     except R2d2VizError as exc:
         return ExportOutcome(job, error=one_line(exc))
+    except OSError as exc:  # the dataset's disk full, a name too long…: the system's words and the file
+        if exc.filename is None:
+            return ExportOutcome(job, error=f"{job.spec.bag}: unexpected {type(exc).__name__}: {one_line(exc)}")
+        return ExportOutcome(job, error=f"{job.spec.bag}: cannot write {exc.filename}: {exc.strerror or exc}")
     except Exception as exc:
         return ExportOutcome(job, error=f"{job.spec.bag}: unexpected {type(exc).__name__}: {one_line(exc)}")
 

@@ -173,6 +173,24 @@ def test_a_bag_with_no_joint_states_and_no_camera_is_one_line(tmp_path: Path) ->
     assert "→" not in done.stderr
 
 
+def test_a_full_disk_is_one_line_naming_the_file_and_leaves_nothing(tmp_path: Path) -> None:
+    bag = write_arm_bag(tmp_path / "b")
+    disk = tmp_path / "disk"  # a 32 kB tmpfs: the 2 s episode (its video, parquet and meta files) does not fit
+    disk.mkdir()
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=32k", "tmpfs", str(disk)], capture_output=True)
+    if mounted.returncode != 0:
+        pytest.skip(f"cannot mount a small tmpfs here (needs root): {mounted.stderr.decode().strip()}")
+    try:
+        done = cli("--bag", bag.path, "--export-lerobot", disk / "ds", "--action", ACTION)
+        left = list(disk.iterdir())
+    finally:
+        subprocess.run(["umount", "-l", str(disk)], check=False)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    first = done.stderr.splitlines()[0]  # the bag's error (it said "unexpected OSError" before), then the summary
+    assert first.startswith(f"error: {bag.path}: cannot write {disk / 'ds'}/") and "No space left on device" in first
+    assert left == []  # no dataset folder, no work folder
+
+
 def test_a_missing_action_topic_is_named_and_the_other_bag_goes_in(tmp_path: Path) -> None:
     good = write_arm_bag(tmp_path / "good")
     twist = write_arm_bag(tmp_path / "twist", command="twist")
