@@ -6,6 +6,8 @@ by slicing those Arrow arrays (zero-copy) and handing them to the public ``rr.se
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 import pyarrow as pa
@@ -65,11 +67,16 @@ def time_array(times_ns: I64, clock: Clock) -> pa.Array:
     return pa.Array.from_buffers(kind, len(values), [None, pa.py_buffer(values)])
 
 
+def flat_array(values: npt.NDArray[np.number[Any]]) -> pa.Array:
+    """Numbers (any shape) flattened as an Arrow array of their type over their buffer: what ``pa.array`` makes (NaN
+    a value, not a null), built without letting go of the GIL (see :func:`time_array`)."""
+    flat = np.ascontiguousarray(values).reshape(-1)
+    return pa.Array.from_buffers(pa.from_numpy_dtype(flat.dtype), len(flat), [None, pa.py_buffer(flat)])
+
+
 def float32_array(values: npt.NDArray[np.float32]) -> pa.Array:
-    """``values`` (float32, any shape) flattened as an Arrow float array over their buffer (what ``pa.array`` makes,
-    NaN a value, not a null; built without letting go of the GIL, see :func:`time_array`)."""
-    flat = np.ascontiguousarray(values, dtype=np.float32).reshape(-1)
-    return pa.Array.from_buffers(pa.float32(), len(flat), [None, pa.py_buffer(flat)])
+    """``values`` cast to float32 (any shape), flattened: :func:`flat_array`."""
+    return flat_array(np.asarray(values, dtype=np.float32))
 
 
 def packed_rgba(rgb: tuple[int, int, int], n: int) -> pa.Array:

@@ -14,6 +14,7 @@ from r2d2_viz.viewer.columns import (
     encoded,
     f32,
     first_of_every,
+    flat_array,
     float32_array,
     list_column,
     packed_rgba,
@@ -88,10 +89,15 @@ def test_time_array_is_what_pyarrow_makes_of_numpy_times_and_owns_its_values(clo
     assert got[0].value == 0
 
 
-def test_float32_array_and_packed_rgba_are_what_pyarrow_and_rerun_make() -> None:
+def test_flat_arrays_and_packed_rgba_are_what_pyarrow_and_rerun_make() -> None:
     values = np.array([[1.5, np.nan, -np.inf], [3.0, 4.0, 1e-3]], dtype=np.float32)
     got, expected_floats = float32_array(values), pa.array(values.reshape(-1))
     assert got.type == expected_floats.type and got.null_count == expected_floats.null_count == 0  # NaN: a value
     assert (got.to_numpy().view(np.uint32) == expected_floats.to_numpy().view(np.uint32)).all()  # bit for bit
+    doubles = np.array([[0.1, np.nan], [-2.5, 1e300]])
+    assert flat_array(doubles).type == pa.float64()
+    assert (
+        flat_array(doubles).to_numpy().view(np.uint64) == pa.array(doubles.reshape(-1)).to_numpy().view(np.uint64)
+    ).all()
     expected = rr.components.ColorBatch(np.array([[255, 0, 255]] * 2, dtype=np.uint8)).as_arrow_array()
     assert packed_rgba((255, 0, 255), 2).equals(expected)
