@@ -50,6 +50,21 @@ def test_a_plain_save_imports_no_bag_yaml_xacro_or_mesh_converter(tmp_path: Path
     assert [name for name in NOT_FOR_A_GENERATED_MOTION if _loaded(modules, name)] == []
 
 
+NOT_FOR_A_SAVED_BAG = (
+    "http.server",  # issue 48: the page's server only when a page is served (~15 ms of a bag run's start-up)
+    "email",
+    "r2d2_viz.viewer.web.server",
+    "r2d2_viz.viewer.web.feed",
+)
+
+
+def test_a_bag_saved_to_a_file_imports_no_page_server(tmp_path: Path) -> None:
+    bag = str(REPO / "tests" / "data" / "bags" / "talker_mcap")
+    modules = _modules_after("--bag", bag, "--save", str(tmp_path / "run.rrd"))
+    assert "r2d2_viz.sources.bags.bag" in modules and "rerun" in modules  # it did read the bag into a recording
+    assert [name for name in NOT_FOR_A_SAVED_BAG if _loaded(modules, name)] == []
+
+
 def test_an_rviz_config_brings_its_yaml_parser(tmp_path: Path) -> None:
     # the counter-check: the same probe does see a module a run needs
     config = REPO / "tests" / "data" / "rviz" / "turtlebot3_model.rviz"

@@ -15,7 +15,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Mapping
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from r2d2_viz.errors import R2d2VizError, shown
 from r2d2_viz.msgs.typestore import typestore
@@ -27,7 +27,9 @@ from r2d2_viz.viewer.layout.plan import ViewPlan
 from r2d2_viz.viewer.sinks import Recording
 from r2d2_viz.viewer.web.draw import ToolDrawing
 from r2d2_viz.viewer.web.events import Drive, Pick, parse_event
-from r2d2_viz.viewer.web.server import EventHandler
+
+if TYPE_CHECKING:  # a type: the page's server (http.server) is imported only by a run that serves a page
+    from r2d2_viz.viewer.web.server import EventHandler
 
 INITIAL_POSE_COVARIANCE = {0: 0.25, 7: 0.25, 35: 0.06853891945200942}
 """RViz's 2D Pose Estimate: x and y variance 0.25 m², yaw 0.0685 rad² ((π/12)²), row-major 6x6 indices."""

@@ -6,6 +6,8 @@ by slicing those Arrow arrays (zero-copy) and handing them to the public ``rr.se
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 import pyarrow as pa
@@ -55,9 +57,34 @@ class _TimeArray:
 
 
 def time_array(times_ns: I64, clock: Clock) -> pa.Array:
-    """Nanoseconds as Rerun's duration or timestamp column type."""
-    kind = "timedelta64[ns]" if clock == "duration" else "datetime64[ns]"
-    return pa.array(np.asarray(times_ns, dtype=np.int64).astype(kind))
+    """Nanoseconds as Rerun's duration or timestamp column type, built over a copy of their int64 buffer.
+
+    Not ``pa.array(numpy)``: it lets go of the GIL, and a batch run's main thread then waits for the bag's reader
+    thread to hand it back — up to the interpreter's switch interval (5 ms); 1.4 ms a call measured beside a busy
+    thread against 4 µs from buffers (a 20 s sensor bag sends ~1,000 time columns)."""
+    values = np.array(times_ns, dtype=np.int64)  # a copy: the column does not change with the caller's array
+    kind = pa.duration("ns") if clock == "duration" else pa.timestamp("ns")
+    return pa.Array.from_buffers(kind, len(values), [None, pa.py_buffer(values)])
+
+
+def flat_array(values: npt.NDArray[np.number[Any]]) -> pa.Array:
+    """Numbers (any shape) flattened as an Arrow array of their type over their buffer: what ``pa.array`` makes (NaN
+    a value, not a null), built without letting go of the GIL (see :func:`time_array`)."""
+    flat = np.ascontiguousarray(values).reshape(-1)
+    return pa.Array.from_buffers(pa.from_numpy_dtype(flat.dtype), len(flat), [None, pa.py_buffer(flat)])
+
+
+def float32_array(values: npt.NDArray[np.float32]) -> pa.Array:
+    """``values`` cast to float32 (any shape), flattened: :func:`flat_array`."""
+    return flat_array(np.asarray(values, dtype=np.float32))
+
+
+def packed_rgba(rgb: tuple[int, int, int], n: int) -> pa.Array:
+    """``n`` copies of an opaque colour as Rerun's ``Color`` values: uint32 ``0xRRGGBBAA``."""
+    r, g, b = rgb
+    return pa.Array.from_buffers(
+        pa.uint32(), n, [None, pa.py_buffer(np.full(n, (r << 24) | (g << 16) | (b << 8) | 0xFF, dtype=np.uint32))]
+    )
 
 
 def send(

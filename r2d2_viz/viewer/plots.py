@@ -21,7 +21,7 @@ from r2d2_viz.arrays import F64
 from r2d2_viz.kinematics.tree import KinematicTree
 from r2d2_viz.sources.base import Clock
 from r2d2_viz.viewer import entities
-from r2d2_viz.viewer.columns import Encoded, encoded, list_column, send, time_array
+from r2d2_viz.viewer.columns import Encoded, encoded, flat_array, list_column, send, time_array
 
 
 class JointPlots:
@@ -82,7 +82,7 @@ class JointPlots:
                 block = np.ascontiguousarray(values, dtype=np.float64)
             else:
                 block = np.ascontiguousarray(values[:, ms], dtype=np.float64)
-            out.append((entity, [(descriptor, list_column(list_type, pa.array(block.reshape(-1)), len(ms)))]))
+            out.append((entity, [(descriptor, list_column(list_type, flat_array(block), len(ms)))]))
         return out
 
     def log_limits(self, rec: rr.RecordingStream, time_ns: int) -> None:

@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 from urllib.parse import urlsplit
 
 import rerun as rr
@@ -26,9 +27,10 @@ from r2d2_viz.errors import DEBUG_ENV, ListenError, SinkError, UsageError, one_l
 from r2d2_viz.robot.children import die_with_parent
 from r2d2_viz.viewer.entities import APP_ID
 from r2d2_viz.viewer.files.whole import flush_file
-from r2d2_viz.viewer.web.assets import viewer_static
-from r2d2_viz.viewer.web.feed import RecordingFeed
-from r2d2_viz.viewer.web.server import RECORDING, PageServer
+
+if TYPE_CHECKING:  # the page's server (http.server, email: ~15 ms idle) only for a run that serves a page
+    from r2d2_viz.viewer.web.feed import RecordingFeed
+    from r2d2_viz.viewer.web.server import PageServer
 
 DEFAULT_GRPC_PORT = 9876
 DEFAULT_WEB_PORT = 9090
@@ -140,6 +142,8 @@ def open_recording(
             raise SinkError("--spawn: no display to open the viewer on; use --save FILE.rrd or --serve instead")
         sinks.append(rr.GrpcSink(_spawn_viewer(config.port)))
         if config.page and not config.serve:
+            from r2d2_viz.viewer.web.server import PageServer
+
             page = PageServer(None, config.bind, config.web_port)  # the sliders; the native viewer shows the robot
     if config.connect is not None:
         _probe(config.connect)
@@ -157,6 +161,8 @@ def open_recording(
     if config.layout_file is not None and blueprint is not None:
         blueprint.save(APP_ID, config.layout_file)
     if config.serve and page is not None and on_ready is not None:
+        from r2d2_viz.viewer.web.server import RECORDING
+
         on_ready(f"serving: open {page.url()} in a browser, or run: rerun {page.url()}{RECORDING}")
     elif page is not None and on_ready is not None:
         on_ready(f"the page with the sliders: open {page.url()} in a browser")
@@ -253,6 +259,10 @@ def serve(config: SinkConfig, stream: rr.BinaryStream) -> tuple[PageServer, Reco
     (No Rerun gRPC server: it takes no token, and would hand the recording to any local process, and relay what
     any process writes into it to the operator's viewer. The SDK's ``serve_web_viewer`` listens everywhere.)
     """
+    from r2d2_viz.viewer.web.assets import viewer_static
+    from r2d2_viz.viewer.web.feed import RecordingFeed
+    from r2d2_viz.viewer.web.server import PageServer
+
     viewer_static()  # rerun-notebook is a dependency; a broken install is one line
     feed = RecordingFeed(lambda: stream.read(flush=False))
     try:

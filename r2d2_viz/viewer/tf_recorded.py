@@ -20,10 +20,11 @@ from r2d2_viz.sources.bag_tf import concatenate
 from r2d2_viz.sources.base import Clock, SampleChunk, TfRecords
 from r2d2_viz.sources.system.tf_robot import RobotFrames
 from r2d2_viz.viewer import entities
-from r2d2_viz.viewer.columns import encoded, f32, send, tiled, time_array
+from r2d2_viz.viewer.columns import f32, send, tiled, time_array
 from r2d2_viz.viewer.layout.fit import AXIS_LENGTH
 from r2d2_viz.viewer.scene import ARROW_COLOR
 from r2d2_viz.viewer.system.tf_graph import TfGraph
+from r2d2_viz.viewer.tf_rows import arrow_columns, transform_columns
 
 if TYPE_CHECKING:
     from r2d2_viz.sources.plan import RunPlan
@@ -103,13 +104,8 @@ class RecordedTf:
         self, times_ns: np.ndarray, parents: list[str], children: list[str], translation: np.ndarray, quat: np.ndarray
     ) -> None:
         times = time_array(times_ns, self.clock)
-        columns = rr.Transform3D.columns(
-            translation=translation,
-            quaternion=quat,  # xyzw
-            parent_frame=tiled(parents, 1),
-            child_frame=tiled(children, 1),
-        )
-        send(self.rec, entities.TF, self.timeline, times, encoded(columns))
+        columns = transform_columns(translation, f32(quat), tiled(parents, 1), tiled(children, 1))  # quat: xyzw
+        send(self.rec, entities.TF, self.timeline, times, columns)
         child_array = np.array(children, dtype=object)
         for parent, child in sorted(set(zip(parents, children, strict=True))):
             rows = np.flatnonzero(child_array == child)
@@ -121,14 +117,8 @@ class RecordedTf:
                     rr.Arrows3D.from_fields(colors=[ARROW_COLOR]),
                     static=True,
                 )
-            arrows = rr.Arrows3D.columns(origins=translation[rows], vectors=-translation[rows])
-            send(
-                self.rec,
-                entities.tf_arrow(child),
-                self.timeline,
-                time_array(times_ns[rows], self.clock),
-                encoded(arrows),
-            )
+            arrows = arrow_columns(translation[rows], -translation[rows])
+            send(self.rec, entities.tf_arrow(child), self.timeline, time_array(times_ns[rows], self.clock), arrows)
 
 
 class TfFeed:

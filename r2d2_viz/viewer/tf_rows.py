@@ -24,7 +24,16 @@ from r2d2_viz.kinematics.tree import (
     write_transforms,
 )
 from r2d2_viz.sources.base import FrameTrack
-from r2d2_viz.viewer.columns import Encoded, encoded, f32, first_of_every, list_column, tiled
+from r2d2_viz.viewer.columns import (
+    Encoded,
+    encoded,
+    f32,
+    first_of_every,
+    float32_array,
+    list_column,
+    packed_rgba,
+    tiled,
+)
 from r2d2_viz.viewer.scene import ARROW_COLOR
 
 
@@ -78,14 +87,7 @@ class TfRows:
                 t32[:, k], q32[:, k] = track.translation, track.quat_xyzw
         if self._names is None or len(self._names[0]) != n * self.rows:
             self._names = (tiled(self.parents, n), tiled(self.children, n))
-        layout = _transform_layout()
-        arrays = {
-            "translation": _vectors(t32, layout["translation"][1]),
-            "quaternion": _vectors(q32, layout["quaternion"][1]),
-            "parent_frame": self._names[0],
-            "child_frame": self._names[1],
-        }
-        columns = [(d, list_column(list_type, arrays[name])) for name, (d, list_type) in layout.items()]
+        columns = transform_columns(t32, q32, *self._names)
         return [*columns, *((d, first_of_every(a, self.rows)) for d, a in arrows)]
 
     def _arrow_columns(self, translation: F64, quat: F64, tracks: tuple[FrameTrack, ...]) -> Encoded:
@@ -99,11 +101,38 @@ class TfRows:
         child = np.stack([at[c] for c, _ in self._arrow_ends], axis=1)  # (n, k, 3)
         parent = np.stack([at[p] if p >= 0 else origin for _, p in self._arrow_ends], axis=1)
         k = len(self._arrow_ends)
-        colors = np.broadcast_to(np.array(ARROW_COLOR, dtype=np.uint8), (n * k, 3))
-        arrows = rr.Arrows3D.columns(
-            origins=f32(child.reshape(-1, 3)), vectors=f32((parent - child).reshape(-1, 3)), colors=colors
-        )
-        return encoded(arrows.partition(np.full(n, k)))
+        return arrow_columns(f32(child), f32(parent - child), per_row=k, color=ARROW_COLOR)
+
+
+def transform_columns(
+    translation: npt.NDArray[np.float32], quat: npt.NDArray[np.float32], parents: pa.Array, children: pa.Array
+) -> Encoded:
+    """One ``Transform3D`` row per transform — ``translation`` ``(..., 3)``, ``quat`` ``(..., 4)`` xyzw, float32,
+    the frame names one string a row — as ``rr.Transform3D.columns`` builds them, from buffers."""
+    layout = _transform_layout()
+    arrays = {
+        "translation": _vectors(translation, layout["translation"][1]),
+        "quaternion": _vectors(quat, layout["quaternion"][1]),
+        "parent_frame": parents,
+        "child_frame": children,
+    }
+    return [(d, list_column(list_type, arrays[name])) for name, (d, list_type) in layout.items()]
+
+
+def arrow_columns(
+    origins: npt.NDArray[np.float32],
+    vectors: npt.NDArray[np.float32],
+    *,
+    per_row: int = 1,
+    color: tuple[int, int, int] | None = None,
+) -> Encoded:
+    """Arrows ``(n·per_row, 3)`` (or ``(n, per_row, 3)``), ``per_row`` a row, with one ``color`` for all or none:
+    what ``rr.Arrows3D.columns(...).partition(np.full(n, per_row))`` builds, from buffers."""
+    layout = _arrow_layout()
+    arrays = {"origins": _vectors(origins, layout["origins"][1]), "vectors": _vectors(vectors, layout["vectors"][1])}
+    if color is not None:
+        arrays["colors"] = packed_rgba(color, origins.size // 3)
+    return [(d, list_column(t, arrays[name], step=per_row)) for name, (d, t) in layout.items() if name in arrays]
 
 
 @cache
@@ -119,6 +148,18 @@ def _transform_layout() -> dict[str, tuple[rr.ComponentDescriptor, pa.DataType]]
     return {d.component.split(":")[-1]: (d, a.type) for d, a in encoded(columns)}
 
 
+@cache
+def _arrow_layout() -> dict[str, tuple[rr.ComponentDescriptor, pa.DataType]]:
+    """Rerun's descriptor and Arrow list type of each ``Arrows3D`` column :meth:`TfRows._arrow_columns` builds
+    (origins, vectors, colors), taken from Rerun's own builder on one row."""
+    columns = rr.Arrows3D.columns(
+        origins=np.zeros((1, 3), dtype=np.float32),
+        vectors=np.ones((1, 3), dtype=np.float32),
+        colors=np.array([ARROW_COLOR], dtype=np.uint8),
+    )
+    return {d.component.split(":")[-1]: (d, a.type) for d, a in encoded(columns)}
+
+
 def _vectors(values: npt.NDArray[np.float32], list_type: pa.DataType) -> pa.Array:
-    """Rows of ``values`` ``(n, k, d)`` as Rerun's fixed-size lists of ``d`` floats (the list type's items)."""
-    return pa.FixedSizeListArray.from_arrays(pa.array(values.reshape(-1)), type=list_type.value_type)
+    """Rows of ``values`` ``(..., d)`` as Rerun's fixed-size lists of ``d`` floats (the list type's items)."""
+    return pa.FixedSizeListArray.from_arrays(float32_array(values), type=list_type.value_type)

@@ -6,10 +6,22 @@ from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
+import pytest
 import rerun as rr
 from rrd import read_recording
 
-from r2d2_viz.viewer.columns import encoded, f32, first_of_every, list_column, send, tiled, time_array
+from r2d2_viz.viewer.columns import (
+    encoded,
+    f32,
+    first_of_every,
+    flat_array,
+    float32_array,
+    list_column,
+    packed_rgba,
+    send,
+    tiled,
+    time_array,
+)
 
 
 def test_tiled_is_texts_times_n() -> None:
@@ -64,3 +76,28 @@ def test_list_column_is_rows_of_step_values_over_the_same_buffer() -> None:
     assert got.to_pylist() == [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0], [6.0, 7.0, 8.0], [9.0, 10.0, 11.0]]
     assert got.values.buffers()[1].address == values.buffers()[1].address  # no copy
     assert list_column(expected.type, values).to_pylist() == [[float(k)] for k in range(12)]
+
+
+@pytest.mark.parametrize(("clock", "kind"), [("duration", "timedelta64[ns]"), ("timestamp", "datetime64[ns]")])
+def test_time_array_is_what_pyarrow_makes_of_numpy_times_and_owns_its_values(clock: str, kind: str) -> None:
+    """Built from buffers (see ``time_array``): the same Arrow type and values as pyarrow's own conversion of numpy's
+    duration or datetime array, and a copy (the caller's array may be reused)."""
+    times = np.array([0, 1, 1_700_000_000_123_456_789, -5], dtype=np.int64)
+    got = time_array(times, clock)  # type: ignore[arg-type]
+    assert got.equals(pa.array(times.astype(kind)))
+    times[0] = 42
+    assert got[0].value == 0
+
+
+def test_flat_arrays_and_packed_rgba_are_what_pyarrow_and_rerun_make() -> None:
+    values = np.array([[1.5, np.nan, -np.inf], [3.0, 4.0, 1e-3]], dtype=np.float32)
+    got, expected_floats = float32_array(values), pa.array(values.reshape(-1))
+    assert got.type == expected_floats.type and got.null_count == expected_floats.null_count == 0  # NaN: a value
+    assert (got.to_numpy().view(np.uint32) == expected_floats.to_numpy().view(np.uint32)).all()  # bit for bit
+    doubles = np.array([[0.1, np.nan], [-2.5, 1e300]])
+    assert flat_array(doubles).type == pa.float64()
+    assert (
+        flat_array(doubles).to_numpy().view(np.uint64) == pa.array(doubles.reshape(-1)).to_numpy().view(np.uint64)
+    ).all()
+    expected = rr.components.ColorBatch(np.array([[255, 0, 255]] * 2, dtype=np.uint8)).as_arrow_array()
+    assert packed_rgba((255, 0, 255), 2).equals(expected)

@@ -12,7 +12,9 @@ from r2d2_viz.kinematics.tree import compile_tree, moving_values, transforms_fro
 from r2d2_viz.robot.model import load_urdf
 from r2d2_viz.robot.synth import random_urdf
 from r2d2_viz.sources.base import FrameTrack
-from r2d2_viz.viewer.tf_rows import TfRows
+from r2d2_viz.viewer.columns import first_of_every
+from r2d2_viz.viewer.scene import ARROW_COLOR
+from r2d2_viz.viewer.tf_rows import TfRows, arrow_columns
 
 
 def test_rows_names_and_moving_arrows(tmp_path) -> None:
@@ -48,6 +50,24 @@ def test_rows_names_and_moving_arrows(tmp_path) -> None:
     for k in range(n):
         expected = [poses[k, index[j.child], :3, 3] for j in ends] + [t_root[k]]
         assert np.allclose(np.array(first[k]), expected, atol=1e-5)
+        parents = [poses[k, index[j.parent], :3, 3] for j in ends] + [np.zeros(3)]  # the root's parent: odom
+        vectors = by_name["vectors"][k * rows.rows].as_py()
+        assert np.allclose(np.array(vectors), np.array(parents) - expected, atol=1e-5)
+    # the arrow columns are built from buffers: the very Arrow arrays (types, nulls, colours) Rerun's builder makes
+    # of the same float32 origins and vectors, partitioned per sample and spread over each sample's rows
+    k = len(ends) + 1
+    on_first = [i * rows.rows for i in range(n)]
+    built = rr.Arrows3D.columns(
+        origins=np.array([origins[i].as_py() for i in on_first], dtype=np.float32).reshape(-1, 3),
+        vectors=np.array([by_name["vectors"][i].as_py() for i in on_first], dtype=np.float32).reshape(-1, 3),
+        colors=np.broadcast_to(np.array(ARROW_COLOR, dtype=np.uint8), (n * k, 3)),
+    ).partition(np.full(n, k))
+    arrow_columns = {str(d): (d, a) for d, a in columns.items() if str(d).startswith("Arrows3D")}
+    assert len(arrow_columns) == 3
+    for column in built:
+        d, a = arrow_columns[str(column.component_descriptor())]
+        assert d == column.component_descriptor()
+        assert a.equals(first_of_every(column.as_arrow_array(), rows.rows)), d
 
 
 @pytest.mark.parametrize("root_track", [True, False])
@@ -87,3 +107,17 @@ def test_columns_are_what_rerun_builds_from_the_float64_transforms(tmp_path, roo
             assert d == column.component_descriptor()
             assert a.equals(column.as_arrow_array()), d
         assert np.isinf(by_descriptor["Transform3D:translation"][1].flatten().flatten().to_numpy()).any()
+
+
+def test_arrow_columns_without_colour_are_what_rerun_builds() -> None:
+    """A recorded edge's arrows (``viewer/tf_recorded.py``): one arrow a row, no colour column — the very columns of
+    ``rr.Arrows3D.columns``."""
+    rng = np.random.default_rng(4)
+    origins = rng.normal(size=(9, 3)).astype(np.float32)
+    got = dict(arrow_columns(origins, -origins))
+    expected = rr.Arrows3D.columns(origins=origins, vectors=-origins)
+    assert len(got) == 2
+    for column in expected:
+        by_descriptor = {str(d): (d, a) for d, a in got.items()}
+        d, a = by_descriptor[str(column.component_descriptor())]
+        assert d == column.component_descriptor() and a.equals(column.as_arrow_array()), d
