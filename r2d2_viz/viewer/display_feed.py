@@ -16,10 +16,13 @@ from collections import deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
 import rerun as rr
 
 from r2d2_viz.errors import short
+from r2d2_viz.msgs.marker_blocks import MarkerBlock
 from r2d2_viz.msgs.nav import apply_grid_update
+from r2d2_viz.msgs.registry import BLOCK_DECODERS
 from r2d2_viz.msgs.rviz2.joined import Joins
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, GridMap, MarkerOp, MeshResource, is_plain
 from r2d2_viz.msgs.typestore import MsgError
@@ -27,6 +30,7 @@ from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_imag
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
 from r2d2_viz.viewer.blocks.image_overlays import on_image, overlay_frames
+from r2d2_viz.viewer.blocks.marker_columns import MarkerColumns
 from r2d2_viz.viewer.blocks.odometry_keep import OdometryKeep, Tolerance
 from r2d2_viz.viewer.blocks.plain_log import PlainBook
 from r2d2_viz.viewer.blocks.row_columns import RowColumns
@@ -112,6 +116,7 @@ class DisplayFeed:
         self.rows = RowColumns(self.rec, timeline, clock, hold=hold)  # every other display's rows: columns too
         self.odometry = OdometryKeep(lambda topic: (self.styles.get(topic) or DisplayStyle()).tolerance)
         self.joins = Joins({topic: style.options for topic, style in self.styles.items()})  # DepthCloud, Effort…
+        self.markers = MarkerColumns(self.rows, timeline, clock, load_mesh)  # MarkerArray blocks: columns
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -147,7 +152,11 @@ class DisplayFeed:
         due: list[TopicMessage] = []
         while self._pending and (time_ns is None or self._pending[0].time_ns <= time_ns):
             due.append(self._pending.popleft())
+        blocks: dict[str, list[TopicMessage]] = {}  # a batch run's topics decoded a block at a time
         for message in self.odometry.kept(due):  # before a pose takes a slot of its history
+            if self._blocked(message):
+                blocks.setdefault(message.topic, []).append(message)
+                continue
             message = self.decode(message)
             if _simple(self, message, message.decoded):
                 entity = _count(self, message)[1]
@@ -156,6 +165,8 @@ class DisplayFeed:
             else:  # on its own: after what its entities' runs hold, at the time the runs left
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
                 self._log(message)
+        for topic, messages in blocks.items():
+            self._log_block(topic, messages)
         self.columns.interrupt(everything=time_ns is None)  # everything taken: held runs too
         end = _FOREVER if time_ns is None else time_ns
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
@@ -179,7 +190,7 @@ class DisplayFeed:
         state, slot = _count(self, message)
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
-            decoded = self.decode(message).decoded
+            decoded = self._decoded(message).decoded
             if isinstance(decoded, MsgError):
                 raise decoded
             assert decoded is not None
@@ -229,9 +240,37 @@ class DisplayFeed:
                     plain=state.plain,
                 )
 
+    def _blocked(self, message: TopicMessage) -> bool:
+        """Whether ``message`` is decoded with its topic's others of the window (:data:`BLOCK_DECODERS`): a batch
+        run's, not decayed, no ``--video``, times not the headers'."""
+        if message.msgtype not in BLOCK_DECODERS or self._flushes or self.header_time or self.video.encoder:
+            return False
+        return not (self.styles.get(message.topic) or DisplayStyle()).decay
+
+    def _log_block(self, topic: str, messages: list[TopicMessage]) -> None:
+        """One topic's messages of a window decoded together and logged as columns; those the block leaves (a
+        DELETE, a lifetime, a problem to say) one by one, in their turn."""
+        options = (self.styles.get(topic) or DisplayStyle()).options
+        block = BLOCK_DECODERS[messages[0].msgtype]([m.data for m in messages], options)
+        state = self.topics.setdefault(topic, _TopicState())
+        state.markers.anchor = self._anchored
+        times = np.array([m.time_ns for m in messages], dtype=np.int64)
+        if isinstance(block, MarkerBlock):
+            self.markers.log(
+                topic,
+                times,
+                block,
+                state.markers,
+                own=lambda i: self._log(messages[i]),
+                count=lambda i: _count(self, messages[i]),
+            )
+
     def decode(self, message: TopicMessage) -> TopicMessage:
         """``message`` with what it draws (or why it cannot), in its topic's style; pure, so a bag's reader
-        thread can call it ahead of :meth:`log`."""
+        thread can call it ahead of :meth:`log` (a block's topic: when it is logged)."""
+        return message if self._blocked(message) else self._decoded(message)
+
+    def _decoded(self, message: TopicMessage) -> TopicMessage:
         if message.decoded is not None or message.msgtype == GRID_UPDATE:  # updates: applied when logged
             return message
         style = self.styles.get(message.topic) or DisplayStyle()
