@@ -61,7 +61,9 @@ def _messages() -> list[bytes]:
     out = []
     for k in range(60):
         if k % 3 == 0:
-            markers = [marker_msg(m.type, **{f: getattr(m, f) for f in ("ns", "points", "colors", "text")}) for m in shared]
+            markers = [
+                marker_msg(m.type, **{f: getattr(m, f) for f in ("ns", "points", "colors", "text")}) for m in shared
+            ]
             markers = [
                 marker_msg(m.type, ns=m.ns, id=k, header=header(f"link{k % 10}", sec=k), pose=pose(k, -k, 0.5 * k))
                 for m in shared
@@ -97,7 +99,10 @@ def _expected(m: Any) -> dict[str, Any]:
 
 def _got(b: MarkerBlock, j: int) -> dict[str, Any]:
     names = ("frame", "stamp_ns", "ns", "id", "type", "action", "lifetime_ns", "frame_locked", "text")
-    out: dict[str, Any] = {name: getattr(b, name)[j].item() if name not in ("frame", "ns", "text") else getattr(b, name)[j] for name in names}
+    out: dict[str, Any] = {
+        name: getattr(b, name)[j].item() if name not in ("frame", "ns", "text") else getattr(b, name)[j]
+        for name in names
+    }
     out |= {"mesh_resource": b.mesh_resource[j], "embedded": bool(b.embedded[j])}
     out |= {"pose": b.pose[j].tolist(), "scale": b.scale[j].tolist(), "color": b.color[j].astype(float).tolist()}
     out["points"] = b.points[b.points_at[j] : b.points_at[j + 1]].tolist()

@@ -25,13 +25,14 @@ from r2d2_viz.msgs.geometry import FLOAT32_MAX, frame_of
 from r2d2_viz.msgs.marker_blocks import MarkerBlock
 from r2d2_viz.msgs.markers import marker_op
 from r2d2_viz.viewer.blocks.row_columns import RowColumns
-from r2d2_viz.viewer.blocks.row_items import _BOOL, _F32, _SOLID, _U8, _U32, _VEC3, _VEC4, _texts
+from r2d2_viz.viewer.blocks.row_items import _BOOL, _F32, _SOLID, _U8, _VEC3, _VEC4, _texts
 from r2d2_viz.viewer.displays import TEXT_RADIUS, Clock, MarkerBook, MeshLoader, _log_items, _place, marker_entity
 
 I64 = npt.NDArray[np.int64]
 ARROW, CUBE, SPHERE, CYLINDER, STRIP, TEXT = 0, 1, 2, 3, 4, 9
 _STRIP_THIN = 100  # a one-colour line strip of width 0: no radii column
 _OWN = -1  # logged marker by marker
+_IDENTITY = np.array([0.0, 0.0, 0.0, 1.0], dtype=np.float32)  # xyzw
 
 
 def _simple(block: MarkerBlock, frames: npt.NDArray[np.object_]) -> npt.NDArray[np.bool_]:
@@ -44,7 +45,8 @@ def _simple(block: MarkerBlock, frames: npt.NDArray[np.object_]) -> npt.NDArray[
     ok &= np.isfinite(norm) & (block.action == 0) & (block.lifetime_ns <= 0)
     ok &= (block.type >= 0) & (block.type <= 11) & (frames != "")
     wrong = np.concatenate([[0], np.cumsum(~ok)])
-    return ~block.bad & (wrong[block.first[1:]] == wrong[block.first[:-1]])
+    simple: npt.NDArray[np.bool_] = ~block.bad & (wrong[block.first[1:]] == wrong[block.first[:-1]])
+    return simple
 
 
 def _kinds(block: MarkerBlock) -> I64:
@@ -89,7 +91,7 @@ def _shape_columns(kind: int, sel: I64, n: _Numbers) -> list[tuple[rr.ComponentD
         return [
             (cls.descriptor_half_sizes(), _vectors(_VEC3, n.scale[sel] / np.float32(2))),
             (cls.descriptor_centers(), _vectors(_VEC3, zeros)),
-            (cls.descriptor_quaternions(), _vectors(_VEC4, np.tile(np.float32([0, 0, 0, 1]), (rows, 1)))),
+            (cls.descriptor_quaternions(), _vectors(_VEC4, np.tile(_IDENTITY, (rows, 1)))),
             (cls.descriptor_colors(), color),
             (cls.descriptor_fill_mode(), _vectors(_U8, np.full(rows, _SOLID, np.uint8))),
         ]
@@ -99,7 +101,7 @@ def _shape_columns(kind: int, sel: I64, n: _Numbers) -> list[tuple[rr.ComponentD
             (rr.Cylinders3D.descriptor_lengths(), _vectors(_F32, s[:, 2])),
             (rr.Cylinders3D.descriptor_radii(), _vectors(_F32, (s[:, 0] + s[:, 1]) / np.float32(4))),
             (rr.Cylinders3D.descriptor_centers(), _vectors(_VEC3, zeros)),
-            (rr.Cylinders3D.descriptor_quaternions(), _vectors(_VEC4, np.tile(np.float32([0, 0, 0, 1]), (rows, 1)))),
+            (rr.Cylinders3D.descriptor_quaternions(), _vectors(_VEC4, np.tile(_IDENTITY, (rows, 1)))),
             (rr.Cylinders3D.descriptor_colors(), color),
             (rr.Cylinders3D.descriptor_fill_mode(), _vectors(_U8, np.full(rows, _SOLID, np.uint8))),
         ]
@@ -175,7 +177,10 @@ def _marker(b: MarkerBlock, j: int) -> Any:
         lifetime=ns(sec=0, nanosec=0),
         frame_locked=bool(b.frame_locked[j]),
         points=[xyz(q) for q in b.points[b.points_at[j] : b.points_at[j + 1]]],
-        colors=[ns(**{k: float(v) for k, v in zip(rgba, q, strict=True)}) for q in b.colors[b.colors_at[j] : b.colors_at[j + 1]]],
+        colors=[
+            ns(**{k: float(v) for k, v in zip(rgba, q, strict=True)})
+            for q in b.colors[b.colors_at[j] : b.colors_at[j + 1]]
+        ],
         text=b.text[j],
         mesh_resource=b.mesh_resource[j],
         mesh_use_embedded_materials=bool(b.embedded[j]),
@@ -196,7 +201,7 @@ class MarkerColumns:
         book: MarkerBook,
         *,
         own: Callable[[int], None],
-        count: Callable[[int], None],
+        count: Callable[[int], object],
     ) -> None:
         """Log the block's messages at ``times_ns`` in order: runs of plain ones as columns (``count`` called for
         each), each other one by ``own`` (the per-message path) in its turn."""
@@ -222,13 +227,20 @@ class MarkerColumns:
         if hi == lo:
             return
         t = np.repeat(times_ns[i:j], np.diff(b.first[i : j + 1]))
-        names, codes = np.unique(b.ns[lo:hi], return_inverse=True)
+        _, codes = np.unique(b.ns[lo:hi], return_inverse=True)
         key = (codes.astype(np.int64) << 32) | (b.id[lo:hi].astype(np.int64) & 0xFFFFFFFF)
-        _, first_of, inverse = np.unique(key, return_index=True, return_inverse=True)
+        _, inverse = np.unique(key, return_inverse=True)
         order = np.argsort(inverse, kind="stable")
         cuts = np.flatnonzero(np.diff(inverse[order])) + 1
         for members in np.split(order, cuts):
-            self._entity(marker_entity(topic, b.ns[lo + members[0]], int(b.id[lo + members[0]])), members + lo, t[members], n, kinds, book)
+            self._entity(
+                marker_entity(topic, b.ns[lo + members[0]], int(b.id[lo + members[0]])),
+                members + lo,
+                t[members],
+                n,
+                kinds,
+                book,
+            )
         self.rows.at(int(times_ns[j - 1]))
 
     def _entity(self, entity: str, sel: I64, t: I64, n: _Numbers, kinds: I64, book: MarkerBook) -> None:

@@ -142,10 +142,14 @@ def test_the_recording_is_the_per_message_one(recorded: dict[bool, tuple[Path, i
     for entity in before:
         assert after[entity] == before[entity], entity
     assert len(before["/markers/solid/1"]) > 10  # drawn, deleted, drawn again
-    assert [t for t, row in before["/markers/life/1"] if "Clear:is_recursive" in row] == [T0 + 9 * S // 10 + 150_000_000]
+    assert [t for t, row in before["/markers/life/1"] if "Clear:is_recursive" in row] == [
+        T0 + 9 * S // 10 + 150_000_000
+    ]
 
 
-def test_only_the_messages_the_block_leaves_are_decoded_alone(recorded: dict[bool, tuple[Path, int, list[str]]]) -> None:
+def test_only_the_messages_the_block_leaves_are_decoded_alone(
+    recorded: dict[bool, tuple[Path, int, list[str]]],
+) -> None:
     # 20 messages: today all 20 decoded alone; with blocks, the DELETE (4), the namespace's DELETEALL (6), the
     # lifetime (9) and the messages while it runs (10, 11: truncated, 12: its expiry is cleared there), the empty
     # frame (13) and the DELETEALL (15)
@@ -158,4 +162,3 @@ def test_the_problems_are_said_as_before(recorded: dict[bool, tuple[Path, int, l
     assert said == recorded[False][2]
     assert sum("/markers" in line and "cannot be shown" in line for line in said) == 1
     assert sum("empty frame_id" in line for line in said) == 1
-
