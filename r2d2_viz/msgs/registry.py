@@ -8,7 +8,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from r2d2_viz.errors import one_line
-from r2d2_viz.msgs import images, marker_blocks, markers, nav, pointcloud, poses, scan, telemetry
+from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
+from r2d2_viz.msgs.blocks import markers as marker_arrays
 from r2d2_viz.msgs.rviz2 import accel, interactive, scalar_points
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.stacks import detections, particles, voxels
@@ -60,7 +61,7 @@ BlockDecoder = Callable[[Sequence[bytes | memoryview], DecodeOptions], object]
 """One topic's messages of a window (CDR) → a block of their own type, decoded together (issue 46, item 3)."""
 
 BLOCK_DECODERS: dict[str, BlockDecoder] = {
-    "visualization_msgs/msg/MarkerArray": marker_blocks.decode_marker_arrays,
+    "visualization_msgs/msg/MarkerArray": marker_arrays.decode_marker_arrays,
 }
 """Types a batch run decodes a block at a time (no decay, no ``--video``); the per-message :data:`DECODERS` still
 decode each message a block cannot read, with their errors."""

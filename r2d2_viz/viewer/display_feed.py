@@ -20,7 +20,7 @@ import numpy as np
 import rerun as rr
 
 from r2d2_viz.errors import short
-from r2d2_viz.msgs.marker_blocks import MarkerBlock
+from r2d2_viz.msgs.blocks.markers import MarkerBlock
 from r2d2_viz.msgs.nav import apply_grid_update
 from r2d2_viz.msgs.registry import BLOCK_DECODERS
 from r2d2_viz.msgs.rviz2.joined import Joins
@@ -116,7 +116,6 @@ class DisplayFeed:
         self.rows = RowColumns(self.rec, timeline, clock, hold=hold)  # every other display's rows: columns too
         self.odometry = OdometryKeep(lambda topic: (self.styles.get(topic) or DisplayStyle()).tolerance)
         self.joins = Joins({topic: style.options for topic, style in self.styles.items()})  # DepthCloud, Effort…
-        self.markers = MarkerColumns(self.rows, timeline, clock, load_mesh)  # MarkerArray blocks: columns
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -152,11 +151,8 @@ class DisplayFeed:
         due: list[TopicMessage] = []
         while self._pending and (time_ns is None or self._pending[0].time_ns <= time_ns):
             due.append(self._pending.popleft())
-        blocks: dict[str, list[TopicMessage]] = {}  # a batch run's topics decoded a block at a time
-        for message in self.odometry.kept(due):  # before a pose takes a slot of its history
-            if self._blocked(message):
-                blocks.setdefault(message.topic, []).append(message)
-                continue
+        alone, blocks = _blocks(self, self.odometry.kept(due))  # odometry first: before a pose takes a history slot
+        for message in alone:
             message = self.decode(message)
             if _simple(self, message, message.decoded):
                 entity = _count(self, message)[1]
@@ -165,8 +161,7 @@ class DisplayFeed:
             else:  # on its own: after what its entities' runs hold, at the time the runs left
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
                 self._log(message)
-        for topic, messages in blocks.items():
-            self._log_block(topic, messages)
+        _log_blocks(self, blocks)
         self.columns.interrupt(everything=time_ns is None)  # everything taken: held runs too
         end = _FOREVER if time_ns is None else time_ns
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
@@ -190,7 +185,7 @@ class DisplayFeed:
         state, slot = _count(self, message)
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
-            decoded = self._decoded(message).decoded
+            decoded = self.decode(message, now=True).decoded
             if isinstance(decoded, MsgError):
                 raise decoded
             assert decoded is not None
@@ -240,39 +235,11 @@ class DisplayFeed:
                     plain=state.plain,
                 )
 
-    def _blocked(self, message: TopicMessage) -> bool:
-        """Whether ``message`` is decoded with its topic's others of the window (:data:`BLOCK_DECODERS`): a batch
-        run's, not decayed, no ``--video``, times not the headers'."""
-        if message.msgtype not in BLOCK_DECODERS or self._flushes or self.header_time or self.video.encoder:
-            return False
-        return not (self.styles.get(message.topic) or DisplayStyle()).decay
-
-    def _log_block(self, topic: str, messages: list[TopicMessage]) -> None:
-        """One topic's messages of a window decoded together and logged as columns; those the block leaves (a
-        DELETE, a lifetime, a problem to say) one by one, in their turn."""
-        options = (self.styles.get(topic) or DisplayStyle()).options
-        block = BLOCK_DECODERS[messages[0].msgtype]([m.data for m in messages], options)
-        state = self.topics.setdefault(topic, _TopicState())
-        state.markers.anchor = self._anchored
-        times = np.array([m.time_ns for m in messages], dtype=np.int64)
-        if isinstance(block, MarkerBlock):
-            self.markers.log(
-                topic,
-                times,
-                block,
-                state.markers,
-                own=lambda i: self._log(messages[i]),
-                count=lambda i: _count(self, messages[i]),
-            )
-
-    def decode(self, message: TopicMessage) -> TopicMessage:
+    def decode(self, message: TopicMessage, *, now: bool = False) -> TopicMessage:
         """``message`` with what it draws (or why it cannot), in its topic's style; pure, so a bag's reader
-        thread can call it ahead of :meth:`log` (a block's topic: when it is logged)."""
-        return message if self._blocked(message) else self._decoded(message)
-
-    def _decoded(self, message: TopicMessage) -> TopicMessage:
-        if message.decoded is not None or message.msgtype == GRID_UPDATE:  # updates: applied when logged
-            return message
+        thread can call it ahead of :meth:`log` (a block's topic: when it is logged, or ``now``)."""
+        if message.decoded is not None or message.msgtype == GRID_UPDATE or (not now and _blocked(self, message)):
+            return message  # updates: applied when logged
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
             decoded: Decoded | list[MarkerOp] | MsgError = self.joins.decode(
@@ -300,6 +267,46 @@ class DisplayFeed:
                 self.notices.report(
                     f"{self._where(topic)}: {state.problems} of {state.messages} messages could not be shown"
                 )
+
+
+def _blocked(feed: DisplayFeed, message: TopicMessage) -> bool:
+    """Whether ``message`` is decoded with its topic's others of the window (:data:`BLOCK_DECODERS`): a batch
+    run's, not decayed, no ``--video``, times not the headers'."""
+    if message.msgtype not in BLOCK_DECODERS or feed._flushes or feed.header_time or feed.video.encoder:
+        return False
+    return not (feed.styles.get(message.topic) or DisplayStyle()).decay
+
+
+def _blocks(feed: DisplayFeed, due: list[TopicMessage]) -> tuple[list[TopicMessage], dict[str, list[TopicMessage]]]:
+    """The messages logged one by one, and those of each topic decoded a block at a time (:func:`_blocked`)."""
+    alone: list[TopicMessage] = []
+    blocks: dict[str, list[TopicMessage]] = {}
+    for message in due:
+        if _blocked(feed, message):
+            blocks.setdefault(message.topic, []).append(message)
+        else:
+            alone.append(message)
+    return alone, blocks
+
+
+def _log_blocks(feed: DisplayFeed, blocks: dict[str, list[TopicMessage]]) -> None:
+    """Each topic's messages of a window decoded together and logged as columns; those a block leaves (a
+    DELETE, a lifetime, a problem to say) one by one, in their turn."""
+    for topic, messages in blocks.items():
+        options = (feed.styles.get(topic) or DisplayStyle()).options
+        block = BLOCK_DECODERS[messages[0].msgtype]([m.data for m in messages], options)
+        state = feed.topics.setdefault(topic, _TopicState())
+        state.markers.anchor = feed._anchored
+        times = np.array([m.time_ns for m in messages], dtype=np.int64)
+        if isinstance(block, MarkerBlock):
+            MarkerColumns(feed.rows, feed.timeline, feed.clock, feed.load_mesh).log(
+                topic,
+                times,
+                block,
+                state.markers,
+                own=lambda i, messages=messages: feed._log(messages[i]),  # type: ignore[misc]
+                count=lambda i, messages=messages: _count(feed, messages[i]),  # type: ignore[misc]
+            )
 
 
 def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[_TopicState, str]:

@@ -1,4 +1,4 @@
-"""A block of MarkerArrays (:mod:`r2d2_viz.msgs.marker_blocks`) straight to columns, one run per marker entity
+"""A block of MarkerArrays (:mod:`r2d2_viz.msgs.blocks.markers`) straight to columns, one run per marker entity
 (issue 46, item 3): the rows :func:`r2d2_viz.viewer.displays.log_decoded` makes for each marker — the same entities
 ``<topic>/<ns>/<id>``, times, components and values — built with numpy a column at a time, no Python object per
 marker.
@@ -21,8 +21,8 @@ import numpy.typing as npt
 import pyarrow as pa
 import rerun as rr
 
+from r2d2_viz.msgs.blocks.markers import MarkerBlock
 from r2d2_viz.msgs.geometry import FLOAT32_MAX, frame_of
-from r2d2_viz.msgs.marker_blocks import MarkerBlock
 from r2d2_viz.msgs.markers import marker_op
 from r2d2_viz.viewer.blocks.row_columns import RowColumns
 from r2d2_viz.viewer.blocks.row_items import _BOOL, _F32, _SOLID, _U8, _VEC3, _VEC4, _texts

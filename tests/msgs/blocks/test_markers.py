@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from msgs_build import TS, T, color, duration, header, marker_msg, pose, quat, vec
 
-from r2d2_viz.msgs.marker_blocks import MarkerBlock, decode_marker_arrays
+from r2d2_viz.msgs.blocks.markers import MarkerBlock, decode_marker_arrays
 
 ARRAY = "visualization_msgs/msg/MarkerArray"
 TEXTS = ("", "a", "base_link", "/odom", "ünï ✓", "x" * 61)
