@@ -9,8 +9,8 @@ message of the same size and encapsulation whose length fields hold the same num
 layout exactly (the lengths decide every later offset), so each field of every marker of the group is a gather of
 the group's bytes (poses, scales, colours, types, actions, ids, lifetimes, stamps, points, colours per point) and
 strings are decoded once per distinct value. A message whose layout differs gets its own walk; one the walk cannot
-read (a bad length, truncated bytes, a string without its NUL, invalid UTF-8, another encapsulation) is marked
-``bad``: the caller decodes it alone, with today's per-message errors.
+read (a bad length, truncated bytes, a string without its NUL, invalid UTF-8 in any string, another
+encapsulation: what rosbags refuses) is marked ``bad``: the caller decodes it alone, with today's per-message errors.
 
 Pure: numpy and ``struct``.
 """
@@ -117,15 +117,16 @@ class _Walk:
         if self.pos > self.layout.size:
             raise ValueError("ends early")
 
-    def string(self, name: str | None = None) -> None:
+    def string(self, name: str = "other") -> None:
         n = self.count()
         if n == 0:
             raise ValueError("string without its NUL")
         start = self.pos
         self.skip(n)
+        if self.data[self.pos - 1] != 0:
+            raise ValueError("string without its NUL")
         self.layout.nuls.append(self.pos - 1)
-        if name is not None:
-            self.layout.strings.setdefault(name, []).append((start, n))
+        self.layout.strings.setdefault(name, []).append((start, n))
 
     def seq(self, name: str | None, item: int, align: int) -> None:
         n = self.count()
@@ -234,6 +235,7 @@ def _part(rows: npt.NDArray[np.uint8], index: I64, layout: _Layout, bad: Bools) 
     }
     for name in ("frame", "ns", "text", "mesh"):
         fields[name] = _texts(rows, layout.strings.get(name, []), local_bad)
+    _texts(rows, layout.strings.get("other", []), local_bad)  # not drawn, but UTF-8 (or rosbags refuses them)
     bad[index[local_bad]] = True
     seq: dict[str, tuple[npt.NDArray[Any], I64]] = {}
     for name, item, width, kind in (("points", 24, 3, "f8"), ("colors", 16, 4, "f4")):
@@ -267,7 +269,7 @@ def _parts(messages: Sequence[bytes | memoryview], bad: Bools) -> list[_Part]:
             same = np.all(lengths == np.asarray(layout.lengths, dtype=np.uint32), axis=1)
             if layout.nuls:
                 same &= np.all(mine[:, layout.nuls] == 0, axis=1)
-            same[0] = True  # the walked one (its NULs were checked)
+            same[0] = True  # the one walked (its NULs checked): the loop always ends
             parts.append(_part(mine[same], todo[left[same]], layout, bad))
             left = left[~same]
     return parts
