@@ -205,20 +205,21 @@ class MarkerColumns:
     ) -> None:
         """Log the block's messages at ``times_ns`` in order: runs of plain ones as columns (``count`` called for
         each), each other one by ``own`` (the per-message path) in its turn."""
-        frames = np.array([frame_of(f) for f in block.frame], dtype=object) if len(block.frame) else block.frame
-        simple, numbers, kinds = _simple(block, frames), _Numbers(block, frames), _kinds(block)
-        i, total = 0, len(times_ns)
-        while i < total:
-            if not simple[i] or any(t is not None for t in book.live.values()):
-                own(i)
-                i += 1
-                continue
-            j = i
-            while j < total and simple[j]:
-                count(j)
-                j += 1
-            self._run(topic, times_ns, numbers, kinds, book, (i, j))
-            i = j
+        with np.errstate(all="ignore"):  # hostile values (1e300 as float32) turn inf silently, as per message
+            frames = np.array([frame_of(f) for f in block.frame], dtype=object) if len(block.frame) else block.frame
+            simple, numbers, kinds = _simple(block, frames), _Numbers(block, frames), _kinds(block)
+            i, total = 0, len(times_ns)
+            while i < total:
+                if not simple[i] or any(t is not None for t in book.live.values()):
+                    own(i)
+                    i += 1
+                    continue
+                j = i
+                while j < total and simple[j]:
+                    count(j)
+                    j += 1
+                self._run(topic, times_ns, numbers, kinds, book, (i, j))
+                i = j
 
     def _run(self, topic: str, times_ns: I64, n: _Numbers, kinds: I64, book: MarkerBook, span: tuple[int, int]) -> None:
         b, (i, j) = n.block, span
