@@ -29,7 +29,7 @@ from r2d2_viz.viewer.blocks.row_items import _BOOL, _F32, _SOLID, _U8, _VEC3, _V
 from r2d2_viz.viewer.displays import TEXT_RADIUS, Clock, MarkerBook, MeshLoader, _log_items, _place, marker_entity
 
 I64 = npt.NDArray[np.int64]
-ARROW, CUBE, SPHERE, CYLINDER, STRIP, TEXT = 0, 1, 2, 3, 4, 9
+ARROW, CUBE, SPHERE, CYLINDER, STRIP, CUBE_LIST, SPHERE_LIST, TEXT = 0, 1, 2, 3, 4, 6, 7, 9
 _STRIP_THIN = 100  # a one-colour line strip of width 0: no radii column
 _OWN = -1  # logged marker by marker
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0], dtype=np.float32)  # xyzw
@@ -51,7 +51,8 @@ def _simple(block: MarkerBlock, frames: npt.NDArray[np.object_]) -> npt.NDArray[
 
 def _kinds(block: MarkerBlock) -> I64:
     """Per marker: the type when it goes as columns (a thin strip: :data:`_STRIP_THIN`), else :data:`_OWN`."""
-    kind = np.where(np.isin(block.type, (ARROW, CUBE, SPHERE, CYLINDER, TEXT)), block.type, _OWN).astype(np.int64)
+    columns = (ARROW, CUBE, SPHERE, CYLINDER, CUBE_LIST, SPHERE_LIST, TEXT)
+    kind = np.where(np.isin(block.type, columns), block.type, _OWN).astype(np.int64)
     points, colors = np.diff(block.points_at), np.diff(block.colors_at)
     strip = (block.type == STRIP) & ~((points > 0) & (colors == points))  # one colour: the marker's
     kind[strip] = np.where(block.scale[strip, 0] / 2 > 0, STRIP, _STRIP_THIN)
@@ -74,6 +75,9 @@ class _Numbers:
         self.scale = block.scale.astype(np.float32)
         c = np.round(np.clip(np.nan_to_num(block.color.astype(np.float64), nan=0.0), 0.0, 1.0) * 255).astype(np.uint8)
         self.color = np.ascontiguousarray(c).view(">u4").ravel().astype(np.uint32)
+        c = np.round(np.clip(np.nan_to_num(block.colors.astype(np.float64), nan=0.0), 0.0, 1.0) * 255).astype(np.uint8)
+        self.colors = np.concatenate([self.color, np.ascontiguousarray(c).view(">u4").ravel().astype(np.uint32)])
+        """The markers' colours, then every point's (packed RGBA8)."""
 
 
 def _vectors(build: Any, values: np.ndarray) -> tuple[pa.Array, I64]:
@@ -115,6 +119,8 @@ def _shape_columns(kind: int, sel: I64, n: _Numbers) -> list[tuple[rr.ComponentD
         ]
     if kind == ARROW:
         return _arrows(sel, n, color)
+    if kind in (CUBE_LIST, SPHERE_LIST):
+        return _lists(kind, sel, n)
     return _strips(kind, sel, n, color)
 
 
@@ -137,12 +143,38 @@ def _arrows(sel: I64, n: _Numbers, color: tuple[pa.Array, I64]) -> list[tuple[rr
     ]
 
 
+def _ranges(starts: I64, counts: I64) -> I64:
+    """``starts[k] + 0 … counts[k] - 1`` for every ``k``, one after the other."""
+    before = np.cumsum(counts) - counts
+    ranges: I64 = np.repeat(starts - before, counts) + np.arange(int(counts.sum()))
+    return ranges
+
+
+def _lists(kind: int, sel: I64, n: _Numbers) -> list[tuple[rr.ComponentDescriptor, Any]]:
+    """Cube and sphere lists: one box or sphere a point, ``scale`` each, coloured per point when there is a colour
+    per point (RViz's rule), else the marker's colour."""
+    b = n.block
+    counts = b.points_at[sel + 1] - b.points_at[sel]
+    per_point = (counts > 0) & (b.colors_at[sel + 1] - b.colors_at[sel] == counts)
+    color_lengths = np.where(per_point, counts, 1)
+    starts = np.where(per_point, len(b.id) + b.colors_at[sel], sel)
+    centers = b.points[_ranges(b.points_at[sel], counts)].astype(np.float32).reshape(-1, 3)
+    cls = rr.Boxes3D if kind == CUBE_LIST else rr.Ellipsoids3D
+    return [
+        (cls.descriptor_half_sizes(), (_VEC3([np.repeat(n.scale[sel] / np.float32(2), counts, axis=0)])[0], counts)),
+        (cls.descriptor_centers(), (_VEC3([centers])[0], counts)),
+        (cls.descriptor_quaternions(), (_VEC4([np.tile(_IDENTITY, (len(centers), 1))])[0], counts)),
+        (cls.descriptor_colors(), (pa.array(n.colors[_ranges(starts, color_lengths)], pa.uint32()), color_lengths)),
+        (cls.descriptor_fill_mode(), _vectors(_U8, np.full(len(sel), _SOLID, np.uint8))),
+    ]
+
+
 def _strips(kind: int, sel: I64, n: _Numbers, color: tuple[pa.Array, I64]) -> list[tuple[rr.ComponentDescriptor, Any]]:
     """One-colour line strips: a strip through the points (none below two), the marker's colour."""
     b = n.block
     counts = b.points_at[sel + 1] - b.points_at[sel]
     drawn = counts > 1
-    at = np.concatenate([np.arange(b.points_at[j], b.points_at[j + 1]) for j in sel[drawn]] or [np.zeros(0, int)])
+    at = _ranges(b.points_at[sel[drawn]], counts[drawn])
     points, _ = _VEC3([b.points[at].astype(np.float32).reshape(-1, 3)])
     offsets = np.zeros(int(drawn.sum()) + 1, dtype=np.int32)
     np.cumsum(counts[drawn], out=offsets[1:])
