@@ -34,6 +34,8 @@ F32 = npt.NDArray[np.float32]
 Bools = npt.NDArray[np.bool_]
 Texts = npt.NDArray[np.object_]
 _CDR = (b"\x00\x00", b"\x00\x01")  # big-endian, little-endian CDR (encapsulation kinds 0 and 1)
+_FEW = 8
+"""Messages of one layout up to this many: their strings are decoded one by one (numpy's unique costs more)."""
 MAX_MARKERS = 1 << 20
 """More markers than this in one array: not read here (the per-message decoder says what is wrong)."""
 
@@ -83,92 +85,73 @@ class _Layout:
     seqs: dict[str, list[tuple[int, int]]] = field(default_factory=dict)
 
 
-class _Walk:
-    """One message's walk (raises ``ValueError`` on anything it cannot read)."""
-
-    def __init__(self, data: bytes) -> None:
-        head = data[:2]
-        if len(data) < 8 or head not in _CDR:
-            raise ValueError("not plain CDR")
-        self.data, self.pos = data, 4
-        self.layout = _Layout(len(data), head == _CDR[1])
-        self.u32 = struct.Struct("<I" if self.layout.little else ">I").unpack_from
-
-    def align(self, n: int) -> None:
-        self.pos += (-(self.pos - 4)) % n
-
-    def count(self) -> int:
-        self.align(4)
-        if self.pos + 4 > self.layout.size:
-            raise ValueError("ends early")
-        (n,) = self.u32(self.data, self.pos)
-        self.layout.lengths_at.append(self.pos)
-        self.layout.lengths.append(n)
-        self.pos += 4
-        return int(n)
-
-    def fixed(self, name: str, size: int, align: int) -> None:
-        self.align(align)
-        self.layout.fixed.setdefault(name, []).append(self.pos)
-        self.skip(size)
-
-    def skip(self, size: int) -> None:
-        self.pos += size
-        if self.pos > self.layout.size:
-            raise ValueError("ends early")
-
-    def string(self, name: str = "other") -> None:
-        n = self.count()
-        if n == 0:
-            raise ValueError("string without its NUL")
-        start = self.pos
-        self.skip(n)
-        if self.data[self.pos - 1] != 0:
-            raise ValueError("string without its NUL")
-        self.layout.nuls.append(self.pos - 1)
-        self.layout.strings.setdefault(name, []).append((start, n))
-
-    def seq(self, name: str | None, item: int, align: int) -> None:
-        n = self.count()
-        if n > self.layout.size:
-            raise ValueError("absurd count")
-        if n:
-            self.align(align)
-        start = self.pos
-        self.skip(n * item)
-        if name is not None:
-            self.layout.seqs.setdefault(name, []).append((start, n))
-
-
 def _walk(data: bytes) -> _Layout:
-    w = _Walk(data)
-    markers = w.count()
-    if markers > MAX_MARKERS:
+    """One message's layout (``ValueError`` on anything it cannot read): one loop, no call per fixed field."""
+    size, head = len(data), data[:2]
+    if size < 8 or head not in _CDR:
+        raise ValueError("not plain CDR")
+    layout = _Layout(size, head == _CDR[1])
+    u32 = struct.Struct("<I" if layout.little else ">I").unpack_from
+    at, values, nuls = layout.lengths_at, layout.lengths, layout.nuls
+    stamp: list[int] = []
+    ints: list[int] = []
+    pose: list[int] = []
+    embedded: list[int] = []
+    spans: dict[str, list[tuple[int, int]]] = {name: [] for name in ("frame", "ns", "text", "mesh", "other", "points")}
+    frame, ns, text, mesh, other, points = spans.values()
+    colors: list[tuple[int, int]] = []
+
+    def count(pos: int) -> tuple[int, int]:
+        pos += (-(pos - 4)) % 4
+        if pos + 4 > size:
+            raise ValueError("ends early")
+        (n,) = u32(data, pos)
+        at.append(pos)
+        values.append(n)
+        return pos + 4, int(n)
+
+    def string(pos: int, spans: list[tuple[int, int]]) -> int:
+        pos, n = count(pos)
+        end = pos + n
+        if n == 0 or end > size or data[end - 1] != 0:
+            raise ValueError("a string without its NUL")
+        nuls.append(end - 1)
+        spans.append((pos, n))
+        return end
+
+    pos, markers = count(4)
+    if markers > min(MAX_MARKERS, size):
         raise ValueError("absurd marker count")
     for _ in range(markers):
-        w.fixed("stamp", 8, 4)
-        w.string("frame")
-        w.string("ns")
-        w.fixed("ints", 12, 4)  # id, type, action
-        w.fixed("pose", 56, 8)
-        w.fixed("scale", 24, 8)
-        w.fixed("color", 16, 4)
-        w.fixed("lifetime", 8, 4)
-        w.fixed("locked", 1, 1)
-        w.seq("points", 24, 8)
-        w.seq("colors", 16, 4)
-        w.string()  # texture_resource
-        w.fixed("texture stamp", 8, 4)
-        w.string()  # texture.header.frame_id
-        w.string()  # texture.format
-        w.seq(None, 1, 1)  # texture.data
-        w.seq(None, 8, 4)  # uv_coordinates
-        w.string("text")
-        w.string("mesh")
-        w.string()  # mesh_file.filename
-        w.seq(None, 1, 1)  # mesh_file.data
-        w.fixed("embedded", 1, 1)
-    return w.layout
+        pos += (-(pos - 4)) % 4
+        stamp.append(pos)
+        pos = string(string(pos + 8, frame), ns)
+        pos += (-(pos - 4)) % 4
+        ints.append(pos)  # id, type, action
+        pos += 12
+        pos += (-(pos - 4)) % 8
+        pose.append(pos)  # then scale, color, lifetime, frame_locked: 56 + 24 + 16 + 8 + 1 bytes
+        pos, n = count(pos + 105)
+        if n:
+            pos += (-(pos - 4)) % 8
+        points.append((pos, n))
+        pos, n = count(pos + 24 * n)
+        colors.append((pos, n))
+        pos = string(pos + 16 * n, other)  # texture_resource
+        pos += (-(pos - 4)) % 4
+        pos = string(string(pos + 8, other), other)  # texture: stamp, frame_id, format
+        pos, n = count(pos)  # texture.data
+        pos, n = count(pos + n)  # uv_coordinates
+        pos = string(string(pos + 8 * n, text), mesh)
+        pos, n = count(string(pos, other))  # mesh_file: filename, data
+        embedded.append(pos + n)
+        pos += n + 1
+    if pos > size:
+        raise ValueError("ends early")
+    layout.fixed = {"stamp": stamp, "ints": ints, "pose": pose, "embedded": embedded}
+    layout.strings = {name: spans[name] for name in ("frame", "ns", "text", "mesh", "other")}
+    layout.seqs = {"points": points, "colors": colors}
+    return layout
 
 
 def _gather(rows: npt.NDArray[np.uint8], at: list[int], size: int, dtype: str) -> npt.NDArray[Any]:
@@ -182,6 +165,15 @@ def _texts(rows: npt.NDArray[np.uint8], spans: list[tuple[int, int]], bad: Bools
     """Each span's string (without its NUL) of every row, ``(k, len(spans))``; rows whose bytes are not UTF-8
     are marked in ``bad``."""
     out = np.empty((rows.shape[0], len(spans)), dtype=object)
+    if rows.shape[0] <= _FEW:  # a layout of its own: each string decoded where it is
+        for r, row in enumerate(rows):
+            data = row.tobytes()
+            for j, (start, n) in enumerate(spans):
+                try:
+                    out[r, j] = data[start : start + n - 1].decode("utf-8")
+                except UnicodeDecodeError:
+                    out[r, j], bad[r] = "", True
+        return out
     for j, (start, n) in enumerate(spans):
         if n == 1:
             out[:, j] = ""
@@ -213,8 +205,9 @@ class _Part:
 
 def _part(rows: npt.NDArray[np.uint8], index: I64, layout: _Layout, bad: Bools) -> _Part:
     e = "<" if layout.little else ">"
-    f = {name: layout.fixed.get(name, []) for name in ("ints", "stamp", "lifetime", "pose", "scale", "color")}
-    f |= {name: layout.fixed.get(name, []) for name in ("locked", "embedded")}
+    f = dict(layout.fixed)
+    for name, after_pose in (("scale", 56), ("color", 80), ("lifetime", 96), ("locked", 104)):
+        f[name] = [p + after_pose for p in f["pose"]]
     ints = _gather(rows, f["ints"], 12, e + "i4")
     stamp = _gather(rows, f["stamp"], 8, e + "u4").astype(np.int64)
     life = _gather(rows, f["lifetime"], 8, e + "u4").astype(np.int64)

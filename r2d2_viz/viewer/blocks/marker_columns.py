@@ -5,9 +5,10 @@ marker.
 
 A message goes this way when every marker of it is a plain ADD: a known type, no lifetime, a frame, finite pose and
 scale, and no marker of its topic has a lifetime running (their expiry is per message). Arrows, cubes, spheres,
-cylinders, text and one-colour line strips are columns; other types (points, lists, meshes, triangle lists,
-strips coloured per point) are logged marker by marker from the block's numbers, as the per-message path does. Any
-other message (DELETE, DELETEALL, lifetimes, an error to report) goes back to the caller, in its turn.
+cylinders, cube and sphere lists, text and one-colour line strips are columns; the other types (points, line lists,
+meshes, triangle lists, strips coloured per point) are logged marker by marker from the block's numbers, as the
+per-message path logs them. Any other message (DELETE, DELETEALL, lifetimes, an error to report) goes back to the
+caller, in its turn.
 """
 
 from __future__ import annotations
