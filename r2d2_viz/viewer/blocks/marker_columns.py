@@ -5,8 +5,8 @@ marker.
 
 A message goes this way when every marker of it is a plain ADD: a known type, no lifetime, a frame, finite pose and
 scale, and no marker of its topic has a lifetime running (their expiry is per message). Arrows, cubes, spheres,
-cylinders, cube and sphere lists, text and one-colour line strips are columns; the other types (points, line lists,
-meshes, triangle lists, strips coloured per point) are logged marker by marker from the block's numbers, as the
+cylinders, cube and sphere lists, points, text and one-colour line strips are columns; the other types (line
+lists, meshes, triangle lists, strips coloured per point) are logged marker by marker from the block's numbers, as the
 per-message path logs them. Any other message (DELETE, DELETEALL, lifetimes, an error to report) goes back to the
 caller, in its turn.
 """
@@ -30,7 +30,7 @@ from r2d2_viz.viewer.blocks.row_items import _BOOL, _F32, _SOLID, _U8, _VEC3, _V
 from r2d2_viz.viewer.displays import TEXT_RADIUS, Clock, MarkerBook, MeshLoader, _log_items, _place, marker_entity
 
 I64 = npt.NDArray[np.int64]
-ARROW, CUBE, SPHERE, CYLINDER, STRIP, CUBE_LIST, SPHERE_LIST, TEXT = 0, 1, 2, 3, 4, 6, 7, 9
+ARROW, CUBE, SPHERE, CYLINDER, STRIP, CUBE_LIST, SPHERE_LIST, POINTS, TEXT = 0, 1, 2, 3, 4, 6, 7, 8, 9
 _STRIP_THIN = 100  # a one-colour line strip of width 0: no radii column
 _OWN = -1  # logged marker by marker
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0], dtype=np.float32)  # xyzw
@@ -52,7 +52,7 @@ def _simple(block: MarkerBlock, frames: npt.NDArray[np.object_]) -> npt.NDArray[
 
 def _kinds(block: MarkerBlock) -> I64:
     """Per marker: the type when it goes as columns (a thin strip: :data:`_STRIP_THIN`), else :data:`_OWN`."""
-    columns = (ARROW, CUBE, SPHERE, CYLINDER, CUBE_LIST, SPHERE_LIST, TEXT)
+    columns = (ARROW, CUBE, SPHERE, CYLINDER, CUBE_LIST, SPHERE_LIST, POINTS, TEXT)
     kind = np.where(np.isin(block.type, columns), block.type, _OWN).astype(np.int64)
     points, colors = np.diff(block.points_at), np.diff(block.colors_at)
     strip = (block.type == STRIP) & ~((points > 0) & (colors == points))  # one colour: the marker's
@@ -120,7 +120,7 @@ def _shape_columns(kind: int, sel: I64, n: _Numbers) -> list[tuple[rr.ComponentD
         ]
     if kind == ARROW:
         return _arrows(sel, n, color)
-    if kind in (CUBE_LIST, SPHERE_LIST):
+    if kind in (CUBE_LIST, SPHERE_LIST, POINTS):
         return _lists(kind, sel, n)
     return _strips(kind, sel, n, color)
 
@@ -152,20 +152,28 @@ def _ranges(starts: I64, counts: I64) -> I64:
 
 
 def _lists(kind: int, sel: I64, n: _Numbers) -> list[tuple[rr.ComponentDescriptor, Any]]:
-    """Cube and sphere lists: one box or sphere a point, ``scale`` each, coloured per point when there is a colour
-    per point (RViz's rule), else the marker's colour."""
+    """Cube and sphere lists (a box or sphere a point, ``scale`` each) and points (``scale.x`` wide: the components
+    of the ``rr.Points3D`` they were logged as), coloured per point when there is a colour per point (RViz's
+    rule), else the marker's colour."""
     b = n.block
     counts = b.points_at[sel + 1] - b.points_at[sel]
     per_point = (counts > 0) & (b.colors_at[sel + 1] - b.colors_at[sel] == counts)
     color_lengths = np.where(per_point, counts, 1)
     starts = np.where(per_point, len(b.id) + b.colors_at[sel], sel)
-    centers = b.points[_ranges(b.points_at[sel], counts)].astype(np.float32).reshape(-1, 3)
+    colors = (pa.array(n.colors[_ranges(starts, color_lengths)], pa.uint32()), color_lengths)
+    centers = (_VEC3([b.points[_ranges(b.points_at[sel], counts)].astype(np.float32).reshape(-1, 3)])[0], counts)
+    if kind == POINTS:
+        return [
+            (rr.Points3D.descriptor_positions(), centers),
+            (rr.Points3D.descriptor_radii(), _vectors(_F32, n.scale[sel, 0] / np.float32(2))),
+            (rr.Points3D.descriptor_colors(), colors),
+        ]
     cls = rr.Boxes3D if kind == CUBE_LIST else rr.Ellipsoids3D
     return [
         (cls.descriptor_half_sizes(), (_VEC3([np.repeat(n.scale[sel] / np.float32(2), counts, axis=0)])[0], counts)),
-        (cls.descriptor_centers(), (_VEC3([centers])[0], counts)),
-        (cls.descriptor_quaternions(), (_VEC4([np.tile(_IDENTITY, (len(centers), 1))])[0], counts)),
-        (cls.descriptor_colors(), (pa.array(n.colors[_ranges(starts, color_lengths)], pa.uint32()), color_lengths)),
+        (cls.descriptor_centers(), centers),
+        (cls.descriptor_quaternions(), (_VEC4([np.tile(_IDENTITY, (int(counts.sum()), 1))])[0], counts)),
+        (cls.descriptor_colors(), colors),
         (cls.descriptor_fill_mode(), _vectors(_U8, np.full(len(sel), _SOLID, np.uint8))),
     ]
 

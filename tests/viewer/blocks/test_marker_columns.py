@@ -30,7 +30,7 @@ P = "Point"
 
 
 def _array(k: int) -> list[Any]:
-    """Fourteen markers: every type, some coloured per point, one given twice."""
+    """Seventeen markers: every type, some coloured per point, one given twice."""
     pts = [vec(0, 0, 0, P), vec(k, 1, 0, P), vec(1, k, 0.5, P), vec(2, 2, k, P)]
     per_point = [color(0.1 * i, 0.5, 1.0 - 0.2 * i, 0.9) for i in range(4)]
     return [
@@ -46,6 +46,7 @@ def _array(k: int) -> list[Any]:
         marker_msg(6, ns="lists", id=1, points=pts[:3], scale=vec(0.1, 0.1, 0.1)),
         marker_msg(7, ns="lists", id=2, points=pts, colors=per_point, scale=vec(0.2, 0.2, 0.2)),
         marker_msg(8, ns="", id=k % 2, points=pts, scale=vec(0.05, 0.05, 0)),
+        marker_msg(8, ns="points", id=1, points=pts[: k % 4], colors=per_point[: k % 4], scale=vec(0.1, 0, 0)),
         marker_msg(9, ns="text", id=1, text=f"ünï {k}", pose=pose(0, 0, k), scale=vec(0, 0, 0.4)),
         marker_msg(10, ns="mesh", id=1, mesh_resource="package://nowhere/a.dae", mesh_use_embedded_materials=k % 2),
         marker_msg(11, ns="tri", id=1, points=pts[:3], colors=per_point[:1]),
