@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from r2d2_viz.errors import one_line
 from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
+from r2d2_viz.msgs.blocks import markers as marker_arrays
 from r2d2_viz.msgs.rviz2 import accel, interactive, scalar_points
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.stacks import detections, particles, voxels
@@ -55,6 +56,15 @@ DECODERS: dict[str, Decoder] = {
     "vision_msgs/msg/Detection2DArray": detections.decode_detection2d_array,
     "vision_msgs/msg/Detection3DArray": detections.decode_detection3d_array,
 }
+
+BlockDecoder = Callable[[Sequence[bytes | memoryview], DecodeOptions], object]
+"""One topic's messages of a window (CDR) → a block of their own type, decoded together (issue 46, item 3)."""
+
+BLOCK_DECODERS: dict[str, BlockDecoder] = {
+    "visualization_msgs/msg/MarkerArray": marker_arrays.decode_marker_arrays,
+}
+"""Types a batch run decodes a block at a time (no decay, no ``--video``); the per-message :data:`DECODERS` still
+decode each message a block cannot read, with their errors."""
 
 VIEWS: dict[str, str] = {
     "rcl_interfaces/msg/Log": "log",

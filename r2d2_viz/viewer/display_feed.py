@@ -16,10 +16,13 @@ from collections import deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
 import rerun as rr
 
 from r2d2_viz.errors import short
+from r2d2_viz.msgs.blocks.markers import MarkerBlock
 from r2d2_viz.msgs.nav import apply_grid_update
+from r2d2_viz.msgs.registry import BLOCK_DECODERS
 from r2d2_viz.msgs.rviz2.joined import Joins
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, GridMap, MarkerOp, MeshResource, is_plain
 from r2d2_viz.msgs.typestore import MsgError
@@ -27,6 +30,7 @@ from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_imag
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
 from r2d2_viz.viewer.blocks.image_overlays import on_image, overlay_frames
+from r2d2_viz.viewer.blocks.marker_columns import MarkerColumns
 from r2d2_viz.viewer.blocks.odometry_keep import OdometryKeep, Tolerance
 from r2d2_viz.viewer.blocks.plain_log import PlainBook
 from r2d2_viz.viewer.blocks.row_columns import RowColumns
@@ -147,7 +151,8 @@ class DisplayFeed:
         due: list[TopicMessage] = []
         while self._pending and (time_ns is None or self._pending[0].time_ns <= time_ns):
             due.append(self._pending.popleft())
-        for message in self.odometry.kept(due):  # before a pose takes a slot of its history
+        alone, blocks = _blocks(self, self.odometry.kept(due))  # odometry first: before a pose takes a history slot
+        for message in alone:
             message = self.decode(message)
             if _simple(self, message, message.decoded):
                 entity = _count(self, message)[1]
@@ -156,6 +161,7 @@ class DisplayFeed:
             else:  # on its own: after what its entities' runs hold, at the time the runs left
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
                 self._log(message)
+        _log_blocks(self, blocks)
         self.columns.interrupt(everything=time_ns is None)  # everything taken: held runs too
         end = _FOREVER if time_ns is None else time_ns
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
@@ -179,7 +185,7 @@ class DisplayFeed:
         state, slot = _count(self, message)
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
-            decoded = self.decode(message).decoded
+            decoded = self.decode(message, now=True).decoded
             if isinstance(decoded, MsgError):
                 raise decoded
             assert decoded is not None
@@ -229,11 +235,11 @@ class DisplayFeed:
                     plain=state.plain,
                 )
 
-    def decode(self, message: TopicMessage) -> TopicMessage:
+    def decode(self, message: TopicMessage, *, now: bool = False) -> TopicMessage:
         """``message`` with what it draws (or why it cannot), in its topic's style; pure, so a bag's reader
-        thread can call it ahead of :meth:`log`."""
-        if message.decoded is not None or message.msgtype == GRID_UPDATE:  # updates: applied when logged
-            return message
+        thread can call it ahead of :meth:`log` (a block's topic: when it is logged, or ``now``)."""
+        if message.decoded is not None or message.msgtype == GRID_UPDATE or (not now and _blocked(self, message)):
+            return message  # updates: applied when logged
         style = self.styles.get(message.topic) or DisplayStyle()
         try:
             decoded: Decoded | list[MarkerOp] | MsgError = self.joins.decode(
@@ -261,6 +267,46 @@ class DisplayFeed:
                 self.notices.report(
                     f"{self._where(topic)}: {state.problems} of {state.messages} messages could not be shown"
                 )
+
+
+def _blocked(feed: DisplayFeed, message: TopicMessage) -> bool:
+    """Whether ``message`` is decoded with its topic's others of the window (:data:`BLOCK_DECODERS`): a batch
+    run's, not decayed, no ``--video``, times not the headers'."""
+    if message.msgtype not in BLOCK_DECODERS or feed._flushes or feed.header_time or feed.video.encoder:
+        return False
+    return not (feed.styles.get(message.topic) or DisplayStyle()).decay
+
+
+def _blocks(feed: DisplayFeed, due: list[TopicMessage]) -> tuple[list[TopicMessage], dict[str, list[TopicMessage]]]:
+    """The messages logged one by one, and those of each topic decoded a block at a time (:func:`_blocked`)."""
+    alone: list[TopicMessage] = []
+    blocks: dict[str, list[TopicMessage]] = {}
+    for message in due:
+        if _blocked(feed, message):
+            blocks.setdefault(message.topic, []).append(message)
+        else:
+            alone.append(message)
+    return alone, blocks
+
+
+def _log_blocks(feed: DisplayFeed, blocks: dict[str, list[TopicMessage]]) -> None:
+    """Each topic's messages of a window decoded together and logged as columns; those a block leaves (a
+    DELETE, a lifetime, a problem to say) one by one, in their turn."""
+    for topic, messages in blocks.items():
+        options = (feed.styles.get(topic) or DisplayStyle()).options
+        block = BLOCK_DECODERS[messages[0].msgtype]([m.data for m in messages], options)
+        state = feed.topics.setdefault(topic, _TopicState())
+        state.markers.anchor = feed._anchored
+        times = np.array([m.time_ns for m in messages], dtype=np.int64)
+        if isinstance(block, MarkerBlock):
+            MarkerColumns(feed.rows, feed.timeline, feed.clock, feed.load_mesh).log(
+                topic,
+                times,
+                block,
+                state.markers,
+                own=lambda i, messages=messages: feed._log(messages[i]),  # type: ignore[misc]
+                count=lambda i, messages=messages: _count(feed, messages[i]),  # type: ignore[misc]
+            )
 
 
 def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[_TopicState, str]:

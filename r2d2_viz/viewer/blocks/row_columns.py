@@ -123,6 +123,25 @@ class RowColumns:
         elif len(group.times_ns) >= RUN_ROWS:
             self.send(entity)
 
+    def add_block(
+        self, entity: str, descriptors: tuple[rr.ComponentDescriptor, ...], times_ns: np.ndarray, columns: list[Any]
+    ) -> None:
+        """Many rows of ``entity`` at once (a block decoder's, :mod:`~r2d2_viz.viewer.blocks.marker_columns`):
+        per descriptor, its instances as one Arrow array and each row's count, as a ``Builder`` makes them."""
+        groups = self.runs.setdefault(entity, [])
+        chunks = (_chunks,) * len(descriptors)
+        if not groups or groups[-1].descriptors != descriptors or groups[-1].builders != chunks:
+            groups.append(_Group(descriptors, chunks, arrays=[[] for _ in descriptors]))
+        group = groups[-1]
+        group.times_ns.extend(times_ns.tolist())
+        for column, chunk in zip(group.arrays, columns, strict=True):
+            column.append(chunk)
+        self.held += len(times_ns)
+        if self.held >= HELD_ROWS or self.held_bytes >= HELD_BYTES:
+            self.send()
+        elif len(group.times_ns) >= RUN_ROWS:
+            self.send(entity)
+
     def send(self, *entities: str) -> None:
         """Send the runs of ``entities`` and of the entities below them (every run when none is named)."""
         if not self.runs:
@@ -157,6 +176,13 @@ class RowColumns:
 def _concatenated(rows: list[pa.Array]) -> tuple[pa.Array, list[int]]:
     """Rows of Arrow arrays of instances (an archetype's) → their instances as one array, and each row's count."""
     return (rows[0] if len(rows) == 1 else pa.concat_arrays(rows)), [len(r) for r in rows]
+
+
+def _chunks(chunks: list[tuple[pa.Array, Any]]) -> tuple[pa.Array, list[int] | np.ndarray]:
+    """Blocks of rows (instances, each row's count) → one array of instances and every row's count."""
+    arrays = [a for a, _ in chunks]
+    values = arrays[0] if len(arrays) == 1 else pa.concat_arrays(arrays)
+    return values, np.concatenate([np.asarray(n, dtype=np.int64) for _, n in chunks])
 
 
 def _column(values: pa.Array, lengths: list[int] | np.ndarray) -> pa.Array:
