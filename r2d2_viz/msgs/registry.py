@@ -12,6 +12,7 @@ from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemet
 from r2d2_viz.msgs.rviz2 import accel, interactive, scalar_points
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.stacks import detections, particles, voxels
+from r2d2_viz.msgs.telemetry_blocks import BlockDecoder, decode_imu_block
 from r2d2_viz.msgs.typestore import MsgError
 
 Decoder = Callable[[bytes | memoryview, DecodeOptions], Decoded | list[MarkerOp]]
@@ -55,6 +56,13 @@ DECODERS: dict[str, Decoder] = {
     "vision_msgs/msg/Detection2DArray": detections.decode_detection2d_array,
     "vision_msgs/msg/Detection3DArray": detections.decode_detection3d_array,
 }
+
+BLOCK_DECODERS: dict[str, BlockDecoder] = {
+    # block decoders (issue 46): a window's messages of one topic at once, columns over their CDR bytes
+    "sensor_msgs/msg/Imu": decode_imu_block,
+}
+"""Types whose messages a batch run decodes a window's worth at a time (:mod:`r2d2_viz.sources.topic_blocks`);
+a block decoder returns None for what it does not read exactly (those messages then go through :data:`DECODERS`)."""
 
 VIEWS: dict[str, str] = {
     "rcl_interfaces/msg/Log": "log",
