@@ -41,7 +41,7 @@ else:
         rows.append(0 if block is None else len(block))
         return block
     registry.BLOCK_DECODERS["sensor_msgs/msg/Imu"] = counted
-    atexit.register(lambda: print("block rows", sum(rows), file=sys.stderr))
+    atexit.register(lambda: print("block rows", sum(rows), "pyarrow.compute" in sys.modules, file=sys.stderr))
 from r2d2_viz.cli.command import main
 sys.exit(main(sys.argv[2:]))
 """
@@ -121,6 +121,7 @@ def test_the_block_path_was_taken(runs: dict[str, tuple[Path, subprocess.Complet
     said = runs["blocks"][1].stderr
     rows = int(said.split("block rows ")[1].split()[0])
     assert rows == 300 + 10  # /imu's messages, and /imu_bare's (decoded, then left to the one-by-one path)
+    assert said.split("block rows ")[1].split()[1] == "False"  # no pyarrow.compute (~0.5 s to import: Array.take)
     assert "/imu_bad: a sensor_msgs/msg/Imu message cannot be shown" in said
 
 
