@@ -11,7 +11,7 @@ from typing import Protocol
 
 import numpy as np
 
-from r2d2_viz.msgs.telemetry_blocks import MessageBlock
+from r2d2_viz.msgs.blocks.telemetry_blocks import MessageBlock
 
 
 @dataclass(frozen=True, eq=False)

@@ -16,27 +16,24 @@ from collections import deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
-import numpy as np
 import rerun as rr
 
 from r2d2_viz.errors import short
 from r2d2_viz.msgs.nav import apply_grid_update
-from r2d2_viz.msgs.registry import BLOCK_DECODERS
 from r2d2_viz.msgs.rviz2.joined import Joins
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, GridMap, MarkerOp, MeshResource, is_plain
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_images
 from r2d2_viz.sources.base import Clock, TfRecords
 from r2d2_viz.sources.topic_blocks import TopicBlock
+from r2d2_viz.viewer.blocks.block_feed import BlockFeed, TopicState
 from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
 from r2d2_viz.viewer.blocks.image_overlays import on_image, overlay_frames
 from r2d2_viz.viewer.blocks.odometry_keep import OdometryKeep, Tolerance
-from r2d2_viz.viewer.blocks.plain_log import PlainBook
 from r2d2_viz.viewer.blocks.row_columns import RowColumns
-from r2d2_viz.viewer.blocks.telemetry_columns import ROWS, BlockRuns
 from r2d2_viz.viewer.blocks.video_feed import VideoFeed as VideoFeed  # where runs build it
 from r2d2_viz.viewer.decay import FixedFramePlacer
-from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
+from r2d2_viz.viewer.displays import MeshLoader, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
 
@@ -61,15 +58,7 @@ class DisplayStyle:
     """Odometry's Position and Angle Tolerance (:mod:`r2d2_viz.viewer.blocks.odometry_keep`)."""
 
 
-@dataclass
-class _TopicState:
-    messages: int = 0
-    problems: int = 0
-    markers: MarkerBook = field(default_factory=MarkerBook)
-    plain: PlainBook = field(default_factory=PlainBook)
-
-
-class DisplayFeed:
+class DisplayFeed(BlockFeed):
     """Decode and log display messages: a replay :meth:`push` es those of each stretch it reads and :meth:`until`
     logs what is due; a live source calls :meth:`log` as messages arrive."""
 
@@ -97,7 +86,7 @@ class DisplayFeed:
         self.clock, self.fixed_frame, self.header_time = clock, fixed_frame, header_time
         self.styles = dict(styles or {})
         self.load_mesh, self.source_name, self.timeline = load_mesh, source_name, timeline
-        self.topics: dict[str, _TopicState] = {}
+        self.topics: dict[str, TopicState] = {}
         self.cameras = camera_images(topics or {})
         self.overlays = overlay_frames(topics or {}, fixed_frame)  # 2D detections: on their camera's image
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
@@ -116,9 +105,7 @@ class DisplayFeed:
         self.rows = RowColumns(self.rec, timeline, clock, hold=hold)  # every other display's rows: columns too
         self.odometry = OdometryKeep(lambda topic: (self.styles.get(topic) or DisplayStyle()).tolerance)
         self.joins = Joins({topic: style.options for topic, style in self.styles.items()})  # DepthCloud, Effort…
-        self._blocks: deque[TopicBlock] = deque()  # a batch run's blocks of messages (issue 46): decode_block
-        self._hold = hold
-        self.block_runs = BlockRuns(self.rec, timeline, clock)
+        self._init_blocks(hold, timeline, clock)  # a batch run's blocks of messages (issue 46): decode_block
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -132,12 +119,8 @@ class DisplayFeed:
                 self.rec.log(entity, rr.CoordinateFrame(self.fixed_frame))
 
     def push(self, messages: Iterable[TopicMessage], blocks: Sequence[TopicBlock] = ()) -> None:
-        """Messages just read, in receive-time order, and blocks of them; the first ones anchor every display
-        entity."""
-        if blocks and self._anchored is None and self._topic_types:
-            first = min(int(b.times_ns[0]) for b in blocks)
-            self._anchor(self._topic_types, first if self._start_ns is None else min(first, self._start_ns))
-        self._blocks.extend(blocks)
+        """Messages just read in receive-time order (and blocks of them); the first ones anchor every display entity."""
+        self._push_blocks(blocks)
         for message in messages:
             if self._anchored is None and self._topic_types:  # from the run's start when that is earlier
                 start = message.time_ns if self._start_ns is None else min(message.time_ns, self._start_ns)
@@ -152,50 +135,7 @@ class DisplayFeed:
     @property
     def next_time_ns(self) -> int | None:
         """The receive time of the next message not logged yet (None: none pending)."""
-        times = [int(b.times_ns[0]) for b in self._blocks]
-        return min([*times, self._pending[0].time_ns] if self._pending else times, default=None)
-
-    def decode_block(
-        self, topic: str, msgtype: str, times_ns: np.ndarray, messages: Sequence[bytes | memoryview]
-    ) -> TopicBlock | None:
-        """A window's messages of ``topic`` as one block (issue 46) when its type has a block decoder and a batch run
-        draws it plainly (no decay, video, header time, empty frame id); None: one by one. Pure, like :meth:`decode`."""
-        style = self.styles.get(topic) or DisplayStyle()
-        decoder = BLOCK_DECODERS.get(msgtype)
-        plain = self._hold and not (self.header_time or style.decay or topic in self.cameras or topic in self.overlays)
-        if decoder is None or not plain or self.video.encoder is not None or len(messages) < 2:
-            return None
-        try:
-            with np.errstate(all="ignore"):
-                block = decoder(messages, style.options)
-        except (ValueError, IndexError, TypeError, OverflowError):  # what the per-message decoders say better
-            return None
-        if block is None or "" in getattr(block, "frames", ()):  # an empty frame: said once, drawn in the fixed one
-            return None
-        return TopicBlock(np.asarray(times_ns, dtype=np.int64), topic, msgtype, block, sum(len(m) for m in messages))
-
-    def _until_blocks(self, time_ns: int | None, after_ns: int | None) -> None:
-        """Log the blocks' messages received up to ``time_ns`` (all when None), after those logged one by one (the
-        last received at ``after_ns``): the recording's time is left at the latest."""
-        kept: deque[TopicBlock] = deque()
-        latest = after_ns
-        for block in self._blocks:
-            due, rest = block.split(time_ns) if time_ns is not None else (block, None)
-            if rest is not None:
-                kept.append(rest)
-            if due is None:
-                continue
-            state = self.topics.setdefault(due.topic, _TopicState())
-            state.markers.anchor = self._anchored
-            state.messages += len(due)
-            self._unflushed += due.nbytes
-            self.rows.send(due.topic)  # rows its messages logged one by one left (a block that fell back)
-            ROWS[due.msgtype](self.block_runs, due.topic, due, state.plain)
-            last = int(due.times_ns[-1])
-            latest = last if latest is None else max(latest, last)
-        self._blocks = kept
-        if latest is not None and (after_ns is None or latest > after_ns):
-            self.rows.at(latest)
+        return self._next_block_ns(self._pending[0].time_ns if self._pending else None)  # blocks too
 
     def until(self, time_ns: int | None = None) -> int:
         """Log the pending messages received up to ``time_ns`` (inclusive; all when None); how many were due."""
@@ -211,16 +151,13 @@ class DisplayFeed:
             else:  # on its own: after what its entities' runs hold, at the time the runs left
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
                 self._log(message)
-        if self._blocks:
-            self._until_blocks(time_ns, due[-1].time_ns if due else None)
+        self._until_blocks(time_ns, due)  # blocks of messages (issue 46): viewer/blocks/block_feed.py
         self.columns.interrupt(everything=time_ns is None)  # everything taken: held runs too
         end = _FOREVER if time_ns is None else time_ns
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
             if state.markers.live:
                 expire_markers(self.rows, state.markers, self.timeline, end, self.clock)
         self.rows.window_end(everything=time_ns is None)
-        if time_ns is None:
-            self.block_runs.send()
         return len(due)
 
     def log(self, *messages: TopicMessage) -> None:
@@ -230,8 +167,6 @@ class DisplayFeed:
         self.rows.window_end()
 
     def _log(self, message: TopicMessage) -> None:
-        if self.block_runs.runs and message.msgtype in BLOCK_DECODERS:  # its blocks' rows first
-            self.block_runs.send(message.topic)
         if message.msgtype == GRID_UPDATE:
             _update_map(self, message)
             return
@@ -325,8 +260,8 @@ class DisplayFeed:
                 )
 
 
-def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[_TopicState, str]:
-    state = feed.topics.setdefault(message.topic, _TopicState())
+def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[TopicState, str]:
+    state = feed.topics.setdefault(message.topic, TopicState())
     state.markers.anchor = feed._anchored
     state.messages += 1
     feed._unflushed += len(message.data)
@@ -352,7 +287,7 @@ def _simple(feed: DisplayFeed, message: TopicMessage, decoded: Decoded | list[Ma
 def _update_map(feed: DisplayFeed, message: TopicMessage) -> None:
     """An OccupancyGridUpdate applied to the latest map of the topic it updates, as RViz's Map display does
     (``/costmap_updates`` updates ``/costmap``); the map is drawn again."""
-    state = feed.topics.setdefault(message.topic, _TopicState())
+    state = feed.topics.setdefault(message.topic, TopicState())
     state.messages += 1
     topic = message.topic.removesuffix("_updates")
     base = feed.maps.get(topic)

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
+from r2d2_viz.msgs.blocks.telemetry_blocks import ImuBlock, decode_imu_block
 from r2d2_viz.msgs.shapes import DecodeOptions
-from r2d2_viz.msgs.telemetry_blocks import ImuBlock, decode_imu_block
 from r2d2_viz.sources.topic_blocks import TopicBlock
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)

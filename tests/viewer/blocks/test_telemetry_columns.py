@@ -16,13 +16,9 @@ from typing import Any
 
 import numpy as np
 import pytest
-import rerun as rr
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 from rrd import read_recording
-
-from r2d2_viz.viewer.display_feed import DisplayFeed, DisplayStyle
-from r2d2_viz.viewer.notices import Notices
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 T = STORE.types
@@ -136,25 +132,3 @@ def test_the_recording_is_the_per_message_one(runs: dict[str, tuple[Path, subpro
         assert dict(a.temporal) == dict(b.temporal), entity
         assert dict(a.static) == dict(b.static), entity
     assert _said(runs["blocks"][1]) == _said(runs["messages"][1])  # the same warnings (the empty frame ids…)
-
-
-def test_only_a_plain_batch_run_takes_blocks() -> None:
-    """A batch run (``hold``) without decay or header time: blocks; a live run, ``--time header``, a decayed display,
-    an empty frame id, one message alone or a type without a block decoder: one by one."""
-    rng = np.random.default_rng(3)
-    data = [bytes(STORE.serialize_cdr(_imu(rng, T0 + k, "imu_link"), IMU)) for k in range(3)]
-    bare = [bytes(STORE.serialize_cdr(_imu(rng, T0 + k, ""), IMU)) for k in range(3)]
-    times = np.arange(3, dtype=np.int64) + T0
-
-    def feed(**kwargs: Any) -> DisplayFeed:
-        return DisplayFeed(Notices(rr.RecordingStream("blocks")), clock="timestamp", fixed_frame="odom", **kwargs)
-
-    block = feed(hold=True).decode_block("/imu", IMU, times, data)
-    assert block is not None and len(block) == 3 and block.times_ns.tolist() == times.tolist()
-    assert feed(hold=True).decode_block("/imu", IMU, times, bare) is None
-    assert feed(hold=True).decode_block("/imu", IMU, times[:1], data[:1]) is None
-    assert feed(hold=True).decode_block("/rosout", LOG, times, data) is None
-    assert feed(hold=False).decode_block("/imu", IMU, times, data) is None
-    assert feed(hold=True, header_time=True).decode_block("/imu", IMU, times, data) is None
-    decayed = {"/imu": DisplayStyle(decay=True)}
-    assert feed(hold=True, styles=decayed).decode_block("/imu", IMU, times, data) is None

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from rosbags.typesys import Stores, get_typestore
 
+from r2d2_viz.msgs.blocks.telemetry_blocks import ImuBlock, decode_imu_block
 from r2d2_viz.msgs.registry import BLOCK_DECODERS, decode
 from r2d2_viz.msgs.shapes import Arrows, Decoded, DecodeOptions, Series
-from r2d2_viz.msgs.telemetry_blocks import ImuBlock, decode_imu_block
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 T = STORE.types
