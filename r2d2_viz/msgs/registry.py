@@ -9,10 +9,10 @@ import numpy as np
 
 from r2d2_viz.errors import one_line
 from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
+from r2d2_viz.msgs.blocks.telemetry_blocks import BlockDecoder, decode_imu_block
 from r2d2_viz.msgs.rviz2 import accel, interactive, scalar_points
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.stacks import detections, particles, voxels
-from r2d2_viz.msgs.blocks.telemetry_blocks import BlockDecoder, decode_imu_block
 from r2d2_viz.msgs.typestore import MsgError
 
 Decoder = Callable[[bytes | memoryview, DecodeOptions], Decoded | list[MarkerOp]]

@@ -19,8 +19,8 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 
-from r2d2_viz.msgs.telemetry import AXIS_COLORS
 from r2d2_viz.msgs.blocks.telemetry_blocks import ImuBlock
+from r2d2_viz.msgs.telemetry import AXIS_COLORS
 from r2d2_viz.sources.topic_blocks import TopicBlock
 from r2d2_viz.viewer.blocks.plain_log import PlainBook
 from r2d2_viz.viewer.blocks.row_columns import RUN_ROWS

@@ -59,6 +59,7 @@ def test_a_block_is_logged_as_far_as_until_asks() -> None:
     assert feed.next_time_ns == T0
     feed.until(T0 + 20)
     assert feed.topics["/imu"].messages == 3 and feed.next_time_ns == T0 + 30
+    assert feed.rows.now == T0 + 20  # the recording's time where its last message logged left it
     assert feed.block_runs.runs["/imu/angular_velocity"].rows == 3  # held, not sent yet
     feed.until(None)
     assert feed.topics["/imu"].messages == 6 and feed.next_time_ns is None and not feed.block_runs.runs
