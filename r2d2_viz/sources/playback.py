@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from r2d2_viz.msgs.registry import BLOCK_DECODERS
 from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.sources.bag_joints import JOINT_STATE, JointStateDecoder, TimeSource, monotonic
 from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
@@ -194,7 +195,7 @@ class BagPass:
             for topic, msgtype in self.displays.items():
                 piece = block.take(block.rows(topic))
                 pairs = piece.pairs()
-                if self.decode_block is not None and len(pairs) > 1:
+                if self.decode_block is not None and len(pairs) > 1 and msgtype in BLOCK_DECODERS:
                     decoded = self.decode_block(topic, msgtype, piece.times_ns, [data for _, data in pairs])
                     if decoded is not None:
                         blocks.append(decoded)
