@@ -241,7 +241,7 @@ class DisplayFeed(BlockFeed):
         prepared = None
         if isinstance(decoded, Decoded) and _ahead(self, message, decoded):
             prepared = prepare(decoded)  # the archetypes too, off the logging thread
-        return dataclasses.replace(message, decoded=decoded, prepared=prepared)
+        return TopicMessage(message.time_ns, message.topic, message.msgtype, message.data, decoded, prepared)
 
     def _where(self, topic: str) -> str:  # the topic's problem follows: less room than in a list of names
         return f"{self.source_name}: {short(topic, 60)}" if self.source_name else short(topic, 60)
