@@ -87,8 +87,8 @@ class Feeds:
         self.tf.push(window.tf, (window.joints, *window.more_joints))
         if self.displays is not None:
             self.displays.add_tf(window.tf)
-            if window.displays:
-                self.displays.push(window.displays)
+            if window.displays or window.blocks:
+                self.displays.push(window.displays, window.blocks)
         for robot, chunk in zip(self.robots, window.more_joints, strict=False):
             robot.push(chunk)
         if self.fields is not None:

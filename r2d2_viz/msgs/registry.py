@@ -10,6 +10,7 @@ import numpy as np
 from r2d2_viz.errors import one_line
 from r2d2_viz.msgs import images, markers, nav, pointcloud, poses, scan, telemetry
 from r2d2_viz.msgs.blocks import markers as marker_arrays
+from r2d2_viz.msgs.blocks.telemetry_blocks import decode_imu_block
 from r2d2_viz.msgs.rviz2 import accel, interactive, scalar_points
 from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, MarkerOp
 from r2d2_viz.msgs.stacks import detections, particles, voxels
@@ -61,10 +62,13 @@ BlockDecoder = Callable[[Sequence[bytes | memoryview], DecodeOptions], object]
 """One topic's messages of a window (CDR) → a block of their own type, decoded together (issue 46, item 3)."""
 
 BLOCK_DECODERS: dict[str, BlockDecoder] = {
-    "visualization_msgs/msg/MarkerArray": marker_arrays.decode_marker_arrays,
+    # block decoders (issue 46): a window's messages of one topic at once, columns over their CDR bytes
+    "visualization_msgs/msg/MarkerArray": marker_arrays.decode_marker_arrays,  # in the feed, when logged
+    "sensor_msgs/msg/Imu": decode_imu_block,  # in the bag's reader thread (viewer/blocks/block_feed.py)
 }
-"""Types a batch run decodes a block at a time (no decay, no ``--video``); the per-message :data:`DECODERS` still
-decode each message a block cannot read, with their errors."""
+"""Types a batch run decodes a window's worth at a time (no decay, no ``--video``, no header time); what a block
+does not read exactly (None from an Imu block, a MarkerArray block's ``bad``) goes through :data:`DECODERS`, with
+their errors."""
 
 VIEWS: dict[str, str] = {
     "rcl_interfaces/msg/Log": "log",

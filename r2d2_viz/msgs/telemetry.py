@@ -144,6 +144,13 @@ def _vector(v: Any) -> np.ndarray:
     return np.array([v.x, v.y, v.z], dtype=np.float64)
 
 
+def quat_norm(q: np.ndarray) -> np.ndarray:
+    """The norm of quaternions ``(..., 4)``, summed in one order (``np.linalg.norm`` 's BLAS sum may differ by an ulp
+    from a vectorised one: a block of messages gets the very values one message gets)."""
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.asarray(np.sqrt(((x * x + y * y) + z * z) + w * w))
+
+
 def decode_imu(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
     """An Imu: its orientation as axes (none when it is unknown: covariance[0] = -1, or not finite or zero) and
     its angular velocity and linear acceleration as plots."""
@@ -152,7 +159,7 @@ def decode_imu(data: bytes | memoryview, options: DecodeOptions) -> Decoded:
     items: list[Shape] = []
     o = msg.orientation
     q = np.array([o.x, o.y, o.z, o.w], dtype=np.float64)
-    norm = float(np.linalg.norm(q))
+    norm = float(quat_norm(q))
     if np.isfinite(norm) and norm > 1e-9 and float(msg.orientation_covariance[0]) != -1.0:
         x, y, z, w = (q / norm).tolist()
         axes = (quat_matrix((x, y, z, w)).T * IMU_AXIS).astype(np.float32)  # rows: the rotated x, y, z axes

@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from r2d2_viz.msgs.registry import BLOCK_DECODERS
 from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.sources.bag_joints import JOINT_STATE, JointStateDecoder, TimeSource, monotonic
 from r2d2_viz.sources.bag_tf import TF_MESSAGE, TfDecoder, concatenate
@@ -25,6 +26,7 @@ from r2d2_viz.sources.bags.storage import Block
 from r2d2_viz.sources.base import SampleChunk, Source, TfRecords, last_per_time
 from r2d2_viz.sources.fields_pass import FieldsPass, TopicColumns
 from r2d2_viz.sources.robots import renamed
+from r2d2_viz.sources.topic_blocks import BlockPredecoder, TopicBlock
 
 JOINTS, TF = "/joint_states", "/tf"
 WINDOW_BYTES = 8 << 20
@@ -49,6 +51,8 @@ class Window:
     """Several robots: the joint states of the second, third… (``joints`` holds the first's)."""
     fields: tuple[TopicColumns, ...] = ()
     """Other topics' fields (:mod:`r2d2_viz.sources.fields_pass`)."""
+    blocks: tuple[TopicBlock, ...] = ()
+    """Display messages decoded a topic at a time (:mod:`r2d2_viz.sources.topic_blocks`), not in ``displays``."""
 
 
 def source_windows(source: Source, max_samples: int) -> Iterator[Window]:
@@ -98,6 +102,10 @@ class BagPass:
         """Say nothing of what was skipped (a look-ahead: the pass itself says it)."""
         self.predecode = predecode
         """Decodes each display message as it is read (in :func:`read_ahead`'s thread, beside the writing)."""
+        owner: BlockPredecoder | None = getattr(predecode, "__self__", None)
+        self.decode_block = getattr(owner, "decode_block", None)
+        """The predecoder's owner's (the display feed's) block decoding, when it has one: a topic's messages of a
+        piece at once (issue 46)."""
         self.joints_topic = robots[0][0] if robots else JOINTS
         if robots:
             actuated = robots[0][1]
@@ -162,6 +170,7 @@ class BagPass:
         chunks: list[SampleChunk] = []
         records: list[TfRecords] = []
         messages: list[TopicMessage] = []
+        blocks: list[TopicBlock] = []
         others: list[list[SampleChunk]] = [[] for _ in self.others]
         fields: list[TopicColumns] = []
         for block in pieces:
@@ -184,7 +193,14 @@ class BagPass:
                     decoded = self.tf.decode(block.take(rows).pairs())
                     records.append(renamed(decoded, prefix, self.shared) if prefix else decoded)
             for topic, msgtype in self.displays.items():
-                for t, data in block.take(block.rows(topic)).pairs():
+                piece = block.take(block.rows(topic))
+                pairs = piece.pairs()
+                if self.decode_block is not None and len(pairs) > 1 and msgtype in BLOCK_DECODERS:
+                    decoded = self.decode_block(topic, msgtype, piece.times_ns, [data for _, data in pairs])
+                    if decoded is not None:
+                        blocks.append(decoded)
+                        continue
+                for t, data in pairs:
                     messages.append(TopicMessage(t, topic, msgtype, data))
         messages.sort(key=lambda m: m.time_ns)
         if self.predecode is not None:
@@ -193,7 +209,7 @@ class BagPass:
         tf = concatenate([r for r in records if len(r)])
         more = tuple(_joined(c) for c in others)
         nbytes = sum(p.nbytes for p in pieces)
-        return Window(self.read_ns, _joined(chunks), tf, tuple(messages), nbytes, more, tuple(fields))
+        return Window(self.read_ns, _joined(chunks), tf, tuple(messages), nbytes, more, tuple(fields), tuple(blocks))
 
     def _finish(self) -> None:
         if self.quiet:

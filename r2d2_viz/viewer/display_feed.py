@@ -28,15 +28,17 @@ from r2d2_viz.msgs.shapes import Decoded, DecodeOptions, GridMap, MarkerOp, Mesh
 from r2d2_viz.msgs.typestore import MsgError
 from r2d2_viz.sources.bag_displays import GRID_UPDATE, TopicMessage, camera_images
 from r2d2_viz.sources.base import Clock, TfRecords
+from r2d2_viz.sources.topic_blocks import TopicBlock
+from r2d2_viz.viewer.blocks.block_feed import BlockFeed, TopicState
 from r2d2_viz.viewer.blocks.display_columns import ColumnRuns, columnable
 from r2d2_viz.viewer.blocks.image_overlays import on_image, overlay_frames
 from r2d2_viz.viewer.blocks.marker_columns import MarkerColumns
 from r2d2_viz.viewer.blocks.odometry_keep import OdometryKeep, Tolerance
-from r2d2_viz.viewer.blocks.plain_log import PlainBook
 from r2d2_viz.viewer.blocks.row_columns import RowColumns
+from r2d2_viz.viewer.blocks.telemetry_columns import ROWS as READER_BLOCKS
 from r2d2_viz.viewer.blocks.video_feed import VideoFeed as VideoFeed  # where runs build it
 from r2d2_viz.viewer.decay import FixedFramePlacer
-from r2d2_viz.viewer.displays import MarkerBook, MeshLoader, expire_markers, log_decoded, prepare, set_time
+from r2d2_viz.viewer.displays import MeshLoader, expire_markers, log_decoded, prepare, set_time
 from r2d2_viz.viewer.entities import TIMELINE
 from r2d2_viz.viewer.notices import Notices
 
@@ -61,15 +63,7 @@ class DisplayStyle:
     """Odometry's Position and Angle Tolerance (:mod:`r2d2_viz.viewer.blocks.odometry_keep`)."""
 
 
-@dataclass
-class _TopicState:
-    messages: int = 0
-    problems: int = 0
-    markers: MarkerBook = field(default_factory=MarkerBook)
-    plain: PlainBook = field(default_factory=PlainBook)
-
-
-class DisplayFeed:
+class DisplayFeed(BlockFeed):
     """Decode and log display messages: a replay :meth:`push` es those of each stretch it reads and :meth:`until`
     logs what is due; a live source calls :meth:`log` as messages arrive."""
 
@@ -97,7 +91,7 @@ class DisplayFeed:
         self.clock, self.fixed_frame, self.header_time = clock, fixed_frame, header_time
         self.styles = dict(styles or {})
         self.load_mesh, self.source_name, self.timeline = load_mesh, source_name, timeline
-        self.topics: dict[str, _TopicState] = {}
+        self.topics: dict[str, TopicState] = {}
         self.cameras = camera_images(topics or {})
         self.overlays = overlay_frames(topics or {}, fixed_frame)  # 2D detections: on their camera's image
         """CameraInfo topic → the image topics of its camera: each gets the pinhole, so images show in 3D."""
@@ -116,6 +110,7 @@ class DisplayFeed:
         self.rows = RowColumns(self.rec, timeline, clock, hold=hold)  # every other display's rows: columns too
         self.odometry = OdometryKeep(lambda topic: (self.styles.get(topic) or DisplayStyle()).tolerance)
         self.joins = Joins({topic: style.options for topic, style in self.styles.items()})  # DepthCloud, Effort…
+        self._init_blocks(hold, timeline, clock)  # a batch run's blocks of messages (issue 46): decode_block
 
     def _anchor(self, topics: Mapping[str, str], time_ns: int) -> None:
         """From the first message's time, every display entity (each slot of a history too) sits in the fixed
@@ -128,8 +123,9 @@ class DisplayFeed:
             for entity in [f"{topic}/{k}" for k in range(keep)] if keep > 1 else [topic]:
                 self.rec.log(entity, rr.CoordinateFrame(self.fixed_frame))
 
-    def push(self, messages: Iterable[TopicMessage]) -> None:
-        """Messages just read, in receive-time order; the first ones anchor every display entity."""
+    def push(self, messages: Iterable[TopicMessage], blocks: Sequence[TopicBlock] = ()) -> None:
+        """Messages just read in receive-time order (and blocks of them); the first ones anchor every display entity."""
+        self._push_blocks(blocks)
         for message in messages:
             if self._anchored is None and self._topic_types:  # from the run's start when that is earlier
                 start = message.time_ns if self._start_ns is None else min(message.time_ns, self._start_ns)
@@ -144,7 +140,7 @@ class DisplayFeed:
     @property
     def next_time_ns(self) -> int | None:
         """The receive time of the next message not logged yet (None: none pending)."""
-        return self._pending[0].time_ns if self._pending else None
+        return self._next_block_ns(self._pending[0].time_ns if self._pending else None)  # blocks too
 
     def until(self, time_ns: int | None = None) -> int:
         """Log the pending messages received up to ``time_ns`` (inclusive; all when None); how many were due."""
@@ -161,7 +157,8 @@ class DisplayFeed:
             else:  # on its own: after what its entities' runs hold, at the time the runs left
                 self.columns.interrupt(message.topic, *self.cameras.get(message.topic, ()))
                 self._log(message)
-        _log_blocks(self, blocks)
+        _log_blocks(self, blocks)  # MarkerArrays a block at a time, decoded here
+        self._until_blocks(time_ns, due)  # blocks the reader decoded (Imu): viewer/blocks/block_feed.py
         self.columns.interrupt(everything=time_ns is None)  # everything taken: held runs too
         end = _FOREVER if time_ns is None else time_ns
         for state in self.topics.values():  # markers whose lifetime ran out, even on a topic gone quiet
@@ -251,7 +248,7 @@ class DisplayFeed:
         prepared = None
         if isinstance(decoded, Decoded) and _ahead(self, message, decoded):
             prepared = prepare(decoded)  # the archetypes too, off the logging thread
-        return dataclasses.replace(message, decoded=decoded, prepared=prepared)
+        return TopicMessage(message.time_ns, message.topic, message.msgtype, message.data, decoded, prepared)
 
     def _where(self, topic: str) -> str:  # the topic's problem follows: less room than in a list of names
         return f"{self.source_name}: {short(topic, 60)}" if self.source_name else short(topic, 60)
@@ -260,6 +257,7 @@ class DisplayFeed:
         """Send the runs still held; say, per topic, how many messages could not be shown (beyond the first)."""
         self.columns.send()
         self.rows.send()
+        self.block_runs.send()
         for topic, note in self.video.finish():
             self.notices.report(f"{self._where(topic)}: {note}")
         for topic, state in self.topics.items():
@@ -272,7 +270,9 @@ class DisplayFeed:
 def _blocked(feed: DisplayFeed, message: TopicMessage) -> bool:
     """Whether ``message`` is decoded with its topic's others of the window (:data:`BLOCK_DECODERS`): a batch
     run's, not decayed, no ``--video``, times not the headers'."""
-    if message.msgtype not in BLOCK_DECODERS or feed._flushes or feed.header_time or feed.video.encoder:
+    if message.msgtype not in BLOCK_DECODERS or message.msgtype in READER_BLOCKS:  # those: the reader's blocks
+        return False
+    if feed._flushes or feed.header_time or feed.video.encoder:
         return False
     return not (feed.styles.get(message.topic) or DisplayStyle()).decay
 
@@ -295,7 +295,7 @@ def _log_blocks(feed: DisplayFeed, blocks: dict[str, list[TopicMessage]]) -> Non
     for topic, messages in blocks.items():
         options = (feed.styles.get(topic) or DisplayStyle()).options
         block = BLOCK_DECODERS[messages[0].msgtype]([m.data for m in messages], options)
-        state = feed.topics.setdefault(topic, _TopicState())
+        state = feed.topics.setdefault(topic, TopicState())
         state.markers.anchor = feed._anchored
         times = np.array([m.time_ns for m in messages], dtype=np.int64)
         if isinstance(block, MarkerBlock):
@@ -309,8 +309,8 @@ def _log_blocks(feed: DisplayFeed, blocks: dict[str, list[TopicMessage]]) -> Non
             )
 
 
-def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[_TopicState, str]:
-    state = feed.topics.setdefault(message.topic, _TopicState())
+def _count(feed: DisplayFeed, message: TopicMessage) -> tuple[TopicState, str]:
+    state = feed.topics.setdefault(message.topic, TopicState())
     state.markers.anchor = feed._anchored
     state.messages += 1
     feed._unflushed += len(message.data)
@@ -336,7 +336,7 @@ def _simple(feed: DisplayFeed, message: TopicMessage, decoded: Decoded | list[Ma
 def _update_map(feed: DisplayFeed, message: TopicMessage) -> None:
     """An OccupancyGridUpdate applied to the latest map of the topic it updates, as RViz's Map display does
     (``/costmap_updates`` updates ``/costmap``); the map is drawn again."""
-    state = feed.topics.setdefault(message.topic, _TopicState())
+    state = feed.topics.setdefault(message.topic, TopicState())
     state.messages += 1
     topic = message.topic.removesuffix("_updates")
     base = feed.maps.get(topic)

@@ -1,2 +1,2 @@
-"""Block decoders (issue 46, item 3): a topic's messages of a window decoded together with numpy over their CDR
-bytes, for ``r2d2_viz.msgs.registry.BLOCK_DECODERS``."""
+"""Block decoders (issue 46): a window's messages of one topic decoded together, with numpy over their CDR bytes
+(the table :data:`r2d2_viz.msgs.registry.BLOCK_DECODERS`)."""
