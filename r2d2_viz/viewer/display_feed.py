@@ -233,8 +233,7 @@ class DisplayFeed(BlockFeed):
                 )
 
     def decode(self, message: TopicMessage, *, now: bool = False) -> TopicMessage:
-        """``message`` with what it draws (or why it cannot), in its topic's style; pure, so a bag's reader
-        thread can call it ahead of :meth:`log` (a block's topic: when it is logged, or ``now``)."""
+        """``message`` with what it draws (or why not), in its style; pure: a bag's reader calls it (blocks: later)."""
         if message.decoded is not None or message.msgtype == GRID_UPDATE or (not now and _blocked(self, message)):
             return message  # updates: applied when logged
         style = self.styles.get(message.topic) or DisplayStyle()
@@ -255,9 +254,8 @@ class DisplayFeed(BlockFeed):
 
     def finish(self) -> None:
         """Send the runs still held; say, per topic, how many messages could not be shown (beyond the first)."""
-        self.columns.send()
-        self.rows.send()
-        self.block_runs.send()
+        for runs in (self.columns, self.rows, self.block_runs):
+            runs.send()
         for topic, note in self.video.finish():
             self.notices.report(f"{self._where(topic)}: {note}")
         for topic, state in self.topics.items():
