@@ -30,12 +30,25 @@ import threading
 import time
 from pathlib import Path
 
-# What the zygote imports: the console script's module and what a run imports. Rerun is imported as the CLI
-# imports it (``cli/command.py``'s ``_quiet_rerun``: ``RUST_LOG=off`` around that import alone, its log filter is
-# read then). Rerun supports fork (``os.register_at_fork``: a child drops the parent's recordings); numpy's
-# OpenBLAS and Arrow's jemalloc too.
-PRELOAD = ("r2d2_viz.cli", "numpy", "pyarrow", "PIL.Image", "lxml.etree", "psutil", "subprocess", "ssl", "uuid")
-QUIET_RERUN = "r2d2_viz.viewer.sinks"
+# What the zygote imports: the console script's module, and what runs import (the app's run, Rerun, a bag's
+# readers and type store, the YAML of --rviz). Rerun is imported as the CLI imports it (``cli/command.py``'s
+# ``_quiet_rerun``: ``RUST_LOG=off`` around it, its log filter is read then; not under ``R2D2_VIZ_DEBUG``). Rerun
+# supports fork (``os.register_at_fork``: a child drops the parent's recordings); numpy's OpenBLAS and Arrow's
+# jemalloc too. The app's modules read no environment when imported. What a run would not have imported is there
+# all the same: ``tests/test_startup.py`` (a fresh interpreter) holds what a run imports.
+PRELOAD = (
+    "r2d2_viz.cli",
+    "r2d2_viz.viewer.sinks",
+    "r2d2_viz.runner",
+    "r2d2_viz.cli.run_args",
+    "rosbags.typesys",
+    "ruamel.yaml",
+    "PIL.Image",
+    "lxml.etree",
+    "psutil",
+    "ssl",
+    "uuid",
+)
 FRESH_PREFIXES = ("PYTHON", "RUST_", "RERUN_", "R2D2_VIZ_DEBUG", "LC_", "LANG", "LD_", "MALLOC", "JE_", "ARROW_")
 
 ZYGOTE = r"""
@@ -106,16 +119,15 @@ with tempfile.TemporaryFile() as said:  # what importing prints (a warning) goes
     os.dup2(said.fileno(), 2)
     try:
         import importlib
+        saved_log = os.environ.get("RUST_LOG")
+        if not os.environ.get("R2D2_VIZ_DEBUG"):
+            os.environ["RUST_LOG"] = "off"
         for name in sys.argv[2].split(","):
             importlib.import_module(name)
-        if not os.environ.get("R2D2_VIZ_DEBUG"):
-            saved_log = os.environ.get("RUST_LOG")
-            os.environ["RUST_LOG"] = "off"
-            importlib.import_module(sys.argv[3])
-            if saved_log is None:
-                del os.environ["RUST_LOG"]
-            else:
-                os.environ["RUST_LOG"] = saved_log
+        if saved_log is None:
+            os.environ.pop("RUST_LOG", None)
+        else:
+            os.environ["RUST_LOG"] = saved_log
     finally:
         sys.stderr.flush()
         os.dup2(saved, 2)
@@ -137,7 +149,7 @@ class _Zygote:
         self.sock, theirs = socket.socketpair()
         self.env = dict(os.environ)
         self.proc = subprocess.Popen(
-            [sys.executable, "-c", ZYGOTE, str(theirs.fileno()), ",".join(PRELOAD), QUIET_RERUN],
+            [sys.executable, "-c", ZYGOTE, str(theirs.fileno()), ",".join(PRELOAD)],
             pass_fds=[theirs.fileno()],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
