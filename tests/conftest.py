@@ -44,7 +44,7 @@ def cli(
     exe = Path(sys.executable).parent / "r2d2-viz"
     command = [str(exe)] if exe.exists() else [sys.executable, "-m", "r2d2_viz"]
     environment = {**os.environ, **(env or {})}
-    if not fresh and exe.exists() and forked_cli.forks(environment):
+    if not fresh and exe.exists() and forked_cli.forks(environment, args):
         return forked_cli.run(command, args, environment, cwd, timeout)
     return subprocess.run([*command, *args], capture_output=True, text=True, timeout=timeout, env=environment, cwd=cwd)
 

@@ -49,6 +49,10 @@ PRELOAD = (
     "ssl",
     "uuid",
 )
+# Flags whose runs are gRPC clients (of a viewer: ``--render``'s ViewerClient, ``--spawn``/``--connect``'s GrpcSink;
+# of a catalog server: ``--dataset``): a forked child's client never gets its tokio tasks run (a ``--render`` hung
+# in ``ViewerClient.connect``), though its server side (``--serve``) answers. These run fresh.
+FRESH_FLAGS = ("--render", "--spawn", "--connect", "--dataset")
 FRESH_PREFIXES = ("PYTHON", "RUST_", "RERUN_", "R2D2_VIZ_DEBUG", "LC_", "LANG", "LD_", "MALLOC", "JE_", "ARROW_")
 
 ZYGOTE = r"""
@@ -224,9 +228,10 @@ def _stop() -> None:
             _zygote.proc.wait(timeout=60)
 
 
-def forks(env: dict[str, str]) -> bool:
-    """Whether a run with this environment may be forked from the zygote (made with the worker's environment)."""
-    if os.environ.get("R2D2_TEST_FRESH_CLI"):
+def forks(env: dict[str, str], args: tuple[str, ...] = ()) -> bool:
+    """Whether a run with these arguments and this environment may be forked from the zygote (made with the
+    worker's environment)."""
+    if os.environ.get("R2D2_TEST_FRESH_CLI") or any(a.split("=")[0] in FRESH_FLAGS for a in args):
         return False
     base = _zygote.env if _zygote is not None else dict(os.environ)
     changed = {k for k in set(env) | set(base) if env.get(k) != base.get(k)}

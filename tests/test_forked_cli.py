@@ -58,6 +58,14 @@ def test_an_environment_that_changes_how_python_or_rerun_start_runs_fresh() -> N
     assert forked_cli.forks({**base, "DISPLAY": ""})
 
 
+def test_a_run_that_is_a_grpc_client_runs_fresh() -> None:
+    base = dict(os.environ)
+    assert forked_cli.forks(base, ("--serve", "--duration", "1"))  # a server answers from a forked child
+    for args in (("--render", "x.rrd"), ("--connect",), ("--connect=rerun+http://127.0.0.1:1/proxy",), ("--spawn",)):
+        assert not forked_cli.forks(base, args), args
+    assert not forked_cli.forks(base, ("--dataset", "fleet"))
+
+
 def test_a_run_over_its_timeout_is_killed_as_subprocess_run_does(tmp_path: Path) -> None:
     import subprocess
 
