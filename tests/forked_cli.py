@@ -101,6 +101,7 @@ def _serve(sock, preface):
             if pid == 0:
                 signal.set_wakeup_fd(-1)
                 signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+                signal.signal(signal.SIGINT, signal.default_int_handler)  # as in any Python process
                 selector.close(); sock.close(); os.close(wake_r); os.close(wake_w)
                 null = os.open(os.devnull, os.O_RDONLY)
                 os.dup2(null, 0); os.dup2(fds[0], 1); os.dup2(fds[1], 2)
@@ -118,6 +119,7 @@ def _serve(sock, preface):
             _send(sock, {"started": pid})
 
 sock = socket.socket(fileno=int(sys.argv[1]))
+signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C sent to the worker's process group is not the zygote's
 with tempfile.TemporaryFile() as said:  # what importing prints (a warning) goes to every run's stderr
     saved = os.dup(2)
     os.dup2(said.fileno(), 2)
@@ -163,6 +165,7 @@ class _Zygote:
         self.lock = threading.Lock()
         self.exits: dict[int, tuple[int, float]] = {}
         self.started: list[int] = []
+        self.reported = 0.0  # its runs' CPU, counted in child_cpu and again in RUSAGE_CHILDREN once it is reaped
 
     def _read_one(self) -> None:
         head = self._recv_exact(4)
@@ -211,11 +214,13 @@ child_cpu = 0.0  # the forked runs' CPU (user + system), which RUSAGE_CHILDREN o
 
 
 def _the_zygote() -> _Zygote:
-    global _zygote
+    global _zygote, child_cpu
     with _zygote_lock:
         if _zygote is None or _zygote.proc.poll() is not None:
             if _zygote is None:
                 atexit.register(_stop)
+            else:  # reaped just now: its runs' CPU came into RUSAGE_CHILDREN with it
+                child_cpu -= _zygote.reported
             _zygote = _Zygote()
         return _zygote
 
@@ -248,6 +253,7 @@ def _kill(zygote: _Zygote, pid: int) -> None:
     os.kill(pid, signal.SIGKILL)  # as subprocess.run does on a timeout; the zygote still has it unwaited
     ended = zygote.wait(pid)
     child_cpu += ended[1] if ended else 0.0
+    zygote.reported += ended[1] if ended else 0.0
 
 
 def run(
@@ -289,6 +295,7 @@ def run(
         raise subprocess.TimeoutExpired([*command, *args], timeout)
     code, cpu = ended
     child_cpu += cpu
+    zygote.reported += cpu
     return subprocess.CompletedProcess(
         [*command, *args], code, _decode(b"".join(chunks[out_r])), _decode(b"".join(chunks[err_r]))
     )

@@ -71,3 +71,13 @@ def test_a_run_over_its_timeout_is_killed_as_subprocess_run_does(tmp_path: Path)
 
     with pytest.raises(subprocess.TimeoutExpired):
         cli("--headless", "--realtime", "--duration", "60", cwd=tmp_path, timeout=3)
+
+
+def test_a_ctrl_c_to_the_workers_process_group_leaves_the_zygote_serving(tmp_path: Path) -> None:
+    import signal
+
+    cli("--rate", "0", cwd=tmp_path)
+    zygote = forked_cli._the_zygote()
+    os.kill(zygote.proc.pid, signal.SIGINT)  # what a killpg(SIGINT) of the worker's group does to it
+    assert cli("--rate", "0", cwd=tmp_path).returncode == 2
+    assert forked_cli._the_zygote() is zygote and zygote.proc.poll() is None
