@@ -20,6 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import forked_cli
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
@@ -35,18 +36,17 @@ def example_robots() -> Path:
     raise AssertionError("example-robot-data is a test dependency: pip install '.[test]'")
 
 
-def cli(*args: str, timeout: float = 120, env: dict[str, str] | None = None, cwd: Path | None = None):
-    """Run the installed ``r2d2-viz`` console script in a subprocess."""
+def cli(
+    *args: str, timeout: float = 120, env: dict[str, str] | None = None, cwd: Path | None = None, fresh: bool = False
+) -> subprocess.CompletedProcess[str]:
+    """Run the installed ``r2d2-viz`` command in a process of its own: forked from a warm interpreter that has
+    imported what every run imports (``forked_cli``), or with ``fresh=True`` the console script in a fresh one."""
     exe = Path(sys.executable).parent / "r2d2-viz"
     command = [str(exe)] if exe.exists() else [sys.executable, "-m", "r2d2_viz"]
-    return subprocess.run(
-        [*command, *args],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        env={**os.environ, **(env or {})},
-        cwd=cwd,
-    )
+    environment = {**os.environ, **(env or {})}
+    if not fresh and exe.exists() and forked_cli.forks(environment, args):
+        return forked_cli.run(command, args, environment, cwd, timeout)
+    return subprocess.run([*command, *args], capture_output=True, text=True, timeout=timeout, env=environment, cwd=cwd)
 
 
 @pytest.fixture(scope="session")
