@@ -14,6 +14,12 @@ from conftest import cli
 from r2d2_viz.viewer.files.whole import rrd_complete
 
 
+@pytest.fixture(autouse=True)
+def _forking(monkeypatch: pytest.MonkeyPatch) -> None:
+    """These tests are about the forked runs: a whole-suite ``R2D2_TEST_FRESH_CLI=1`` (every run fresh) not here."""
+    monkeypatch.delenv("R2D2_TEST_FRESH_CLI", raising=False)
+
+
 def _same(a: str, b: str, tmp: Path, fresh_tmp: Path) -> None:
     assert a.replace(str(tmp), "<tmp>") == b.replace(str(fresh_tmp), "<tmp>")
 
