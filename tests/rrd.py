@@ -140,3 +140,23 @@ def pose_in(edges: dict[str, tuple[str, np.ndarray]], frame: str, fixed: str) ->
         T = T_parent_frame @ T
         frame = parent
     return T
+
+
+def rows_in_order(path: str | Path, under: tuple[str, ...] = ("/",)) -> dict[str, list[tuple[int, dict[str, Any]]]]:
+    """Entity (those under ``under``) → its rows as Rerun orders them (by time, then row id: rows at one time in the
+    order they were logged, whichever chunk holds them), each {component: value}; static rows at time -1."""
+    reader = RrdReader(path)
+    out: dict[str, list[tuple[int, bytes, dict[str, Any]]]] = {}
+    for chunk in reader.stream(store=reader.recordings()[0]):
+        if not chunk.entity_path.startswith(under):
+            continue
+        batch = chunk.to_record_batch()
+        skip = {"time", "log_time", "log_tick"}
+        columns = {f.name: batch.column(i).to_pylist() for i, f in enumerate(batch.schema) if f.name not in skip}
+        names = batch.schema.names
+        times = batch.column(names.index("time")).cast("int64").to_pylist() if "time" in names else [-1] * len(batch)
+        ids = columns.pop("rerun.controls.RowId")
+        for i in range(batch.num_rows):
+            row = {k: v[i] for k, v in columns.items() if v[i] is not None}
+            out.setdefault(chunk.entity_path, []).append((times[i], ids[i], row))
+    return {e: [(t, row) for t, _, row in sorted(rows, key=lambda r: (r[0], r[1]))] for e, rows in out.items()}

@@ -16,6 +16,7 @@ from typing import Any
 import pytest
 import rerun as rr
 from msgs_build import TS, T, color, duration, header, marker_msg, pose, quat, vec
+from rrd import rows_in_order
 
 from r2d2_viz.msgs import registry
 from r2d2_viz.sources.bag_displays import TopicMessage
@@ -117,28 +118,8 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[bool, tuple[Path,
         return {blocks: _record(folder / f"{blocks}.rrd", blocks, patch) for blocks in (False, True)}
 
 
-def _read(path: Path) -> dict[str, list[tuple[int, dict[str, Any]]]]:
-    from rerun.chunk import RrdReader
-
-    reader = RrdReader(path)
-    out: dict[str, list[tuple[int, bytes, dict[str, Any]]]] = {}
-    for chunk in reader.stream(store=reader.recordings()[0]):
-        batch = chunk.to_record_batch()
-        skip = {"time", "log_time", "log_tick"}
-        columns = {f.name: batch.column(i).to_pylist() for i, f in enumerate(batch.schema) if f.name not in skip}
-        names = batch.schema.names
-        times = batch.column(names.index("time")).cast("int64").to_pylist() if "time" in names else [-1] * len(batch)
-        ids = columns.pop("rerun.controls.RowId")
-        if not chunk.entity_path.startswith("/markers"):
-            continue
-        for i in range(batch.num_rows):
-            row = {k: v[i] for k, v in columns.items() if v[i] is not None}
-            out.setdefault(chunk.entity_path, []).append((times[i], ids[i], row))
-    return {e: [(t, row) for t, _, row in sorted(rows, key=lambda r: (r[0], r[1]))] for e, rows in out.items()}
-
-
 def test_the_recording_is_the_per_message_one(recorded: dict[bool, tuple[Path, int, list[str]]]) -> None:
-    before, after = _read(recorded[False][0]), _read(recorded[True][0])
+    before, after = rows_in_order(recorded[False][0], ("/markers",)), rows_in_order(recorded[True][0], ("/markers",))
     assert sorted(after) == sorted(before)
     for entity in before:
         assert after[entity] == before[entity], entity

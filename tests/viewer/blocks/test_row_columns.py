@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 import rerun as rr
 from msgs_build import TS, T, cdr, color, duration, header, marker_msg, pose, quat, vec
-from rerun.chunk import RrdReader
-from rrd import Rows, read_recording
+from rrd import Rows, read_recording, rows_in_order
 
 from r2d2_viz.sources.bag_displays import TopicMessage
 from r2d2_viz.viewer.blocks import row_columns
@@ -169,29 +168,10 @@ def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, 
     return {how: _record(folder / f"{how}.rrd", how) for how in ("before", "batch", "live")}
 
 
-def _in_order(path: Path) -> dict[str, list[tuple[int, dict[str, Any]]]]:
-    """Entity → its temporal rows as Rerun orders them (by time, then row id: rows at one time in the order they
-    were logged, whichever chunk holds them), each {component: value}; static rows at time -1."""
-    reader = RrdReader(path)
-    out: dict[str, list[tuple[int, bytes, dict[str, Any]]]] = {}
-    for chunk in reader.stream(store=reader.recordings()[0]):
-        if not chunk.entity_path.startswith(tuple(TOPICS)):
-            continue
-        batch = chunk.to_record_batch()
-        skip = {"time", "log_time", "log_tick"}
-        columns = {f.name: batch.column(i).to_pylist() for i, f in enumerate(batch.schema) if f.name not in skip}
-        names = batch.schema.names
-        times = batch.column(names.index("time")).cast("int64").to_pylist() if "time" in names else [-1] * len(batch)
-        ids = columns.pop("rerun.controls.RowId")
-        for i in range(batch.num_rows):
-            row = {k: v[i] for k, v in columns.items() if v[i] is not None}
-            out.setdefault(chunk.entity_path, []).append((times[i], ids[i], row))
-    return {e: [(t, row) for t, _, row in sorted(rows, key=lambda r: (r[0], r[1]))] for e, rows in out.items()}
-
-
 @pytest.mark.parametrize("how", ["batch", "live"])
 def test_the_recording_is_the_one_per_message_logging_made(recordings: dict[str, dict[str, Rows]], how: str) -> None:
-    before, after = _in_order(recordings["before"]["path"]), _in_order(recordings[how]["path"])
+    before = rows_in_order(recordings["before"]["path"], tuple(TOPICS))
+    after = rows_in_order(recordings[how]["path"], tuple(TOPICS))
     assert sorted(after) == sorted(before)
     for entity in before:
         assert after[entity] == before[entity], entity
