@@ -89,7 +89,7 @@ def _checked_main(argv: list[str] | None) -> int:
         if exc.filename is None or os.environ.get(DEBUG_ENV):  # not about a path: unexpected (the lines below)
             return _unexpected(exc)
         # a path the command line named (or one inside it) the system refused: too long, not allowed, no room…
-        print(stderr_line(f"error: {exc.filename}: {exc.strerror or exc}"), file=sys.stderr)
+        print(stderr_line(f"error: {shown_in_line(str(exc.filename))}: {exc.strerror or exc}"), file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as exc:
         return _unexpected(exc)

@@ -79,6 +79,7 @@ BAD_INPUT = [
     (["--tool-topic", "goal=move base"], "'move base' is not a ROS topic name"),
     # a name longer than the file system takes (255 bytes on ext4, Linux's NAME_MAX): the OS's words, the file named
     (["--save", "a" * 300 + ".rrd"], ".rrd: File name too long"),
+    (["--save", "line\nbreak" + "c" * 300 + ".rrd"], "line\\x0abreak"),  # the name's line break shown, one line
     (["--render", "b" * 300 + ".mp4", "--duration", "1"], ".mp4: File name too long"),
 ]
 CONSOLE_SCRIPT = {"--bogus", "--urdf"}
